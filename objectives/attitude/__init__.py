@@ -1,0 +1,1 @@
+"""Attitude estimation: quaternion kernels, recordings, filters, metrics and the filter objective."""

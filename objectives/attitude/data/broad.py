@@ -1,0 +1,104 @@
+"""Loader for the BROAD benchmark (Laidig et al., Data 6(7):72, 2021).
+
+Each trial is a MATLAB ``.mat`` file (or the equivalent ``.hdf5`` of the dataset's ``data_hdf5``
+folder, read when h5py is installed) with keys ``imu_gyr``, ``imu_acc``, ``imu_mag`` (uT),
+``opt_quat`` (w-x-y-z, sensor-to-earth, ENU, NaN where markers were lost), ``movement`` and
+``sampling_rate``. See ``../shared/data/broad/README.md``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from objectives.attitude.data.recording import Recording, RecordingError
+
+__all__ = ["load_broad", "broad_trials", "default_broad_dir"]
+
+_KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate")
+
+
+def default_broad_dir() -> Path:
+    """``../shared/data/broad`` relative to the project root (where tests and configs expect it)."""
+    return Path(__file__).resolve().parents[3].parent / "shared" / "data" / "broad"
+
+
+def _read_mat(path: Path) -> dict:
+    import scipy.io
+
+    try:
+        return scipy.io.loadmat(str(path))
+    except Exception as exc:  # scipy raises several types for corrupt/truncated files
+        raise RecordingError(f"{path}: cannot read as a MATLAB .mat file ({type(exc).__name__}: {exc})") from None
+
+
+def _read_hdf5(path: Path) -> dict:
+    try:
+        import h5py
+    except ImportError:
+        raise RecordingError(f"{path}: reading .hdf5 needs h5py (pip install 'tuner[hdf5]')") from None
+    try:
+        with h5py.File(path, "r") as f:
+            out = {}
+            for k in _KEYS:
+                if k in f:
+                    a = np.asarray(f[k])
+                    # MATLAB-written HDF5 stores arrays transposed
+                    if a.ndim == 2 and k != "sampling_rate" and a.shape[0] in (1, 3, 4) and a.shape[1] > 4:
+                        a = a.T
+                    out[k] = a
+            return out
+    except OSError as exc:
+        raise RecordingError(f"{path}: cannot read as HDF5 ({exc})") from None
+
+
+def load_broad(path: str | Path, name: str | None = None) -> Recording:
+    """Read one BROAD trial into a :class:`Recording` (frame ENU, mag in uT).
+
+    Raises
+    ------
+    RecordingError
+        The file is missing, unreadable or truncated, a key is missing or has the wrong shape, or
+        gyr/acc/mag hold NaN; the message names the file and the key.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise RecordingError(f"{path}: file not found")
+    d = _read_hdf5(path) if path.suffix in (".hdf5", ".h5") else _read_mat(path)
+    missing = [k for k in _KEYS if k not in d]
+    if missing:
+        raise RecordingError(f"{path}: missing key(s) {missing}; a BROAD trial needs {list(_KEYS)}")
+    rate = float(np.asarray(d["sampling_rate"]).ravel()[0])
+    if not (np.isfinite(rate) and rate > 0):
+        raise RecordingError(f"{path}: 'sampling_rate' must be a positive number of Hz, got {rate}")
+    return Recording(
+        name=name or path.stem,
+        gyr=d["imu_gyr"],
+        acc=d["imu_acc"],
+        mag=d["imu_mag"],
+        dt=1.0 / rate,
+        quat=d["opt_quat"],
+        motion=np.asarray(d["movement"]).ravel(),
+        frame="ENU",
+        units={"gyr": "rad/s", "acc": "m/s^2", "mag": "uT"},
+        source=str(path),
+    )
+
+
+def broad_trials(directory: str | Path | None = None) -> list[str]:
+    """Names of the trials present in ``directory`` (sorted), from their ``.mat`` files."""
+    directory = Path(directory) if directory else default_broad_dir()
+    return sorted(p.stem for p in directory.glob("*.mat"))
+
+
+def broad_groups(directory: str | Path | None = None) -> dict[str, list[str]]:
+    """Trial groups of the published index (``trials.json``): group name -> trial names."""
+    directory = Path(directory) if directory else default_broad_dir()
+    index = json.loads((directory / "trials.json").read_text())
+    groups: dict[str, list[str]] = {}
+    for trial, info in index["trials"].items():
+        for g in info["groups"]:
+            groups.setdefault(g, []).append(trial)
+    return groups

@@ -1,0 +1,177 @@
+"""The :class:`Recording`: IMU samples with ground truth, validated once at construction.
+
+Conventions (shared by every filter, metric and loader of the project)
+----------------------------------------------------------------------
+- Quaternions are ``(w, x, y, z)``, Hamilton product, and describe the **sensor-to-earth**
+  rotation: ``v_earth = q * v_sensor * conj(q)``.
+- ``frame`` names the earth frame: ``"ENU"`` (x east, y north, z up; BROAD) or ``"NED"`` (x north,
+  y east, z down; the FAEKF paper). See :mod:`objectives.attitude.quaternion` for conversions.
+- ``gyr`` in rad/s, ``acc`` in m/s^2 (specific force: at rest the accelerometer reads +g along the
+  earth's *up* axis expressed in the sensor frame), ``mag`` in any unit (filters normalise it).
+- ``quat`` (truth) may hold NaN rows where the reference was lost; metrics skip them.
+- ``motion`` marks the samples that metrics use (BROAD's ``movement``); all True by default.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Recording", "RecordingError"]
+
+FRAMES = ("ENU", "NED")
+
+
+class RecordingError(ValueError):
+    """Bad recording data: the message names the source, the field and what was expected."""
+
+
+def _as_array(source: str, key: str, value: Any, ncols: int | None, n: int | None) -> np.ndarray:
+    try:
+        a = np.ascontiguousarray(np.asarray(value, dtype=np.float64))
+    except (TypeError, ValueError) as exc:
+        raise RecordingError(f"{source}: {key!r} is not numeric ({exc})") from None
+    if ncols is None:
+        if a.ndim == 2 and a.shape[1] == 1:
+            a = np.ascontiguousarray(a[:, 0])
+        if a.ndim != 1:
+            raise RecordingError(f"{source}: {key!r} must have shape (N,), got {a.shape}")
+    elif a.ndim != 2 or a.shape[1] != ncols:
+        raise RecordingError(f"{source}: {key!r} must have shape (N, {ncols}), got {a.shape}")
+    if n is not None and a.shape[0] != n:
+        raise RecordingError(f"{source}: {key!r} has {a.shape[0]} samples, expected {n} (as gyr)")
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Recording:
+    """IMU data of one trial plus ground truth.
+
+    Attributes
+    ----------
+    name : str
+        Trial name (used in metrics tables and history columns).
+    gyr : ndarray (N, 3)
+        Angular rate in the sensor frame, rad/s.
+    acc : ndarray (N, 3)
+        Specific force in the sensor frame, m/s^2.
+    mag : ndarray (N, 3) or None
+        Magnetic field in the sensor frame, any unit (``units["mag"]`` says which).
+    dt : float
+        Sample time, s (uniform sampling).
+    quat : ndarray (N, 4) or None
+        True sensor-to-earth orientation ``(w, x, y, z)`` in ``frame``; NaN rows are unknown.
+    motion : ndarray (N,) bool
+        Samples used by metrics.
+    frame : {"ENU", "NED"}
+        Earth frame of ``quat`` and of every filter's output on this recording.
+    units : dict
+        Units of the signals, e.g. ``{"gyr": "rad/s", "acc": "m/s^2", "mag": "uT"}``.
+    source : str
+        Where the data came from (file path or generator spec), for error messages.
+    extra : dict
+        Optional named signals of length N (e.g. ``{"true_ext_acc": (N, 3)}`` from a generator).
+    """
+
+    name: str
+    gyr: np.ndarray
+    acc: np.ndarray
+    mag: np.ndarray | None
+    dt: float
+    quat: np.ndarray | None = None
+    motion: np.ndarray | None = None
+    frame: str = "ENU"
+    units: Mapping[str, str] = field(default_factory=lambda: {"gyr": "rad/s", "acc": "m/s^2", "mag": "1"})
+    source: str = ""
+    extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        src = self.source or self.name or "recording"
+        gyr = _as_array(src, "gyr", self.gyr, 3, None)
+        n = gyr.shape[0]
+        if n < 2:
+            raise RecordingError(f"{src}: needs at least 2 samples, got {n}")
+        acc = _as_array(src, "acc", self.acc, 3, n)
+        for key, a in (("gyr", gyr), ("acc", acc)):
+            bad = ~np.isfinite(a).all(axis=1)
+            if bad.any():
+                i = int(np.argmax(bad))
+                raise RecordingError(
+                    f"{src}: {key!r} has {int(bad.sum())} non-finite sample(s), first at index {i}; "
+                    "filters need finite gyr and acc (clean or cut the recording)"
+                )
+        mag = None
+        if self.mag is not None:
+            mag = _as_array(src, "mag", self.mag, 3, n)
+            bad = ~np.isfinite(mag).all(axis=1)
+            if bad.any():
+                raise RecordingError(
+                    f"{src}: 'mag' has {int(bad.sum())} non-finite sample(s), first at index "
+                    f"{int(np.argmax(bad))}"
+                )
+        quat = None if self.quat is None else _as_array(src, "quat", self.quat, 4, n)
+        if self.motion is None:
+            motion = np.ones(n, dtype=bool)
+        else:
+            motion = _as_array(src, "motion", self.motion, None, n).astype(bool)
+        try:
+            dt = float(self.dt)
+        except (TypeError, ValueError):
+            raise RecordingError(f"{src}: 'dt' must be a number of seconds, got {self.dt!r}") from None
+        if not (np.isfinite(dt) and dt > 0):
+            raise RecordingError(f"{src}: 'dt' must be a positive number of seconds, got {self.dt!r}")
+        if self.frame not in FRAMES:
+            raise RecordingError(f"{src}: 'frame' must be one of {FRAMES}, got {self.frame!r}")
+        extra = {}
+        for k, v in dict(self.extra).items():
+            a = np.ascontiguousarray(np.asarray(v, dtype=np.float64))
+            if a.shape[0] != n:
+                raise RecordingError(f"{src}: extra signal {k!r} has {a.shape[0]} samples, expected {n}")
+            extra[k] = a
+        for k, v in (("gyr", gyr), ("acc", acc), ("mag", mag), ("quat", quat), ("motion", motion),
+                     ("dt", dt), ("extra", extra)):
+            object.__setattr__(self, k, v)
+
+    # ------------------------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return self.gyr.shape[0]
+
+    @property
+    def rate_hz(self) -> float:
+        return 1.0 / self.dt
+
+    @property
+    def duration_s(self) -> float:
+        return self.n * self.dt
+
+    @property
+    def time(self) -> np.ndarray:
+        """Sample times, s, starting at 0."""
+        return np.arange(self.n) * self.dt
+
+    def slice(self, start: int, stop: int, name: str | None = None) -> Recording:
+        """Samples ``start:stop`` as a new recording."""
+        def cut(a):
+            return None if a is None else a[start:stop]
+        return replace(
+            self,
+            name=name or self.name,
+            gyr=self.gyr[start:stop],
+            acc=self.acc[start:stop],
+            mag=cut(self.mag),
+            quat=cut(self.quat),
+            motion=self.motion[start:stop],
+            extra={k: v[start:stop] for k, v in self.extra.items()},
+        )
+
+    def without_mag(self) -> Recording:
+        return replace(self, mag=None)
+
+    def __repr__(self) -> str:
+        return (f"Recording({self.name!r}, n={self.n}, rate={self.rate_hz:.6g} Hz, frame={self.frame}, "
+                f"mag={'yes' if self.mag is not None else 'no'}, truth={'yes' if self.quat is not None else 'no'})")

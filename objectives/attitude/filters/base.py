@@ -1,0 +1,180 @@
+"""What every attitude filter shares: named parameters, default search space, initialisation, frames.
+
+A filter is a numba batch kernel over whole arrays plus a thin subclass of :class:`AttitudeFilter`
+that declares its parameters and calls the kernel. Subclasses set
+
+- ``name``: the YAML name (``filter: madgwick``);
+- ``params``: a tuple of :class:`tuner.space.Real` with default search bounds, and ``fixed`` options
+  declared as ``Real(name, fixed=default)``;
+- ``defaults``: a dict of default values of every parameter;
+- ``needs_mag``: whether the 9-D mode uses the magnetometer (a ``use_mag`` option switches 6-D);
+
+and implement ``_run(rec, q0) -> FilterResult`` with ``q0`` already in the filter's working frame.
+Output quaternions are sensor-to-earth ``(w, x, y, z)`` in the recording's frame (``rec.frame``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from objectives.attitude.data.recording import Recording
+from tuner.space import Real, Space
+
+__all__ = ["AttitudeFilter", "FilterResult", "quat_from_rotmat", "quat_from_acc_mag", "initial_quaternion"]
+
+
+@dataclass(frozen=True)
+class FilterResult:
+    """Output of a filter run.
+
+    quat : (N, 4) sensor-to-earth estimates in ``frame``; non-finite rows mark samples where the
+        filter diverged (metrics count them as maximal errors).
+    diagnostics : named (N,) or (N, k) signals for reports (fuzzy scaling factor, disturbance
+        measures, innovation, estimated gyro bias, ...).
+    """
+
+    quat: np.ndarray
+    frame: str
+    diagnostics: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+
+def quat_from_rotmat(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (Shepperd's method)."""
+    R = np.asarray(R, float)
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    if tr > 0:
+        s = 2.0 * math.sqrt(1.0 + tr)
+        q = np.array([0.25 * s, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s])
+    elif R[0, 0] > R[1, 1] and R[0, 0] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = np.array([(R[2, 1] - R[1, 2]) / s, 0.25 * s, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s])
+    elif R[1, 1] > R[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = np.array([(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, 0.25 * s, (R[1, 2] + R[2, 1]) / s])
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = np.array([(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, 0.25 * s])
+    q /= np.linalg.norm(q)
+    return q if q[0] >= 0 else -q
+
+
+def quat_from_acc_mag(acc: np.ndarray, mag: np.ndarray | None, frame: str = "ENU") -> np.ndarray:
+    """Sensor-to-earth quaternion from one accelerometer (and magnetometer) sample.
+
+    ``acc`` points up in the sensor frame (specific force at rest). With ``mag`` the heading follows
+    the horizontal magnetic field (magnetic north = earth north); without it the heading is chosen
+    so that the sensor's x axis projects on north (zero yaw). This is BROAD's ``quatFromAccMag``.
+    """
+    up = np.asarray(acc, float) / np.linalg.norm(acc)
+    if mag is not None and np.all(np.isfinite(mag)) and np.linalg.norm(np.cross(mag, up)) > 1e-12:
+        east = np.cross(mag, up)
+    else:
+        east = np.cross(np.array([1.0, 0.0, 0.0]), up)
+        if np.linalg.norm(east) < 1e-9:
+            east = np.cross(np.array([0.0, 1.0, 0.0]), up)
+        east = -east
+        # x_s x up points west when x_s is north-ish; negate for east
+    east /= np.linalg.norm(east)
+    north = np.cross(up, east)
+    if frame.upper() == "ENU":
+        R = np.vstack([east, north, up])  # rows: earth axes in sensor coords -> v_e = R v_s
+    elif frame.upper() == "NED":
+        R = np.vstack([north, east, -up])
+    elif frame.upper() == "NWU":
+        R = np.vstack([north, -east, up])
+    else:
+        raise ValueError(f"frame must be ENU, NED or NWU, got {frame!r}")
+    return quat_from_rotmat(R)
+
+
+def initial_quaternion(rec: Recording, frame: str, q0: Any = None, use_mag: bool = True) -> np.ndarray:
+    """The common initialisation of all filters.
+
+    ``q0`` may be ``None``/``"accmag"`` (first acc/mag sample), ``"truth"`` (first finite truth sample,
+    converted to ``frame``), or an explicit (4,) quaternion in ``frame``.
+    """
+    from objectives.attitude.quaternion import to_frame
+
+    if q0 is None or (isinstance(q0, str) and q0 == "accmag"):
+        mag = rec.mag[0] if (use_mag and rec.mag is not None) else None
+        return quat_from_acc_mag(rec.acc[0], mag, frame)
+    if isinstance(q0, str) and q0 == "truth":
+        if rec.quat is None:
+            raise ValueError(f"{rec.name}: q0='truth' but the recording has no truth")
+        ok = np.isfinite(rec.quat).all(axis=1)
+        if not ok.any():
+            raise ValueError(f"{rec.name}: q0='truth' but every truth sample is NaN")
+        return to_frame(rec.quat[int(np.argmax(ok))], rec.frame, frame)
+    q = np.asarray(q0, float).reshape(-1)
+    if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
+        raise ValueError(f"q0 must be 'accmag', 'truth' or a finite (4,) quaternion, got {q0!r}")
+    return q / np.linalg.norm(q)
+
+
+class AttitudeFilter:
+    """Base class of all attitude filters (see module docstring)."""
+
+    name: ClassVar[str] = ""
+    params: ClassVar[tuple[Real, ...]] = ()
+    defaults: ClassVar[dict[str, Any]] = {}
+    #: earth frame the kernel works in; the output is converted to the recording's frame
+    working_frame: ClassVar[str] = "ENU"
+    needs_mag: ClassVar[bool] = False
+
+    def __init__(self, **values: Any):
+        unknown = sorted(set(values) - set(self.defaults))
+        if unknown:
+            raise ValueError(
+                f"{self.name}: unknown parameter(s) {unknown}; known: {sorted(self.defaults)}"
+            )
+        self.values: dict[str, Any] = {**self.defaults, **values}
+        self._check()
+
+    def _check(self) -> None:
+        """Subclasses validate values here (raise ValueError naming the parameter)."""
+
+    # --- search space -----------------------------------------------------------------------
+    @classmethod
+    def space(cls) -> Space:
+        """Default search space: bounded parameters searched, options fixed at their defaults."""
+        return Space(cls.params)
+
+    @classmethod
+    def from_run(cls, run_dir: str | Path, **overrides: Any) -> AttitudeFilter:
+        """The filter with the best parameters of a finished run (``best.yaml``)."""
+        import yaml
+
+        best = yaml.safe_load((Path(run_dir) / "best.yaml").read_text())
+        params = dict(best.get("params", best))
+        params = {k: v for k, v in params.items() if k in cls.defaults}
+        return cls(**{**params, **overrides})
+
+    # --- running ----------------------------------------------------------------------------
+    def run(self, rec: Recording, q0: Any = None) -> np.ndarray:
+        """Estimate orientation over the whole recording: (N, 4) sensor-to-earth in ``rec.frame``."""
+        return self.run_detailed(rec, q0).quat
+
+    def run_detailed(self, rec: Recording, q0: Any = None) -> FilterResult:
+        from objectives.attitude.quaternion import to_frame
+
+        if self.needs_mag and self.values.get("use_mag", True) and rec.mag is None:
+            raise ValueError(f"{self.name}: recording {rec.name!r} has no magnetometer; set use_mag: false")
+        use_mag = bool(self.values.get("use_mag", True)) and rec.mag is not None
+        qi = initial_quaternion(rec, self.working_frame, q0, use_mag=use_mag)
+        res = self._run(rec, qi)
+        if res.frame != rec.frame:
+            res = FilterResult(to_frame(res.quat, res.frame, rec.frame), rec.frame, res.diagnostics)
+        return res
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.values.items())
+        return f"{type(self).__name__}({args})"
