@@ -26,6 +26,8 @@ from numba import njit
 __all__ = [
     "qmul", "qconj", "qnormalize", "qrot", "qmul_batch", "qconj_batch", "normalize_batch",
     "Q_ENU_FROM_NWU", "Q_NED_FROM_ENU", "frame_rotation", "to_frame",
+    "FRAME_CODES", "rotmat", "rotmat_batch", "qexp", "qlog", "qexp_batch", "qlog_batch",
+    "qeuler_zyx", "euler_zyx", "quat_from_euler_zyx", "triad", "triad_code", "triad_batch",
 ]
 
 _S = 1.0 / math.sqrt(2.0)
@@ -126,3 +128,418 @@ def to_frame(q: np.ndarray, src: str, dst: str) -> np.ndarray:
         return q.copy()
     out = qmul_batch(frame_rotation(src, dst), np.ascontiguousarray(q))
     return out[0] if q.ndim == 1 else out
+
+
+# ------------------------------------------------------------------------------------------------
+# Rotation matrix (eq. 3), exp/log maps, Euler angles (eq. 6), TRIAD (eqs. 11-14)
+# ------------------------------------------------------------------------------------------------
+
+#: integer codes of the earth frames inside kernels (``FRAME_CODES["NED"]``).
+FRAME_CODES = {"ENU": 0, "NED": 1, "NWU": 2}
+
+_SMALL_ANGLE = 1e-8  # rad; below it exp/log use their Taylor series
+
+
+def _frame_code(frame: str) -> int:
+    try:
+        return FRAME_CODES[str(frame).upper()]
+    except KeyError:
+        raise ValueError(f"frame must be one of {sorted(FRAME_CODES)}, got {frame!r}") from None
+
+
+def _as_rows(a, ncols: int, what: str) -> tuple[np.ndarray, bool]:
+    """``a`` as a C-contiguous float64 (N, ncols) array, and whether it was a single row."""
+    try:
+        arr = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{what}: not numeric ({exc})") from None
+    if arr.ndim == 1 and arr.shape[0] == ncols:
+        return np.ascontiguousarray(arr.reshape(1, ncols)), True
+    if arr.ndim != 2 or arr.shape[1] != ncols:
+        raise ValueError(f"{what}: expected shape ({ncols},) or (N, {ncols}), got {arr.shape}")
+    return np.ascontiguousarray(arr), False
+
+
+@njit(cache=True)
+def rotmat(q):
+    """Rotation matrix of the quaternion ``q``: the FAEKF paper eq. 3.
+
+    Parameters
+    ----------
+    q : ndarray (4,)
+        Unit quaternion ``(w, x, y, z)``, sensor-to-earth.
+
+    Returns
+    -------
+    ndarray (3, 3)
+        ``R`` with ``v_earth = R @ v_sensor`` (the paper's :math:`{}^E R(q)`). The formula uses
+        ``w^2 + x^2 - y^2 - z^2`` on the diagonal, as printed, so ``q`` must be of unit norm.
+    """
+    w, x, y, z = q[0], q[1], q[2], q[3]
+    R = np.empty((3, 3))
+    R[0, 0] = w * w + x * x - y * y - z * z
+    R[0, 1] = 2.0 * (x * y - w * z)
+    R[0, 2] = 2.0 * (x * z + w * y)
+    R[1, 0] = 2.0 * (x * y + w * z)
+    R[1, 1] = w * w - x * x + y * y - z * z
+    R[1, 2] = 2.0 * (y * z - w * x)
+    R[2, 0] = 2.0 * (x * z - w * y)
+    R[2, 1] = 2.0 * (y * z + w * x)
+    R[2, 2] = w * w - x * x - y * y + z * z
+    return R
+
+
+def rotmat_batch(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (eq. 3) of (N, 4) quaternions: (N, 3, 3); a (4,) input gives (3, 3)."""
+    q2, single = _as_rows(q, 4, "rotmat_batch: q")
+    w, x, y, z = q2.T
+    R = np.empty((q2.shape[0], 3, 3))
+    R[:, 0, 0] = w * w + x * x - y * y - z * z
+    R[:, 0, 1] = 2.0 * (x * y - w * z)
+    R[:, 0, 2] = 2.0 * (x * z + w * y)
+    R[:, 1, 0] = 2.0 * (x * y + w * z)
+    R[:, 1, 1] = w * w - x * x + y * y - z * z
+    R[:, 1, 2] = 2.0 * (y * z - w * x)
+    R[:, 2, 0] = 2.0 * (x * z - w * y)
+    R[:, 2, 1] = 2.0 * (y * z + w * x)
+    R[:, 2, 2] = w * w - x * x - y * y + z * z
+    return R[0] if single else R
+
+
+@njit(cache=True, inline="always")
+def _qexp_into(vx, vy, vz, out, i):
+    angle = math.sqrt(vx * vx + vy * vy + vz * vz)
+    half = 0.5 * angle
+    if angle < _SMALL_ANGLE:
+        # sin(a/2)/a = 1/2 - a^2/48 + ...; cos(a/2) = 1 - a^2/8
+        s = 0.5 - angle * angle / 48.0
+        c = 1.0 - angle * angle / 8.0
+    else:
+        s = math.sin(half) / angle
+        c = math.cos(half)
+    out[i, 0] = c
+    out[i, 1] = s * vx
+    out[i, 2] = s * vy
+    out[i, 3] = s * vz
+
+
+@njit(cache=True, inline="always")
+def _qlog_into(w, x, y, z, out, i):
+    if w < 0.0:  # q and -q are the same rotation: take the one with angle in [0, pi]
+        w, x, y, z = -w, -x, -y, -z
+    nv = math.sqrt(x * x + y * y + z * z)
+    if nv < _SMALL_ANGLE:
+        # angle = 2 atan2(nv, w) ~ 2 nv / w; scale = angle / nv
+        scale = 2.0 / w if w > 0.0 else 0.0
+    else:
+        scale = 2.0 * math.atan2(nv, w) / nv
+    out[i, 0] = scale * x
+    out[i, 1] = scale * y
+    out[i, 2] = scale * z
+
+
+@njit(cache=True)
+def qexp(v):
+    """Unit quaternion of the rotation vector ``v`` (3,), rad: ``(cos(|v|/2), sin(|v|/2) v/|v|)``.
+
+    This is the exponential map of SO(3) written with quaternions, ``exp((0, v/2))``; the rotation
+    is by ``|v|`` rad about ``v/|v|``. A Taylor series is used for ``|v| < 1e-8`` rad.
+    """
+    out = np.empty((1, 4))
+    _qexp_into(v[0], v[1], v[2], out, 0)
+    return out[0]
+
+
+@njit(cache=True)
+def qlog(q):
+    """Rotation vector (3,), rad, of the unit quaternion ``q``: the inverse of :func:`qexp`.
+
+    Returns the shortest rotation (angle in ``[0, pi]``): ``q`` and ``-q`` give the same vector,
+    so ``qexp(qlog(q)) == q`` when ``q[0] >= 0`` and ``== -q`` otherwise. ``q`` is not
+    renormalised; the angle uses ``atan2(|q_v|, w)``, which tolerates small norm errors.
+    """
+    out = np.empty((1, 3))
+    _qlog_into(q[0], q[1], q[2], q[3], out, 0)
+    return out[0]
+
+
+@njit(cache=True)
+def _qexp_kernel(v, out):
+    for i in range(v.shape[0]):
+        _qexp_into(v[i, 0], v[i, 1], v[i, 2], out, i)
+
+
+@njit(cache=True)
+def _qlog_kernel(q, out):
+    for i in range(q.shape[0]):
+        _qlog_into(q[i, 0], q[i, 1], q[i, 2], q[i, 3], out, i)
+
+
+def qexp_batch(v: np.ndarray) -> np.ndarray:
+    """:func:`qexp` row by row: rotation vectors (N, 3) rad -> quaternions (N, 4); (3,) -> (4,)."""
+    v2, single = _as_rows(v, 3, "qexp_batch: v")
+    out = np.empty((v2.shape[0], 4))
+    _qexp_kernel(v2, out)
+    return out[0] if single else out
+
+
+def qlog_batch(q: np.ndarray) -> np.ndarray:
+    """:func:`qlog` row by row: quaternions (N, 4) -> rotation vectors (N, 3) rad; (4,) -> (3,)."""
+    q2, single = _as_rows(q, 4, "qlog_batch: q")
+    out = np.empty((q2.shape[0], 3))
+    _qlog_kernel(q2, out)
+    return out[0] if single else out
+
+
+@njit(cache=True, inline="always")
+def _euler_into(w, x, y, z, out, i):
+    # Elements of R (eq. 3) written homogeneously (scale-invariant in q).
+    r11 = w * w + x * x - y * y - z * z
+    r21 = 2.0 * (x * y + w * z)
+    r31 = 2.0 * (x * z - w * y)
+    r32 = 2.0 * (y * z + w * x)
+    r33 = w * w - x * x - y * y + z * z
+    out[i, 0] = math.atan2(r32, r33)
+    out[i, 1] = math.atan2(-r31, math.sqrt(r11 * r11 + r21 * r21))
+    out[i, 2] = math.atan2(r21, r11)
+
+
+@njit(cache=True)
+def qeuler_zyx(q):
+    """Scalar kernel of :func:`euler_zyx`: (4,) -> (3,) roll, pitch, yaw in rad."""
+    out = np.empty((1, 3))
+    _euler_into(q[0], q[1], q[2], q[3], out, 0)
+    return out[0]
+
+
+@njit(cache=True)
+def _euler_kernel(q, out):
+    for i in range(q.shape[0]):
+        _euler_into(q[i, 0], q[i, 1], q[i, 2], q[i, 3], out, i)
+
+
+def euler_zyx(q: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw (rad) of sensor-to-earth quaternions: intrinsic Z-Y'-X'' (the FAEKF paper eq. 6).
+
+    The angles satisfy ``R(q) = Rz(yaw) @ Ry(pitch) @ Rx(roll)`` with ``R`` the sensor-to-earth
+    matrix of eq. 3: starting from the earth axes, turn by yaw about z, then by pitch about the new
+    y, then by roll about the newest x. Roll is about the sensor x axis, pitch about y, yaw about z.
+
+    The formulas hold in any right-handed earth frame; what the angles mean depends on it:
+
+    - ``NED`` (the FAEKF paper): yaw is the heading, clockwise seen from above, from north to the
+      projection of the sensor x axis (0 = x points north, +pi/2 = east); pitch > 0 lifts the
+      nose (x up); roll > 0 lowers the right side (y down). The usual aerospace angles for a
+      forward-right-down sensor.
+    - ``ENU`` (BROAD): yaw is counter-clockwise seen from above, from east to the projection of x
+      (0 = x points east, +pi/2 = north), so heading-from-north = pi/2 - yaw; pitch > 0 lowers x
+      (nose down); roll > 0 lifts y.
+
+    The same physical orientation has different Euler angles in NED and ENU (the earth axes
+    differ, the sensor axes do not): convert quaternions with :func:`to_frame` first, never the
+    angles.
+
+    Eq. 6 as printed, ``phi = atan2(2 q2 q3 - 2 q0 q1, 2 q0^2 + 2 q3^2 - 1)`` etc., is this
+    function applied to ``conj(q)``: the paper writes it for the earth-to-sensor quaternion (as in
+    Madgwick's report). We keep ``q`` sensor-to-earth everywhere and use the equivalent
+    ``roll = atan2(R32, R33)``, ``pitch = -asin(R31)``, ``yaw = atan2(R21, R11)``. Pitch is
+    computed as ``atan2(-R31, hypot(R11, R21))`` (the same angle, accurate near +-pi/2 and free of
+    the ``sqrt(1 - x^2)`` of eq. 6 going NaN when rounding pushes ``|x|`` above 1); the formulas
+    are homogeneous, so ``q`` need not be exactly normalised.
+
+    Gimbal lock: at ``|pitch| = pi/2`` roll and yaw are not unique (only their difference or sum
+    is); errors between Euler angles there are meaningless.
+
+    Parameters
+    ----------
+    q : ndarray (N, 4) or (4,)
+        Quaternions ``(w, x, y, z)``, sensor-to-earth.
+
+    Returns
+    -------
+    ndarray (N, 3) or (3,)
+        Columns roll in ``[-pi, pi]``, pitch in ``[-pi/2, pi/2]``, yaw in ``[-pi, pi]``, rad.
+        Non-finite input rows give NaN rows.
+    """
+    q2, single = _as_rows(q, 4, "euler_zyx: q")
+    out = np.empty((q2.shape[0], 3))
+    _euler_kernel(q2, out)
+    return out[0] if single else out
+
+
+@njit(cache=True)
+def _quat_from_euler_kernel(e, out):
+    for i in range(e.shape[0]):
+        cr, sr = math.cos(0.5 * e[i, 0]), math.sin(0.5 * e[i, 0])
+        cp, sp = math.cos(0.5 * e[i, 1]), math.sin(0.5 * e[i, 1])
+        cy, sy = math.cos(0.5 * e[i, 2]), math.sin(0.5 * e[i, 2])
+        out[i, 0] = cr * cp * cy + sr * sp * sy
+        out[i, 1] = sr * cp * cy - cr * sp * sy
+        out[i, 2] = cr * sp * cy + sr * cp * sy
+        out[i, 3] = cr * cp * sy - sr * sp * cy
+
+
+def quat_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
+    """Sensor-to-earth quaternion ``qz(yaw) * qy(pitch) * qx(roll)``: the inverse of :func:`euler_zyx`.
+
+    Parameters
+    ----------
+    euler : ndarray (N, 3) or (3,)
+        Roll, pitch, yaw in rad (any range).
+
+    Returns
+    -------
+    ndarray (N, 4) or (4,)
+        Unit quaternions ``(w, x, y, z)``; not sign-normalised (``w`` may be negative).
+    """
+    e2, single = _as_rows(euler, 3, "quat_from_euler_zyx: euler")
+    out = np.empty((e2.shape[0], 4))
+    _quat_from_euler_kernel(e2, out)
+    return out[0] if single else out
+
+
+@njit(cache=True, inline="always")
+def _triad_into(ax, ay, az, mx, my, mz, code, out, i):
+    """TRIAD (eqs. 11-14) for one sample, written into ``out[i]``; NaN if acc x mag vanishes."""
+    # r1 = A/|A|, r2 = A x H / |A x H|, r3 = r1 x r2 (eq. 12)
+    na = math.sqrt(ax * ax + ay * ay + az * az)
+    cx = ay * mz - az * my
+    cy = az * mx - ax * mz
+    cz = ax * my - ay * mx
+    nc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    if not (na > 0.0 and nc > 1e-12 * na * math.sqrt(mx * mx + my * my + mz * mz)) or not (nc < math.inf):
+        out[i, 0] = math.nan
+        out[i, 1] = math.nan
+        out[i, 2] = math.nan
+        out[i, 3] = math.nan
+        return
+    r1x, r1y, r1z = ax / na, ay / na, az / na
+    r2x, r2y, r2z = cx / nc, cy / nc, cz / nc
+    r3x = r1y * r2z - r1z * r2y
+    r3y = r1z * r2x - r1x * r2z
+    r3z = r1x * r2y - r1y * r2x
+    # Earth triad (eq. 11) from s1 = up, s2 = up x north / |.| = west, s3 = s1 x s2 = south,
+    # written out per frame: (s1, s2, s3) as earth-frame vectors.
+    if code == 1:  # NED: up = -z, west = -y, south = -x
+        # R = M_ref M_mea^T (sensor-to-earth); row k of R is sum_j s_j[k] * r_j
+        R00, R01, R02 = -r3x, -r3y, -r3z
+        R10, R11, R12 = -r2x, -r2y, -r2z
+        R20, R21, R22 = -r1x, -r1y, -r1z
+    elif code == 0:  # ENU: up = z, west = -x, south = -y
+        R00, R01, R02 = -r2x, -r2y, -r2z
+        R10, R11, R12 = -r3x, -r3y, -r3z
+        R20, R21, R22 = r1x, r1y, r1z
+    else:  # NWU: up = z, west = y, south = -x
+        R00, R01, R02 = -r3x, -r3y, -r3z
+        R10, R11, R12 = r2x, r2y, r2z
+        R20, R21, R22 = r1x, r1y, r1z
+    # Eq. 14 with the numerically safe branches (Shepperd): divide by the largest of 4 w^2,
+    # 4 x^2, 4 y^2, 4 z^2 instead of 4 q0, which is near 0 for rotations near 180 deg.
+    tr = R00 + R11 + R22
+    if tr > 0.0:
+        s = 2.0 * math.sqrt(1.0 + tr)  # = 4 q0
+        w = 0.25 * s
+        x = (R21 - R12) / s
+        y = (R02 - R20) / s
+        z = (R10 - R01) / s
+    elif R00 > R11 and R00 > R22:
+        s = 2.0 * math.sqrt(max(1.0 + R00 - R11 - R22, 0.0))  # = 4 |q1|
+        w = (R21 - R12) / s
+        x = 0.25 * s
+        y = (R01 + R10) / s
+        z = (R02 + R20) / s
+    elif R11 > R22:
+        s = 2.0 * math.sqrt(max(1.0 + R11 - R00 - R22, 0.0))
+        w = (R02 - R20) / s
+        x = (R01 + R10) / s
+        y = 0.25 * s
+        z = (R12 + R21) / s
+    else:
+        s = 2.0 * math.sqrt(max(1.0 + R22 - R00 - R11, 0.0))
+        w = (R10 - R01) / s
+        x = (R02 + R20) / s
+        y = (R12 + R21) / s
+        z = 0.25 * s
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    if w < 0.0:
+        n = -n
+    out[i, 0] = w / n
+    out[i, 1] = x / n
+    out[i, 2] = y / n
+    out[i, 3] = z / n
+
+
+@njit(cache=True)
+def triad_code(acc, mag, code):
+    """:func:`triad` with the earth frame as an integer code (``FRAME_CODES``): 0 ENU, 1 NED, 2 NWU."""
+    out = np.empty((1, 4))
+    _triad_into(acc[0], acc[1], acc[2], mag[0], mag[1], mag[2], code, out, 0)
+    return out[0]
+
+
+@njit(cache=True)
+def triad(acc, mag, frame="NED"):
+    """Sensor-to-earth quaternion from one accelerometer and magnetometer sample: TRIAD, FAEKF eqs. 11-14.
+
+    Parameters
+    ----------
+    acc : ndarray (3,)
+        Specific force in the sensor frame, any unit (at rest it points *up*, the project's
+        convention; see :mod:`objectives.attitude.data.recording`).
+    mag : ndarray (3,)
+        Magnetic field in the sensor frame, any unit; magnetic north is taken as earth north.
+    frame : {"NED", "ENU", "NWU"}
+        Earth frame of the result. Inside other kernels prefer :func:`triad_code` (no string).
+
+    Returns
+    -------
+    ndarray (4,)
+        Unit quaternion ``(w, x, y, z)`` with ``w >= 0``; NaN if ``acc`` is zero or parallel to
+        ``mag`` (heading undefined), or if an input is not finite.
+
+    Notes
+    -----
+    Sensor triad (eq. 12): ``r1 = A/|A|``, ``r2 = A x H/|A x H|``, ``r3 = r1 x r2``. Earth triad
+    (eq. 11) from the same construction on the earth-frame references. The paper uses the
+    gravity vector ``g = (0, 0, 9.81)`` NED with an accelerometer that reads it (pointing down);
+    our accelerometer reads the specific force (pointing up), so both triads use *up* instead
+    (``s1 = up``, ``s2 = up x north / |.| = west``, ``s3 = s1 x s2 = south``): flipping both
+    ``r1`` and ``s1`` flips ``r2, s2`` too and gives the same rotation. Only the direction of
+    north in the earth frame enters (the magnetic inclination cancels in ``s2``), so no field
+    model is needed. Eq. 13 builds ``S_R = M_mea M_ref^T`` (earth-to-sensor); eq. 14 read on it
+    gives ``q1 = (r23 - r32) / 4 q0`` etc., which is exactly the quaternion of the sensor-to-earth
+    matrix ``E_R = M_ref M_mea^T`` in our convention, so the result is sensor-to-earth as
+    everywhere in the project. Eq. 14 divides by ``4 q0``, which loses all precision for
+    rotations near 180 deg (``q0 -> 0``); we use Shepperd's branch choice (divide by the
+    largest of the four ``4 |q_i|``), identical to eq. 14 whenever ``1 + trace > 1``.
+    """
+    f = frame.upper()
+    code = 1
+    if f == "ENU":
+        code = 0
+    elif f == "NWU":
+        code = 2
+    elif f != "NED":
+        raise ValueError("triad: frame must be 'NED', 'ENU' or 'NWU'")
+    return triad_code(acc, mag, code)
+
+
+@njit(cache=True)
+def _triad_kernel(acc, mag, code, out):
+    for i in range(acc.shape[0]):
+        _triad_into(acc[i, 0], acc[i, 1], acc[i, 2], mag[i, 0], mag[i, 1], mag[i, 2], code, out, i)
+
+
+def triad_batch(acc: np.ndarray, mag: np.ndarray, frame: str = "NED") -> np.ndarray:
+    """:func:`triad` for every row: acc (N, 3), mag (N, 3) -> (N, 4) sensor-to-earth quaternions.
+
+    Rows where TRIAD is undefined (zero acc, acc parallel to mag, non-finite input) are NaN.
+    A single (3,) pair gives a (4,) result.
+    """
+    a2, single = _as_rows(acc, 3, "triad_batch: acc")
+    m2, _ = _as_rows(mag, 3, "triad_batch: mag")
+    if a2.shape[0] != m2.shape[0]:
+        raise ValueError(f"triad_batch: acc has {a2.shape[0]} rows, mag has {m2.shape[0]}")
+    out = np.empty((a2.shape[0], 4))
+    _triad_kernel(a2, m2, _frame_code(frame), out)
+    return out[0] if single else out
