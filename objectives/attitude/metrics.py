@@ -1,16 +1,25 @@
 """Error metrics of attitude estimates against ground truth.
 
-Every metric skips samples whose truth is NaN (and, for BROAD metrics, samples outside the motion
-mask); they never propagate NaN from the truth.
+Every metric skips samples whose truth is NaN (and samples outside the motion mask where one is
+given); they never propagate NaN from the truth. Estimates that are not finite (a diverged filter)
+count as the maximal error (pi rad, 180 deg) and are never dropped, so diverging cannot look good.
+
+Units: the Euler metrics of the FAEKF paper (Table 2, eq. 35) are computed from errors in rad;
+:class:`EulerStats` reports them in deg / deg^2 (names carry the unit), :func:`euler_mse_geomean`
+in rad^2 as the paper's Table 2 does.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BroadErrors", "broad_errors", "broad_error_angles"]
+__all__ = [
+    "BroadErrors", "broad_errors", "broad_error_angles", "wrap_angle", "euler_errors", "EulerStats",
+    "euler_stats", "euler_mse_geomean", "mse_1d",
+]
 
 
 @dataclass(frozen=True)
@@ -73,3 +82,234 @@ def broad_errors(q_est: np.ndarray, q_true: np.ndarray, motion: np.ndarray | Non
         a = np.where(np.isfinite(a), a, np.pi)
         out.append(float(np.degrees(np.sqrt(np.mean(a * a)))))
     return BroadErrors(out[0], out[1], out[2], n)
+
+
+# ------------------------------------------------------------------------------------------------
+# Euler-angle metrics (the FAEKF paper, Table 2 and eq. 35; the thesis, eq. 3.18)
+# ------------------------------------------------------------------------------------------------
+
+_AXES = ("roll", "pitch", "yaw")
+
+
+def wrap_angle(a):
+    """Angle(s) in rad wrapped to ``[-pi, pi)``; NaN stays NaN. Scalar in, float out."""
+    out = np.mod(np.asarray(a, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
+    # np.mod may return 2 pi for tiny negative inputs (rounding); keep the half-open interval
+    out = np.where(out >= np.pi, out - 2.0 * np.pi, out)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def _quat_rows(q, what: str) -> np.ndarray:
+    q = np.asarray(q, dtype=float)
+    if q.ndim != 2 or q.shape[1] != 4:
+        raise ValueError(f"{what} must have shape (N, 4), got {q.shape}")
+    return q
+
+
+def euler_errors(q_est: np.ndarray, q_true: np.ndarray) -> np.ndarray:
+    """Roll, pitch and yaw errors ``e = true - estimate`` (the FAEKF paper, section 5.2), rad.
+
+    Both inputs are sensor-to-earth quaternions in the same earth frame; angles are those of
+    :func:`objectives.attitude.quaternion.euler_zyx` and each difference is wrapped to
+    ``[-pi, pi)``, so 179 deg vs -179 deg is a 2 deg error.
+
+    Parameters
+    ----------
+    q_est, q_true : ndarray (N, 4)
+
+    Returns
+    -------
+    ndarray (N, 3)
+        Errors in rad. Rows where the truth is not finite are NaN (metrics skip them); rows where
+        the truth is finite but the estimate is not are ``pi`` on every axis (maximal error).
+    """
+    from objectives.attitude.quaternion import euler_zyx
+
+    q_est = _quat_rows(q_est, "q_est")
+    q_true = _quat_rows(q_true, "q_true")
+    if q_est.shape != q_true.shape:
+        raise ValueError(f"q_est {q_est.shape} and q_true {q_true.shape} differ in shape")
+    truth_ok = np.isfinite(q_true).all(axis=1)
+    est_ok = np.isfinite(q_est).all(axis=1) & (np.abs(q_est).sum(axis=1) > 0)
+    with np.errstate(invalid="ignore"):
+        e = wrap_angle(euler_zyx(q_true) - euler_zyx(q_est))
+    e = np.asarray(e).reshape(-1, 3)
+    e[~est_ok] = np.pi
+    e[~truth_ok] = np.nan
+    return e
+
+
+def _valid_mask(n: int, truth_ok: np.ndarray, mask) -> np.ndarray:
+    valid = truth_ok.copy()
+    if mask is not None:
+        m = np.asarray(mask, dtype=bool).ravel()
+        if m.shape[0] != n:
+            raise ValueError(f"mask has {m.shape[0]} samples, expected {n}")
+        valid &= m
+    return valid
+
+
+@dataclass(frozen=True)
+class EulerStats:
+    """Per-axis statistics of the Euler errors (order roll, pitch, yaw), as in the FAEKF paper's Table 2.
+
+    Attributes
+    ----------
+    mse_deg2 : ndarray (3,)
+        Mean squared error, deg^2 (Table 2 reports rad^2: ``mse_rad2``).
+    rmse_deg : ndarray (3,)
+        Root mean squared error, deg.
+    std_deg : ndarray (3,)
+        Standard deviation of the error about its mean, deg, with ``N - 1`` in the denominator
+        (MATLAB's ``std``, the tool of the paper); ``mse = std^2 (N-1)/N + mean^2``.
+    mean_deg : ndarray (3,)
+        Mean error (bias), deg.
+    n_samples : int
+        Samples used (finite truth and inside the mask).
+    """
+
+    mse_deg2: np.ndarray
+    rmse_deg: np.ndarray
+    std_deg: np.ndarray
+    mean_deg: np.ndarray
+    n_samples: int
+
+    @property
+    def mse_rad2(self) -> np.ndarray:
+        """MSE in rad^2, the unit of the paper's Table 2 and of eq. 35."""
+        return self.mse_deg2 * (np.pi / 180.0) ** 2
+
+    @property
+    def std_rad(self) -> np.ndarray:
+        return np.radians(self.std_deg)
+
+    def as_dict(self) -> dict[str, float]:
+        """Flat names: ``roll_mse_deg2``, ``roll_rmse_deg``, ``roll_std_deg``, ``roll_mean_deg``, ..."""
+        out: dict[str, float] = {}
+        for i, ax in enumerate(_AXES):
+            out[f"{ax}_mse_deg2"] = float(self.mse_deg2[i])
+            out[f"{ax}_rmse_deg"] = float(self.rmse_deg[i])
+            out[f"{ax}_std_deg"] = float(self.std_deg[i])
+            out[f"{ax}_mean_deg"] = float(self.mean_deg[i])
+        return out
+
+
+def euler_stats(q_est: np.ndarray, q_true: np.ndarray, mask: np.ndarray | None = None) -> EulerStats:
+    """Per-axis MSE, RMSE, STD and mean of the Euler errors (:func:`euler_errors`), in deg.
+
+    Parameters
+    ----------
+    q_est, q_true : ndarray (N, 4)
+        Sensor-to-earth quaternions in the same frame; NaN truth rows are skipped.
+    mask : ndarray (N,) bool, optional
+        Samples to use (e.g. ``Recording.motion``); default all.
+
+    Returns
+    -------
+    EulerStats
+        With NaN arrays and ``n_samples = 0`` when no sample is valid; STD is NaN for one sample.
+    """
+    e = euler_errors(q_est, q_true)
+    valid = _valid_mask(e.shape[0], np.isfinite(e).all(axis=1), mask)
+    n = int(valid.sum())
+    if n == 0:
+        nan = np.full(3, np.nan)
+        return EulerStats(nan, nan.copy(), nan.copy(), nan.copy(), 0)
+    ed = np.degrees(e[valid])
+    mse = np.mean(ed * ed, axis=0)
+    std = np.std(ed, axis=0, ddof=1) if n > 1 else np.full(3, np.nan)
+    return EulerStats(mse, np.sqrt(mse), std, ed.mean(axis=0), n)
+
+
+def _scenario_mse_rad2(item, j: int) -> np.ndarray:
+    if not isinstance(item, (tuple, list)) or len(item) not in (2, 3):
+        raise ValueError(
+            f"scenario {j}: expected (q_est, q_true) or (q_est, q_true, mask), got {type(item).__name__}"
+        )
+    q_est, q_true = item[0], item[1]
+    mask = item[2] if len(item) == 3 else None
+    e = euler_errors(q_est, q_true)
+    valid = _valid_mask(e.shape[0], np.isfinite(e).all(axis=1), mask)
+    if not valid.any():
+        raise ValueError(f"scenario {j}: no sample with finite truth inside the mask")
+    ev = e[valid]
+    return np.mean(ev * ev, axis=0)
+
+
+def euler_mse_geomean(
+    scenarios: Sequence, weights: Sequence[float] = (1.0, 1.0, 1.0), normalize: bool = False
+) -> float:
+    """Fitness of the FAEKF paper, eq. 35: cube root of the product of the per-axis MSEs over scenarios.
+
+    ``F = ( prod_j MSE_roll,j * MSE_pitch,j * MSE_yaw,j ) ^ (1/3)`` with ``MSE = sum_k e_k^2 / N_j``
+    over the valid samples of scenario ``j`` and errors in **rad** (so ``F`` is in rad^2 for one
+    scenario, as the paper's Table 2). For one scenario it is the geometric mean of the three
+    MSEs; the paper keeps the cube root for ``k_sce`` scenarios, which makes ``F`` scale like
+    ``MSE^k_sce``: that does not change which parameters are best, but values for different numbers
+    of scenarios are not comparable. ``normalize=True`` takes the ``1/(3 k_sce)`` root instead (the
+    geometric mean of all MSEs, in rad^2), a documented extension, not the paper's definition.
+
+    Parameters
+    ----------
+    scenarios : sequence of (q_est, q_true) or (q_est, q_true, mask)
+        One entry per scenario: (N_j, 4) quaternions and an optional (N_j,) bool mask.
+    weights : (3,) floats >= 0, default (1, 1, 1)
+        Exponents of the roll, pitch, yaw MSEs (a weighted geometric mean); the root becomes
+        ``1/sum(weights)`` (``1/(k_sce sum(weights))`` with ``normalize``), so (1, 1, 1) is eq. 35.
+    normalize : bool
+        See above.
+
+    Returns
+    -------
+    float
+        ``F`` >= 0 (0 if some weighted MSE is exactly 0). Non-finite estimates count as pi errors.
+
+    Raises
+    ------
+    ValueError
+        No scenario, bad weights, or a scenario with no valid sample (names its index).
+    """
+    w = np.asarray(weights, dtype=float)
+    if w.shape != (3,) or not np.all(np.isfinite(w)) or np.any(w < 0) or w.sum() <= 0:
+        raise ValueError(f"weights must be 3 finite numbers >= 0 with a positive sum, got {weights!r}")
+    scenarios = list(scenarios)
+    if not scenarios:
+        raise ValueError("euler_mse_geomean needs at least one scenario")
+    log_sum = 0.0
+    for j, item in enumerate(scenarios):
+        mse = _scenario_mse_rad2(item, j)
+        with np.errstate(divide="ignore"):
+            logs = np.where(w > 0, np.log(mse), 0.0)
+        log_sum += float(np.sum(w * logs))
+    root = w.sum() * (len(scenarios) if normalize else 1)
+    return float(np.exp(log_sum / root))
+
+
+def mse_1d(angle_est: np.ndarray, angle_true: np.ndarray, mask: np.ndarray | None = None) -> float:
+    """Mean squared error of one angle, the thesis eq. 3.18: ``F = (1/N) sum_k (theta_k - theta_hat_k)^2``.
+
+    Parameters
+    ----------
+    angle_est, angle_true : ndarray (N,)
+        Angles in rad (e.g. the tilt of the 1-D Kalman filter of thesis 3.1). The difference is
+        wrapped to ``[-pi, pi)`` (no effect for the small tilt angles of the thesis).
+    mask : ndarray (N,) bool, optional
+        Samples to use.
+
+    Returns
+    -------
+    float
+        MSE in rad^2 over the samples with finite truth inside the mask (NaN if none); samples with
+        a non-finite estimate count as pi errors.
+    """
+    est = np.asarray(angle_est, dtype=float).ravel()
+    true = np.asarray(angle_true, dtype=float).ravel()
+    if est.shape != true.shape:
+        raise ValueError(f"angle_est {est.shape} and angle_true {true.shape} differ in shape")
+    valid = _valid_mask(true.shape[0], np.isfinite(true), mask)
+    if not valid.any():
+        return float("nan")
+    with np.errstate(invalid="ignore"):
+        e = wrap_angle(true[valid] - est[valid])
+    e = np.where(np.isfinite(est[valid]), e, np.pi)
+    return float(np.mean(e * e))
