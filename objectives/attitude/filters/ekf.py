@@ -1,0 +1,706 @@
+"""Quaternion EKF with TRIAD measurement and its fuzzy-adaptive variant (FAEKF).
+
+Source: Odry et al. 2020, "A Novel Fuzzy-Adaptive Extended Kalman Filter for Real-Time Attitude
+Estimation of Mobile Robots", Sensors 20, 803 (``/work/shared/seeds/faekf-odry-2020-sensors.txt``).
+
+The EKF (section 3.3)
+---------------------
+State ``x = (q0, q1, q2, q3, bx, by, bz)``: the sensor-to-earth quaternion and the gyro bias (rad/s).
+Time update (eqs. 16, 20, 21): ``q_k = q_{k-1} + Ts/2 * q_{k-1} (x) (0, Omega_{k-1} - b_{k-1})``,
+``b_k = b_{k-1}``, ``P^- = Phi P Phi^T + Q``. Measurement (eqs. 11-15, 17, 22): the TRIAD quaternion
+from accelerometer and magnetometer, ``z = q_TRIAD = [I4 0] x + v``. Noise (eq. 36):
+``Q = diag(q_q I4, q_w I3)``, ``R = rho I4``.
+
+Units and rate: like the paper, ``q_q`` (quaternion units^2 per sample), ``q_w`` ((rad/s)^2 per
+sample) and ``rho`` (quaternion units^2) are **per-sample** variances; the paper's values
+(``q_q = 1.45e-6``, ``q_w = 9.71e-10``, ``rho = 3.53``, section 5.2) assume ``f_s = 1 kHz``. They are
+used as given at any rate (a 100 Hz recording needs its own tuning).
+
+The FAEKF (section 4)
+---------------------
+``R_k = K_k R`` (eq. 31) where ``K_k`` is the output of a zero-order Sugeno system with min-AND
+(eqs. 28-30) over three inputs: the vibration frequency ``f`` (Hz, eqs. 23-25), the accumulated
+external acceleration ``a_ext`` (g, eq. 26) and magnetic perturbation ``h_ext`` (normalised units,
+eq. 27), each covered by three Gaussian sets Z, S, B; the 27 rules of Table 1 map the set indices
+``(i_f, i_a, i_h)`` in {0, 1, 2} to the singleton ``K_{1 + i_f + i_a + i_h}``. The disturbance
+measures depend only on fixed window options, so :meth:`FAEKF.disturbances` computes them once and
+``FAEKF.run_detailed(rec, disturbances=...)`` reuses them.
+
+Deviations from the paper (and why)
+-----------------------------------
+- Working frame NED as in the paper (``working_frame = "NED"``); the output is converted to the
+  recording's frame. Our accelerometer convention (specific force: +g along *up* at rest) is used with
+  the reference ``s1 = up = (0, 0, -1)`` in NED; the paper's ``g = (0, 0, 9.81)`` with the opposite
+  sign convention gives the same TRIAD matrix. The magnetic reference enters TRIAD only through its
+  horizontal direction (north), so the inclination is not a parameter.
+- The Jacobian is the exact derivative of eq. 16. The text of eq. 21 (as converted) has rows 2-4 of
+  the quaternion block permuted/sign-flipped with respect to eq. 16; its bias columns agree with ours.
+- Eq. 14 divides by ``4 q0`` and fails near 180 deg; we use Shepperd's four-branch extraction (equal
+  to eq. 14 when ``1 + tr R`` is the largest pivot) and flip the sign of ``z`` into the hemisphere of
+  the prior ``q^-`` (``q`` and ``-q`` are the same attitude; the paper's linear measurement model
+  needs them on the same side).
+- The quaternion is normalised after each measurement update (the first-order step of eq. 16 grows
+  the norm by ``(|omega| Ts)^2 / 4`` per sample, 6e-4 at 50 rad/s and 1 kHz).
+- Without magnetometer (``use_mag = 0``) the second TRIAD vector is the predicted north direction in
+  the sensor frame, ``R(q^-)^T e_N``: the accelerometer corrects tilt and the heading follows the gyro.
+- Sample ``i`` uses gyro sample ``i - 1`` to propagate from ``i - 1`` to ``i`` (eq. 16 indexing), then
+  the TRIAD of sample ``i``; sample 0 is the initial state.
+- The covariance update ``P = (I - G H) P^-`` is computed in the algebraically equal symmetric form
+  ``P = P^- - W^T W`` with ``W = L^{-1} P^-_{q,:}``, ``L L^T = P^-_qq + R_k`` (Cholesky of a 4x4).
+- The fuzzy sets (Figure 3) and the singletons are not in the text; our defaults are documented at
+  :data:`FUZZY_DEFAULTS` and :data:`K_DEFAULTS`, and can be tuned (section 5.3's future work item 3).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+from numba import njit
+
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from tuner.space import Real, Space
+
+__all__ = [
+    "EKF", "FAEKF", "FUZZY_DEFAULTS", "K_DEFAULTS", "FUZZY_INPUTS", "FUZZY_SETS",
+    "ekf_kernel", "fuzzy_scale", "triad_ned", "rule_consequent_index", "Disturbances",
+]
+
+G_STD = 9.80665  # m/s^2 per g, for the external-acceleration input in g
+
+# indices into the coefficient array of the kernel
+_C_DT, _C_QQ, _C_QW, _C_RHO, _C_P0Q, _C_P0B, _C_MAG = range(7)
+N_COEF = 7
+
+
+# ---------------------------------------------------------------------------------------------
+# numba kernels
+# ---------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _triad_ned(ax, ay, az, mx, my, mz, qref, z):
+    """TRIAD quaternion (eqs. 11-14, NED, sensor-to-earth) written into ``z``; False if degenerate.
+
+    ``qref`` picks the sign: ``z . qref >= 0``.
+    """
+    na = math.sqrt(ax * ax + ay * ay + az * az)
+    if not na > 0.0:
+        return False
+    r1x, r1y, r1z = ax / na, ay / na, az / na  # up in sensor coordinates
+    cx = r1y * mz - r1z * my
+    cy = r1z * mx - r1x * mz
+    cz = r1x * my - r1y * mx  # up x mag = west in sensor coordinates
+    nc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    if not nc > 1e-12:
+        return False
+    r2x, r2y, r2z = cx / nc, cy / nc, cz / nc
+    r3x = r1y * r2z - r1z * r2y  # up x west = south
+    r3y = r1z * r2x - r1x * r2z
+    r3z = r1x * r2y - r1y * r2x
+    # R = M_ref M_mea^T with M_ref = [up, west, south] in NED: rows north, east, down = -r3, -r2, -r1
+    m00, m01, m02 = -r3x, -r3y, -r3z
+    m10, m11, m12 = -r2x, -r2y, -r2z
+    m20, m21, m22 = -r1x, -r1y, -r1z
+    tr = m00 + m11 + m22
+    if tr > 0.0:  # eq. 14
+        s = 2.0 * math.sqrt(1.0 + tr)
+        w = 0.25 * s
+        x = (m21 - m12) / s
+        y = (m02 - m20) / s
+        zz = (m10 - m01) / s
+    elif m00 > m11 and m00 > m22:
+        s = 2.0 * math.sqrt(1.0 + m00 - m11 - m22)
+        w = (m21 - m12) / s
+        x = 0.25 * s
+        y = (m01 + m10) / s
+        zz = (m02 + m20) / s
+    elif m11 > m22:
+        s = 2.0 * math.sqrt(1.0 + m11 - m00 - m22)
+        w = (m02 - m20) / s
+        x = (m01 + m10) / s
+        y = 0.25 * s
+        zz = (m12 + m21) / s
+    else:
+        s = 2.0 * math.sqrt(1.0 + m22 - m00 - m11)
+        w = (m10 - m01) / s
+        x = (m02 + m20) / s
+        y = (m12 + m21) / s
+        zz = 0.25 * s
+    if w * qref[0] + x * qref[1] + y * qref[2] + zz * qref[3] < 0.0:
+        w, x, y, zz = -w, -x, -y, -zz
+    z[0] = w
+    z[1] = x
+    z[2] = y
+    z[3] = zz
+    return True
+
+
+@njit(cache=True)
+def triad_ned(acc, mag):
+    """TRIAD quaternions (N, 4), sensor-to-earth in NED, ``w >= 0`` (eqs. 11-14); NaN if degenerate.
+
+    ``acc`` (N, 3) specific force (any unit), ``mag`` (N, 3) magnetic field (any unit).
+    """
+    n = acc.shape[0]
+    out = np.empty((n, 4))
+    ref = np.array([1.0, 0.0, 0.0, 0.0])
+    z = np.empty(4)
+    for i in range(n):
+        if _triad_ned(acc[i, 0], acc[i, 1], acc[i, 2], mag[i, 0], mag[i, 1], mag[i, 2], ref, z):
+            out[i, 0] = z[0]
+            out[i, 1] = z[1]
+            out[i, 2] = z[2]
+            out[i, 3] = z[3]
+        else:
+            out[i, :] = np.nan
+    return out
+
+
+@njit(cache=True)
+def ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b):
+    """Run the EKF / FAEKF over a whole recording (eqs. 16-22, 36; ``R_k = K_k R`` of eq. 31).
+
+    Parameters
+    ----------
+    gyr, acc, mag : (N, 3) float64
+        rad/s, specific force (any unit), magnetic field (any unit; ignored if ``coef[6] == 0``).
+    coef : (7,) float64
+        ``dt`` (s), ``q_q``, ``q_w``, ``rho``, ``p0_q``, ``p0_b`` (initial variances), ``use_mag``.
+    kscale : (N,) or (1,) float64
+        Per-sample scale ``K_k`` of ``R`` (FAEKF), or a single constant (1.0 for the EKF).
+    x0 : (7,) float64
+        Initial state: NED sensor-to-earth quaternion and gyro bias (rad/s).
+    out_q : (N, 4) float64, out
+        Normalised quaternion estimates, NED sensor-to-earth.
+    out_b : (N, 3) float64, out
+        Gyro bias estimates, rad/s.
+    """
+    n = gyr.shape[0]
+    h = 0.5 * coef[_C_DT]
+    qq = coef[_C_QQ]
+    qw = coef[_C_QW]
+    rho = coef[_C_RHO]
+    use_mag = coef[_C_MAG] != 0.0
+    nk = kscale.shape[0]
+
+    P = np.zeros((7, 7))
+    for i in range(4):
+        P[i, i] = coef[_C_P0Q]
+    for i in range(4, 7):
+        P[i, i] = coef[_C_P0B]
+    A = np.empty((4, 4))
+    B = np.empty((4, 3))
+    T = np.empty((4, 7))
+    W = np.empty((4, 7))
+    L = np.zeros((4, 4))
+    x = np.empty(7)
+    z = np.empty(4)
+    v = np.empty(4)
+    for i in range(7):
+        x[i] = x0[i]
+    nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
+    for i in range(4):
+        x[i] /= nq
+        out_q[0, i] = x[i]
+    for i in range(3):
+        out_b[0, i] = x[4 + i]
+
+    for k in range(1, n):
+        # ---- time update (eqs. 16, 20, 21) with gyro sample k-1 --------------------------------
+        q0, q1, q2, q3 = x[0], x[1], x[2], x[3]
+        wx = gyr[k - 1, 0] - x[4]
+        wy = gyr[k - 1, 1] - x[5]
+        wz = gyr[k - 1, 2] - x[6]
+        hx, hy, hz = h * wx, h * wy, h * wz
+        # A = d q_k / d q_{k-1} = I + h * Omega_R(omega)   (q (x) (0, w) = Omega_R(w) q)
+        A[0, 0] = 1.0
+        A[0, 1] = -hx
+        A[0, 2] = -hy
+        A[0, 3] = -hz
+        A[1, 0] = hx
+        A[1, 1] = 1.0
+        A[1, 2] = hz
+        A[1, 3] = -hy
+        A[2, 0] = hy
+        A[2, 1] = -hz
+        A[2, 2] = 1.0
+        A[2, 3] = hx
+        A[3, 0] = hz
+        A[3, 1] = hy
+        A[3, 2] = -hx
+        A[3, 3] = 1.0
+        # B = d q_k / d b = -h * Xi(q), q (x) (0, w) = Xi(q) w
+        B[0, 0] = h * q1
+        B[0, 1] = h * q2
+        B[0, 2] = h * q3
+        B[1, 0] = -h * q0
+        B[1, 1] = h * q3
+        B[1, 2] = -h * q2
+        B[2, 0] = -h * q3
+        B[2, 1] = -h * q0
+        B[2, 2] = h * q1
+        B[3, 0] = h * q2
+        B[3, 1] = -h * q1
+        B[3, 2] = -h * q0
+        # state: q <- A q (the bias is constant)
+        x[0] = q0 - hx * q1 - hy * q2 - hz * q3
+        x[1] = q1 + hx * q0 + hz * q2 - hy * q3
+        x[2] = q2 + hy * q0 - hz * q1 + hx * q3
+        x[3] = q3 + hz * q0 + hy * q1 - hx * q2
+        # T = Phi[:4, :] P  (4 x 7); Phi = [[A, B], [0, I]]
+        for r in range(4):
+            a0, a1, a2, a3 = A[r, 0], A[r, 1], A[r, 2], A[r, 3]
+            b0, b1, b2 = B[r, 0], B[r, 1], B[r, 2]
+            for c in range(7):
+                T[r, c] = (a0 * P[0, c] + a1 * P[1, c] + a2 * P[2, c] + a3 * P[3, c]
+                           + b0 * P[4, c] + b1 * P[5, c] + b2 * P[6, c])
+        # P^- = T Phi^T + Q: qq block, qb block (= T[:, 4:]), bb block unchanged
+        for r in range(4):
+            for c in range(r, 4):
+                s = (T[r, 0] * A[c, 0] + T[r, 1] * A[c, 1] + T[r, 2] * A[c, 2] + T[r, 3] * A[c, 3]
+                     + T[r, 4] * B[c, 0] + T[r, 5] * B[c, 1] + T[r, 6] * B[c, 2])
+                P[r, c] = s
+                P[c, r] = s
+            P[r, r] += qq
+            for c in range(4, 7):
+                P[r, c] = T[r, c]
+                P[c, r] = T[r, c]
+        for r in range(4, 7):
+            P[r, r] += qw
+
+        # ---- measurement update (eqs. 11-15, 17, 22) -------------------------------------------
+        if use_mag:
+            ok = _triad_ned(acc[k, 0], acc[k, 1], acc[k, 2], mag[k, 0], mag[k, 1], mag[k, 2], x, z)
+        else:
+            # predicted north in sensor coordinates: first row of R(q^-), up to scale
+            p0, p1, p2, p3 = x[0], x[1], x[2], x[3]
+            nx = p0 * p0 + p1 * p1 - p2 * p2 - p3 * p3
+            ny = 2.0 * (p1 * p2 + p0 * p3)
+            nz = 2.0 * (p1 * p3 - p0 * p2)
+            ok = _triad_ned(acc[k, 0], acc[k, 1], acc[k, 2], nx, ny, nz, x, z)
+        if ok:
+            r_k = rho * (kscale[k] if nk > 1 else kscale[0])
+            # Cholesky of S = P_qq + R_k (4 x 4, SPD)
+            for r in range(4):
+                for c in range(r + 1):
+                    s = P[r, c]
+                    if r == c:
+                        s += r_k
+                    for m in range(c):
+                        s -= L[r, m] * L[c, m]
+                    if r == c:
+                        L[r, r] = math.sqrt(s)
+                    else:
+                        L[r, c] = s / L[c, c]
+            # W = L^{-1} P[:4, :], v = L^{-1} (z - q^-)
+            for r in range(4):
+                inv = 1.0 / L[r, r]
+                for c in range(7):
+                    s = P[r, c]
+                    for m in range(r):
+                        s -= L[r, m] * W[m, c]
+                    W[r, c] = s * inv
+                s = z[r] - x[r]
+                for m in range(r):
+                    s -= L[r, m] * v[m]
+                v[r] = s * inv
+            # x += G (z - q^-) = W^T v;  P -= W^T W
+            for c in range(7):
+                x[c] += W[0, c] * v[0] + W[1, c] * v[1] + W[2, c] * v[2] + W[3, c] * v[3]
+            for r in range(7):
+                for c in range(r, 7):
+                    s = P[r, c] - (W[0, r] * W[0, c] + W[1, r] * W[1, c]
+                                   + W[2, r] * W[2, c] + W[3, r] * W[3, c])
+                    P[r, c] = s
+                    P[c, r] = s
+        nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
+        inv = 1.0 / nq
+        for i in range(4):
+            x[i] *= inv
+            out_q[k, i] = x[i]
+        for i in range(3):
+            out_b[k, i] = x[4 + i]
+
+
+# ---------------------------------------------------------------------------------------------
+# fuzzy scaling of R (section 4.3, eqs. 28-31, Table 1)
+# ---------------------------------------------------------------------------------------------
+#: fuzzy inputs in kernel order: vibration frequency (Hz), external acceleration (g), magnetic
+#: perturbation (normalised units)
+FUZZY_INPUTS = ("vib", "acc", "mag")
+FUZZY_UNITS = {"vib": "Hz", "acc": "g", "mag": "nu"}
+FUZZY_SETS = ("Z", "S", "B")
+
+#: Default Gaussian sets ``(mean, std)`` per input and set. Figure 3 of the paper (the sets) is not
+#: in the text; we cover each input's range with three sets whose neighbours cross at 0.5
+#: (``std = spacing / (2 sqrt(2 ln 2))``): ``f`` over 0..10 Hz (``f_thr``, eq. 25), ``a_ext`` over
+#: 0..1 g and ``h_ext`` over 0..1 nu (the accumulated measures of eqs. 26-27 average the 0-16 g and
+#: 0-5 nu peaks of section 5.3 over L = 400 samples; these ranges cover the bench recordings).
+FUZZY_DEFAULTS: dict[str, tuple[float, float]] = {
+    "vib_Z": (0.0, 2.1233), "vib_S": (5.0, 2.1233), "vib_B": (10.0, 2.1233),
+    "acc_Z": (0.0, 0.21233), "acc_S": (0.5, 0.21233), "acc_B": (1.0, 0.21233),
+    "mag_Z": (0.0, 0.21233), "mag_S": (0.5, 0.21233), "mag_B": (1.0, 0.21233),
+}
+#: Default singletons K1..K7 (not in the text). K1 = 1 keeps R in the undisturbed state, as the
+#: paper describes ("in these static cases, the adaptive strategy does not modify the noise
+#: variances"); the others grow roughly geometrically up to 100.
+K_DEFAULTS = (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
+#: search bounds of the set parameters: (mean low, mean high, std low, std high) per input
+FUZZY_BOUNDS = {"vib": (0.0, 10.0, 0.1, 10.0), "acc": (0.0, 2.0, 0.01, 2.0), "mag": (0.0, 2.0, 0.01, 2.0)}
+K_BOUNDS = (0.1, 1000.0)
+
+
+def rule_consequent_index(i_f: int, i_a: int, i_h: int) -> int:
+    """Table 1: rule with set indices (0=Z, 1=S, 2=B) of f, a_ext, h_ext -> 0-based index of its K."""
+    return i_f + i_a + i_h
+
+
+@njit(cache=True)
+def fuzzy_scale(vib, acc, mag, mf, kappa, out):
+    """Crisp scale ``K_k`` of R for every sample (eqs. 28-31, Table 1).
+
+    Parameters
+    ----------
+    vib, acc, mag : (N,) float64
+        Vibration frequency (Hz), external acceleration (g), magnetic perturbation (nu).
+    mf : (3, 3, 2) float64
+        ``mf[input, set] = (mean, std)`` of the Gaussian sets, inputs (vib, acc, mag), sets (Z, S, B).
+    kappa : (7,) float64
+        Singletons K1..K7.
+    out : (N,) float64, out
+        ``K = sum_i kappa^i gamma^i / sum_i gamma^i`` with ``gamma^i`` the min of the rule's three
+        memberships (zero-order Sugeno, min-AND). Where every rule fires 0 (inputs far outside
+        all sets) the scale is the K of the nearest sets in the (scaled) distance sense.
+    """
+    n = vib.shape[0]
+    mu = np.empty((3, 3))
+    d2 = np.empty((3, 3))
+    inv = np.empty((3, 3))
+    for j in range(3):
+        for s in range(3):
+            inv[j, s] = 1.0 / (2.0 * mf[j, s, 1] * mf[j, s, 1])
+    for k in range(n):
+        xs0, xs1, xs2 = vib[k], acc[k], mag[k]
+        for s in range(3):
+            e = xs0 - mf[0, s, 0]
+            d2[0, s] = e * e * inv[0, s]
+            e = xs1 - mf[1, s, 0]
+            d2[1, s] = e * e * inv[1, s]
+            e = xs2 - mf[2, s, 0]
+            d2[2, s] = e * e * inv[2, s]
+        for j in range(3):
+            for s in range(3):
+                mu[j, s] = math.exp(-d2[j, s])
+        num = 0.0
+        den = 0.0
+        best = np.inf
+        kbest = 0.0
+        for a in range(3):
+            ma = mu[0, a]
+            for b in range(3):
+                mab = min(ma, mu[1, b])
+                for c in range(3):
+                    g = min(mab, mu[2, c])
+                    kap = kappa[a + b + c]
+                    num += kap * g
+                    den += g
+                    if den == 0.0:  # fallback bookkeeping only while nothing fires
+                        dd = max(d2[0, a], max(d2[1, b], d2[2, c]))
+                        if dd < best:
+                            best = dd
+                            kbest = kap
+        out[k] = num / den if den > 0.0 else kbest
+
+
+# ---------------------------------------------------------------------------------------------
+# filter classes
+# ---------------------------------------------------------------------------------------------
+def _mf_name(inp: str, s: str, what: str) -> str:
+    return f"{inp}_{s}_{what}_{FUZZY_UNITS[inp]}"
+
+
+def _fuzzy_params(tunable: bool) -> tuple[Real, ...]:
+    out = []
+    for inp in FUZZY_INPUTS:
+        lo_m, hi_m, lo_s, hi_s = FUZZY_BOUNDS[inp]
+        for s in FUZZY_SETS:
+            mean, std = FUZZY_DEFAULTS[f"{inp}_{s}"]
+            n_mean, n_std = _mf_name(inp, s, "mean"), _mf_name(inp, s, "std")
+            d_mean = f"centre of the Gaussian set {s} of the {inp} input (eq. 28 b_ij)"
+            d_std = f"standard deviation of the Gaussian set {s} of the {inp} input (eq. 28 c_ij)"
+            if tunable:
+                out.append(Real(n_mean, lo_m, hi_m, unit=FUZZY_UNITS[inp], doc=d_mean))
+                out.append(Real(n_std, lo_s, hi_s, scale="log", unit=FUZZY_UNITS[inp], doc=d_std))
+            else:
+                out.append(Real(n_mean, fixed=mean, unit=FUZZY_UNITS[inp], doc=d_mean))
+                out.append(Real(n_std, fixed=std, unit=FUZZY_UNITS[inp], doc=d_std))
+    return tuple(out)
+
+
+_EKF_PARAMS: tuple[Real, ...] = (
+    Real("q_q", 1e-9, 1e-3, scale="log", unit="1 per sample",
+         doc="process noise variance of each quaternion component per sample "
+             "(eq. 36 Q_q; paper 1.45e-6 at 1 kHz)"),
+    Real("q_w", 1e-13, 1e-6, scale="log", unit="(rad/s)^2 per sample",
+         doc="gyro-bias random-walk variance per sample (eq. 36 Q_omega; paper 9.71e-10 at 1 kHz)"),
+    Real("rho", 1e-3, 1e2, scale="log", unit="1",
+         doc="variance of each TRIAD quaternion component (eq. 36 R = rho I4; paper 3.53)"),
+    Real("use_mag", fixed=True, doc="9-D TRIAD with the magnetometer; false: heading from the gyro"),
+    Real("p0_q", fixed=1e-2, unit="1", doc="initial variance of each quaternion component (P0, eq. 18)"),
+    Real("p0_b", fixed=1e-6, unit="(rad/s)^2",
+         doc="initial variance of each gyro-bias component (P0, eq. 18)"),
+)
+_EKF_DEFAULTS: dict[str, Any] = {
+    "q_q": 1.45e-6, "q_w": 9.71e-10, "rho": 3.53, "use_mag": True, "p0_q": 1e-2, "p0_b": 1e-6,
+}
+
+
+def _positive(name: str, value: Any, flt: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{flt}: {name} must be a number, got {value!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise ValueError(f"{flt}: {name} must be finite and > 0, got {value!r}")
+    return v
+
+
+class EKF(AttitudeFilter):
+    """Quaternion EKF with TRIAD measurement (FAEKF paper eqs. 16-22, noise of eq. 36).
+
+    Parameters (per-sample definitions of the paper at 1 kHz; see the module docstring)
+    ----------
+    q_q : float
+        Process noise variance of each quaternion component per sample.
+    q_w : float
+        Gyro-bias random-walk variance per sample, (rad/s)^2.
+    rho : float
+        Measurement noise variance of each TRIAD quaternion component.
+    use_mag : bool
+        Fixed option; False runs without magnetometer (tilt from acc, heading from the gyro).
+    p0_q, p0_b : float
+        Fixed options: initial covariance ``P0 = diag(p0_q I4, p0_b I3)``; the bias starts at 0.
+
+    Diagnostics of :meth:`run_detailed`: ``gyr_bias`` (N, 3) rad/s.
+    """
+
+    name: ClassVar[str] = "ekf"
+    params: ClassVar[tuple[Real, ...]] = _EKF_PARAMS
+    defaults: ClassVar[dict[str, Any]] = dict(_EKF_DEFAULTS)
+    working_frame: ClassVar[str] = "NED"
+    needs_mag: ClassVar[bool] = True
+
+    def _check(self) -> None:
+        for key in ("q_q", "q_w", "rho", "p0_q", "p0_b"):
+            self.values[key] = _positive(key, self.values[key], self.name)
+        if not isinstance(self.values["use_mag"], (bool, np.bool_)) and self.values["use_mag"] not in (0, 1):
+            raise ValueError(f"{self.name}: use_mag must be true or false, got {self.values['use_mag']!r}")
+
+    def coefficients(self, dt: float, use_mag: bool) -> np.ndarray:
+        """The kernel's (7,) coefficient array (see :func:`ekf_kernel`)."""
+        v = self.values
+        return np.array([dt, v["q_q"], v["q_w"], v["rho"], v["p0_q"], v["p0_b"], 1.0 if use_mag else 0.0])
+
+    def _inputs(self, rec: Recording) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+        gyr = np.ascontiguousarray(rec.gyr, dtype=np.float64)
+        acc = np.ascontiguousarray(rec.acc, dtype=np.float64)
+        use_mag = bool(self.values["use_mag"]) and rec.mag is not None
+        mag = np.ascontiguousarray(rec.mag, dtype=np.float64) if use_mag else np.zeros((1, 3))
+        return gyr, acc, mag, use_mag
+
+    def _kernel(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        gyr, acc, mag, use_mag = self._inputs(rec)
+        n = rec.n
+        out_q = np.empty((n, 4))
+        out_b = np.empty((n, 3))
+        x0 = np.zeros(7)
+        x0[:4] = q0
+        ekf_kernel(gyr, acc, mag, self.coefficients(rec.dt, use_mag), kscale, x0, out_q, out_b)
+        return out_q, out_b
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        q, b = self._kernel(rec, q0, np.ones(1))
+        return FilterResult(q, self.working_frame, {"gyr_bias": b})
+
+
+@dataclass(frozen=True)
+class Disturbances:
+    """The three fuzzy inputs of the FAEKF for every sample (section 4.1-4.2).
+
+    vib_freq_hz : (N,) oscillation frequency estimate ``f`` (eqs. 23-25), Hz.
+    ext_acc_g : (N,) accumulated external acceleration ``a_ext`` (eq. 26), g.
+    mag_pert_nu : (N,) accumulated magnetic perturbation ``h_ext`` (eq. 27), normalised units.
+    """
+
+    vib_freq_hz: np.ndarray
+    ext_acc_g: np.ndarray
+    mag_pert_nu: np.ndarray
+
+
+class FAEKF(EKF):
+    """Fuzzy-adaptive EKF: the :class:`EKF` with ``R_k = K_k R`` (FAEKF paper section 4, eqs. 23-31).
+
+    Parameters
+    ----------
+    q_q, q_w, rho, use_mag, p0_q, p0_b
+        As :class:`EKF`.
+    K1 ... K7 : float
+        Singleton consequents of Table 1 (searched in the default space, log scale 0.1-1000).
+    {vib,acc,mag}_{Z,S,B}_{mean,std}_{Hz,g,nu} : float
+        Centre and standard deviation of each Gaussian set (eq. 28); fixed at :data:`FUZZY_DEFAULTS`
+        in the default space, searched by ``FAEKF.space(tune_fuzzy=True)`` within
+        :data:`FUZZY_BOUNDS`.
+    window : int
+        Fixed option: packet / accumulation length L, samples (paper: 400).
+    fft_length : int
+        Fixed option: L_FFT (paper: 512).
+    f_thr : float
+        Fixed option: highest expected oscillation frequency, Hz (paper: 10).
+    omega_thr : float
+        Fixed option: amplitude threshold of the vibration estimate, rad/s (paper: 0.26).
+    tune_fuzzy : bool
+        Fixed option: whether the default space searches the set parameters.
+
+    Diagnostics of :meth:`run_detailed`: ``gyr_bias`` (N, 3), ``K`` (N,), ``vib_freq_hz``,
+    ``ext_acc``, ``mag_pert`` (N,).
+    """
+
+    name: ClassVar[str] = "faekf"
+    params: ClassVar[tuple[Real, ...]] = (
+        _EKF_PARAMS
+        + tuple(Real(f"K{i + 1}", K_BOUNDS[0], K_BOUNDS[1], scale="log", unit="1",
+                     doc=f"singleton K{i + 1} of Table 1 (scale of R)") for i in range(7))
+        + _fuzzy_params(tunable=False)
+        + (
+            Real("window", fixed=400, unit="samples", doc="L: window of eqs. 24, 26, 27"),
+            Real("fft_length", fixed=512, unit="samples", doc="L_FFT of eq. 23"),
+            Real("f_thr", fixed=10.0, unit="Hz", doc="highest expected oscillation frequency (eq. 25)"),
+            Real("omega_thr", fixed=0.26, unit="rad/s", doc="|Omega|_thr of eq. 25"),
+            Real("tune_fuzzy", fixed=False, doc="search the fuzzy sets too (FAEKF.space(tune_fuzzy=True))"),
+        )
+    )
+    defaults: ClassVar[dict[str, Any]] = {
+        **_EKF_DEFAULTS,
+        **{f"K{i + 1}": K_DEFAULTS[i] for i in range(7)},
+        **{_mf_name(inp, s, w): FUZZY_DEFAULTS[f"{inp}_{s}"][j]
+           for inp in FUZZY_INPUTS for s in FUZZY_SETS for j, w in enumerate(("mean", "std"))},
+        "window": 400, "fft_length": 512, "f_thr": 10.0, "omega_thr": 0.26, "tune_fuzzy": False,
+    }
+
+    @classmethod
+    def space(cls, tune_fuzzy: bool | None = None) -> Space:
+        """Default search space; with ``tune_fuzzy`` the 18 set parameters are searched too."""
+        if not tune_fuzzy:
+            return Space(cls.params)
+        tunable = {p.name: p for p in _fuzzy_params(tunable=True)}
+        params = [tunable.get(p.name, p) for p in cls.params]
+        params = [Real("tune_fuzzy", fixed=True, doc=p.doc) if p.name == "tune_fuzzy" else p for p in params]
+        return Space(params)
+
+    def _check(self) -> None:
+        super()._check()
+        v = self.values
+        for i in range(7):
+            v[f"K{i + 1}"] = _positive(f"K{i + 1}", v[f"K{i + 1}"], self.name)
+        for inp in FUZZY_INPUTS:
+            for s in FUZZY_SETS:
+                m, d = _mf_name(inp, s, "mean"), _mf_name(inp, s, "std")
+                try:
+                    v[m] = float(v[m])
+                except (TypeError, ValueError):
+                    raise ValueError(f"{self.name}: {m} must be a number, got {v[m]!r}") from None
+                if not math.isfinite(v[m]):
+                    raise ValueError(f"{self.name}: {m} must be finite, got {v[m]!r}")
+                v[d] = _positive(d, v[d], self.name)
+        for key in ("window", "fft_length"):
+            if int(v[key]) != v[key] or int(v[key]) < 2:
+                raise ValueError(f"{self.name}: {key} must be an integer >= 2, got {v[key]!r}")
+            v[key] = int(v[key])
+        if v["fft_length"] < v["window"]:
+            raise ValueError(
+                f"{self.name}: fft_length ({v['fft_length']}) must be >= window ({v['window']})"
+            )
+        v["f_thr"] = _positive("f_thr", v["f_thr"], self.name)
+        v["omega_thr"] = _positive("omega_thr", v["omega_thr"], self.name)
+
+    # --- fuzzy system -----------------------------------------------------------------------
+    def membership_table(self) -> np.ndarray:
+        """(3, 3, 2) ``(mean, std)`` of the sets, inputs (vib, acc, mag) x sets (Z, S, B)."""
+        mf = np.empty((3, 3, 2))
+        for j, inp in enumerate(FUZZY_INPUTS):
+            for s, name in enumerate(FUZZY_SETS):
+                mf[j, s, 0] = self.values[_mf_name(inp, name, "mean")]
+                mf[j, s, 1] = self.values[_mf_name(inp, name, "std")]
+        return mf
+
+    def singletons(self) -> np.ndarray:
+        """(7,) K1..K7."""
+        return np.array([self.values[f"K{i + 1}"] for i in range(7)], dtype=np.float64)
+
+    def scale(self, dist: Disturbances) -> np.ndarray:
+        """Fuzzy scale ``K_k`` (N,) of R for precomputed disturbance measures (eqs. 28-31)."""
+        out = np.empty(dist.vib_freq_hz.shape[0])
+        fuzzy_scale(dist.vib_freq_hz, dist.ext_acc_g, dist.mag_pert_nu, self.membership_table(),
+                    self.singletons(), out)
+        return out
+
+    # --- disturbances -----------------------------------------------------------------------
+    def disturbances(self, rec: Recording) -> Disturbances:
+        """The fuzzy inputs of ``rec`` (depend only on window, fft_length, f_thr, omega_thr).
+
+        Compute once and pass to :meth:`run_detailed` (``disturbances=``) to skip the FFTs when
+        only Q, R or the fuzzy system change.
+        """
+        from objectives.attitude import disturbance as dis
+
+        v = self.values
+        vib = dis.vibration_frequency(rec.gyr, rec.dt, v["window"], v["fft_length"], v["omega_thr"],
+                                      f_thr=v["f_thr"])
+        ext = dis.external_acceleration(rec.acc, v["window"])
+        if rec.mag is not None and bool(v["use_mag"]):
+            mp = dis.magnetic_perturbation_measure(rec.mag, v["window"])
+        else:
+            mp = np.zeros(rec.n)
+        return self._as_disturbances(rec, vib, ext, mp)
+
+    @staticmethod
+    def _as_disturbances(rec: Recording, vib, ext, mp) -> Disturbances:
+        arrs = []
+        for key, a in (("vib_freq_hz", vib), ("ext_acc_g", ext), ("mag_pert_nu", mp)):
+            a = np.ascontiguousarray(np.asarray(a, dtype=np.float64))
+            if a.shape != (rec.n,):
+                raise ValueError(f"faekf: disturbance {key!r} must have shape ({rec.n},), got {a.shape}")
+            if not np.isfinite(a).all():
+                raise ValueError(f"faekf: disturbance {key!r} has non-finite values")
+            arrs.append(a)
+        return Disturbances(*arrs)
+
+    # --- running ----------------------------------------------------------------------------
+    def run_detailed(
+        self, rec: Recording, q0: Any = None, disturbances: Disturbances | None = None
+    ) -> FilterResult:
+        """As :meth:`AttitudeFilter.run_detailed`; ``disturbances`` reuses precomputed fuzzy inputs."""
+        if disturbances is not None:
+            disturbances = self._as_disturbances(rec, disturbances.vib_freq_hz, disturbances.ext_acc_g,
+                                                  disturbances.mag_pert_nu)
+        self._given = disturbances
+        try:
+            return super().run_detailed(rec, q0)
+        finally:
+            self._given = None
+
+    def run(self, rec: Recording, q0: Any = None, disturbances: Disturbances | None = None) -> np.ndarray:
+        return self.run_detailed(rec, q0, disturbances).quat
+
+    def _run(self, rec: Recording, q0: np.ndarray, disturbances: Disturbances | None = None) -> FilterResult:
+        dist = disturbances if disturbances is not None else getattr(self, "_given", None)
+        if dist is None:
+            dist = self.disturbances(rec)
+        k = self.scale(dist)
+        q, b = self._kernel(rec, q0, k)
+        return FilterResult(q, self.working_frame, {
+            "gyr_bias": b, "K": k, "vib_freq_hz": dist.vib_freq_hz, "ext_acc": dist.ext_acc_g,
+            "mag_pert": dist.mag_pert_nu,
+        })
