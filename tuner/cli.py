@@ -1,0 +1,297 @@
+"""The ``tuner`` command line.
+
+Exit status: 0 success, 1 a run failed or was interrupted, 2 bad input (config, arguments, run
+directory), printed as one line ``error: <file>: <key>: <what is wrong and what is allowed>``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+__all__ = ["main"]
+
+EPILOG = """examples:
+  tuner run configs/demo.yaml                      tune with the config's settings
+  tuner run configs/demo.yaml --seed 3 --n-jobs 1  override seed and workers
+  tuner run job.yaml --set optimizer.population=40 --set objective.metric=broad_total_rmse
+  tuner resume runs/20261122T101500Z-demo-a1b2c3   continue an interrupted run
+  tuner show runs/20261122T101500Z-demo-a1b2c3     summary of a run (or a sweep directory)
+  tuner export RUN_DIR --format c > tuned.h        best parameters as a C header
+  tuner evaluate RUN_DIR --data other.yaml --json  score the best parameters on other data
+  tuner sweep configs/sweep_demo.yaml              many runs and one report
+  tuner list                                       optimizers, objectives, filters, controllers
+"""
+
+
+class UsageError(Exception):
+    pass
+
+
+def _add_run(sub) -> None:
+    p = sub.add_parser("run", help="tune: run a job from a YAML config",
+                       description="Run a tuning job and store it in its own run directory.")
+    p.add_argument("config", help="job YAML file")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a config value, e.g. optimizer.population=40 (repeatable)")
+    p.add_argument("--seed", type=int, help="override the seed")
+    p.add_argument("--n-jobs", type=int, help="override parallel.n_jobs")
+    p.add_argument("--run-dir", help="use this run directory instead of runs/<time>-<name>-<hex>")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="tuner", formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EPILOG,
+        description="Tune attitude filters and robot controllers by global optimisation "
+                    "(PSO, CMA-ES, differential evolution).")
+    from tuner import __version__
+
+    ap.add_argument("--version", action="version", version=f"tuner {__version__}")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND")
+    _add_run(sub)
+
+    p = sub.add_parser("resume", help="continue an interrupted run from its checkpoint")
+    p.add_argument("run_dir")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = sub.add_parser("show", help="summary of a run or a sweep directory")
+    p.add_argument("path")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+    p = sub.add_parser("compare", help="two or more runs side by side (parameters and metrics)")
+    p.add_argument("run_dirs", nargs="+")
+
+    p = sub.add_parser("list", help="what can be named in a config, or the runs of a directory")
+    p.add_argument("what", nargs="?", default="all",
+                   choices=["all", "optimizers", "objectives", "filters", "controllers", "functions", "runs"])
+    p.add_argument("--dir", default="runs", help="runs directory for `list runs` (default: runs)")
+
+    p = sub.add_parser("export", help="best parameters as yaml, json, python or a C header")
+    p.add_argument("run_dir")
+    p.add_argument("--format", default="yaml", choices=["yaml", "json", "python", "c"])
+    p.add_argument("-o", "--output", help="write to this file instead of standard output")
+
+    p = sub.add_parser("evaluate", help="score parameters without tuning (default: a run's best)")
+    p.add_argument("target", help="a run directory or a config file")
+    p.add_argument("--params", help="YAML file with parameters (a best.yaml works)")
+    p.add_argument("--data", help="YAML file with a `data` list (or mapping) replacing the config's data")
+    p.add_argument("--json", action="store_true", help="print {fitness, recordings: {...}} as JSON")
+
+    p = sub.add_parser("sweep", help="run many jobs (configs x overrides x seeds) and write one report")
+    p.add_argument("sweep", help="sweep YAML file")
+    p.add_argument("--dir", help="sweep directory (default: runs/sweeps/<name>)")
+    p.add_argument("--jobs", type=int, help="concurrent jobs (default: from the sweep file, else 1)")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory")
+    p.add_argument("path")
+    return ap
+
+
+def _cmd_run(a) -> int:
+    from tuner.config import load_config
+    from tuner.run import run
+
+    cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
+    res = run(cfg, run_dir=a.run_dir, quiet=a.quiet)
+    return _print_result(res)
+
+
+def _print_result(res) -> int:
+    print(f"status: {res.status} ({res.stop_reason})")
+    print(f"best fitness: {res.best_fitness:.6g} after {res.n_evals} evaluations")
+    for k, v in res.best_params.items():
+        print(f"  {k}: {v:.6g}" if isinstance(v, float) else f"  {k}: {v}")
+    summary = res.extra.get("summary_table")
+    if summary:
+        print()
+        print(summary)
+    print(f"run directory: {res.run_dir}")
+    if (res.run_dir / "report.md").exists():
+        print(f"report: {res.run_dir / 'report.md'}")
+    return 0 if res.status == "finished" else 1
+
+
+def _cmd_resume(a) -> int:
+    from tuner.run import resume
+
+    return _print_result(resume(a.run_dir, quiet=a.quiet))
+
+
+def _cmd_show(a) -> int:
+    from tuner.report import run_summary
+
+    path = Path(a.path)
+    if (path / "sweep.yaml").exists():
+        from tuner.sweep import show_sweep
+
+        print(show_sweep(path, as_json=a.json))
+        return 0
+    if not (path / "meta.json").exists():
+        raise UsageError(f"{path}: not a run or sweep directory (no meta.json / sweep.yaml)")
+    s = run_summary(path)
+    if a.json:
+        print(json.dumps(s, indent=1, default=str))
+        return 0
+    print(f"run:        {s['run']}")
+    print(f"status:     {s['status']} ({s['stop_reason']})")
+    print(f"optimizer:  {s['optimizer']}  seed {s['seed']}")
+    print(f"evals:      {s['n_evals']} ({s['n_failed']} failed), {s['wall_s'] or 0:.1f} s")
+    fit = s["best_fitness"]
+    print(f"best:       {fit:.6g}" if fit is not None else "best:       -")
+    for k, v in s["params"].items():
+        print(f"  {k:24s} {v:.6g}" if isinstance(v, float) else f"  {k:24s} {v}")
+    if s["evaluation"].get("summary_table"):
+        print()
+        print(s["evaluation"]["summary_table"])
+    return 0
+
+
+def _cmd_compare(a) -> int:
+    import pandas as pd
+
+    from tuner.report import run_summary
+
+    cols = {}
+    for d in a.run_dirs:
+        if not (Path(d) / "meta.json").exists():
+            raise UsageError(f"{d}: not a run directory")
+        s = run_summary(Path(d))
+        col = {"status": s["status"], "optimizer": s["optimizer"], "seed": s["seed"], "n_evals": s["n_evals"],
+               "best_fitness": s["best_fitness"]}
+        col.update({f"param.{k}": v for k, v in s["params"].items()})
+        col.update({f"metric.{k}": v for k, v in s["metrics"].items() if not isinstance(v, (dict, list))})
+        cols[s["run"]] = col
+    print(pd.DataFrame(cols).to_string())
+    return 0
+
+
+def _cmd_list(a) -> int:
+    what = a.what
+    if what == "runs":
+        from tuner.sweep import list_runs
+
+        print(list_runs(Path(a.dir)))
+        return 0
+    if what in ("all", "optimizers"):
+        from tuner.optimizers import OPTIMIZERS
+
+        print("optimizers:")
+        for name, cls in sorted(OPTIMIZERS.items()):
+            doc = (cls.__doc__ or "").strip().splitlines()[0]
+            print(f"  {name:10s} {doc}")
+    if what in ("all", "objectives"):
+        from objectives.registry import OBJECTIVE_KINDS
+
+        print("objective kinds:")
+        for name, spec in OBJECTIVE_KINDS.items():
+            print(f"  {name:12s} {spec}")
+    if what in ("all", "functions"):
+        from objectives.functions import FUNCTIONS
+
+        print("test functions (objective.kind: function):")
+        print("  " + ", ".join(sorted(FUNCTIONS)))
+    if what in ("all", "filters"):
+        from objectives.attitude.filters import FILTERS
+
+        print("filters (objective.kind: filter):")
+        print("  " + ", ".join(sorted(FILTERS)))
+    if what in ("all", "controllers"):
+        try:
+            from objectives.control.controllers import CONTROLLERS
+            names = sorted(CONTROLLERS)
+        except ImportError:
+            names = []
+        print("controllers (objective.kind: closed_loop):")
+        print("  " + (", ".join(names) or "-"))
+    return 0
+
+
+def _cmd_export(a) -> int:
+    from tuner.export import export
+
+    run_dir = Path(a.run_dir)
+    if not (run_dir / "best.yaml").exists():
+        raise UsageError(f"{run_dir}: no best.yaml (not a run directory, or nothing evaluated yet)")
+    text = export(run_dir, a.format)
+    if a.output:
+        Path(a.output).write_text(text)
+        print(f"wrote {a.output}", file=sys.stderr)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def _cmd_evaluate(a) -> int:
+    from tuner.scoring import evaluate_target
+
+    out = evaluate_target(a.target, params_file=a.params, data_file=a.data)
+    if a.json:
+        print(json.dumps(out, indent=1, default=float))
+    else:
+        print(f"fitness: {out['fitness']:.6g}")
+        for rec, metrics in out.get("recordings", {}).items():
+            vals = "  ".join(f"{k}={v:.4g}" for k, v in metrics.items() if isinstance(v, (int, float)))
+            print(f"  {rec}: {vals}")
+    return 0
+
+
+def _cmd_sweep(a) -> int:
+    from tuner.sweep import run_sweep
+
+    res = run_sweep(a.sweep, sweep_dir=a.dir, jobs=a.jobs, quiet=a.quiet)
+    print(f"sweep directory: {res['dir']}")
+    print(f"report: {res['report']}")
+    return 0 if res["ok"] else 1
+
+
+def _cmd_report(a) -> int:
+    path = Path(a.path)
+    if (path / "sweep.yaml").exists():
+        from tuner.sweep import write_sweep_report
+
+        print(write_sweep_report(path))
+    elif (path / "meta.json").exists():
+        from tuner.report import write_run_report
+
+        print(write_run_report(path))
+    else:
+        raise UsageError(f"{path}: not a run or sweep directory")
+    return 0
+
+
+COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
+            "list": _cmd_list, "export": _cmd_export, "evaluate": _cmd_evaluate, "sweep": _cmd_sweep,
+            "report": _cmd_report}
+
+
+def main(argv: list[str] | None = None) -> int:
+    from tuner.config import ConfigError
+    from tuner.run import RunError
+    from tuner.space import SpaceError
+
+    ap = build_parser()
+    a = ap.parse_args(argv)
+    if not a.command:
+        ap.print_help()
+        return 2
+    try:
+        return COMMANDS[a.command](a)
+    except (ConfigError, RunError, SpaceError, UsageError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:  # pragma: no cover - runs handle their own interrupts
+        print("interrupted", file=sys.stderr)
+        return 1
+
+
+def _entry() -> Any:  # pragma: no cover
+    sys.exit(main())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,251 @@
+"""Job configuration: YAML into typed, validated dataclasses.
+
+Every error is a :class:`ConfigError` that names the file, the key path, the bad value and what is
+allowed; the CLI prints it and exits with status 2.
+
+Shape of a job (see README for every key)::
+
+    name: my-job
+    seed: 7
+    objective: {kind: filter, ...}            # validated by the objective's own factory
+    parameters: {beta: {low: 0.001, high: 1, scale: log}}   # optional: the objective's default space
+    optimizer: {method: pso, population: 30, generations: 30, <method options>,
+                refine: {stages: 2, shrink: 0.2}}
+    parallel: {backend: loky, n_jobs: 2, address: null}
+    output: runs                              # parent directory of run directories
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from tuner.space import Space, SpaceError
+
+__all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig",
+           "load_config", "config_from_dict", "apply_overrides"]
+
+TOP_KEYS = {
+    "name": "job name (used in the run directory name)",
+    "description": "free text",
+    "seed": "integer seed of the run",
+    "objective": "what to minimise: {kind: function|filter|closed_loop|python, ...}",
+    "parameters": "search space: {name: {low, high, scale, integer} | {fixed: value}}",
+    "optimizer": "{method: pso|cmaes|de|random, population, generations, ...options}",
+    "parallel": "{backend: serial|loky|dask, n_jobs, address}",
+    "output": "directory holding the run directories (default: runs)",
+}
+
+
+class ConfigError(ValueError):
+    """A bad configuration: ``file: key.path: message``."""
+
+    def __init__(self, file: str | Path | None, key: str, message: str):
+        self.file, self.key, self.message = (str(file) if file else "<config>"), key, message
+        super().__init__(f"{self.file}: {key}: {message}" if key else f"{self.file}: {message}")
+
+
+@dataclass(frozen=True)
+class RefineConfig:
+    """Multi-stage refinement: after each stage the bounds shrink around the best point."""
+
+    stages: int = 1
+    shrink: float = 0.2
+
+
+@dataclass(frozen=True)
+class OptimizerConfig:
+    method: str = "pso"
+    population: int | None = None
+    generations: int | None = None
+    options: Mapping[str, Any] = field(default_factory=dict)
+    refine: RefineConfig = field(default_factory=RefineConfig)
+
+
+@dataclass(frozen=True)
+class ParallelConfig:
+    backend: str = "loky"
+    n_jobs: int = 2
+    address: str | None = None
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory."""
+
+    name: str
+    seed: int
+    objective: Mapping[str, Any]
+    parameters: Mapping[str, Any] | None
+    optimizer: OptimizerConfig
+    parallel: ParallelConfig
+    output: str
+    source: str
+    base_dir: Path
+    raw: Mapping[str, Any]
+    description: str = ""
+
+    def space(self, objective: Any = None) -> Space:
+        """The search space: ``parameters`` if given, else the objective's ``default_space()``."""
+        if self.parameters is not None:
+            try:
+                return Space.from_dict(self.parameters)
+            except SpaceError as exc:
+                raise ConfigError(self.source, "parameters", str(exc)) from None
+        if objective is not None and hasattr(objective, "default_space"):
+            return objective.default_space()
+        raise ConfigError(self.source, "parameters", "missing: this objective has no default search space")
+
+
+def _type_name(t: Any) -> str:
+    return t.__name__ if isinstance(t, type) else " or ".join(x.__name__ for x in t)
+
+
+def _get(d: Mapping, key: str, types: Any, file: Any, path: str, default: Any = None, required=False):
+    if key not in d or d[key] is None:
+        if required:
+            raise ConfigError(file, f"{path}{key}", "missing (required)")
+        return default
+    v = d[key]
+    if isinstance(v, bool) and bool not in (types if isinstance(types, tuple) else (types,)):
+        raise ConfigError(file, f"{path}{key}", f"expected {_type_name(types)}, got {v!r}")
+    if not isinstance(v, types):
+        raise ConfigError(file, f"{path}{key}", f"expected {_type_name(types)}, got {type(v).__name__} {v!r}")
+    return v
+
+
+def parse_value(text: str) -> Any:
+    """A ``--set`` value: YAML scalar/flow syntax (``3``, ``1e-3``, ``true``, ``[1, 2]``, ``{a: 1}``)."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError:
+        return text
+
+
+def apply_overrides(raw: dict[str, Any], overrides: list[str], file: Any = None) -> dict[str, Any]:
+    """Apply ``key.path=value`` overrides (creating intermediate mappings)."""
+    raw = copy.deepcopy(raw)
+    for item in overrides:
+        if "=" not in item:
+            raise ConfigError(file, "--set", f"expected key.path=value, got {item!r}")
+        path, text = item.split("=", 1)
+        keys = path.strip().split(".")
+        node = raw
+        for k in keys[:-1]:
+            if not isinstance(node.get(k), dict):
+                node[k] = {}
+            node = node[k]
+        node[keys[-1]] = parse_value(text)
+    return raw
+
+
+def load_config(path: str | Path, overrides: list[str] | None = None, seed: int | None = None,
+                n_jobs: int | None = None) -> RunConfig:
+    """Read and validate a job file; ``overrides`` are ``key.path=value`` strings (``--set``)."""
+    path = Path(path)
+    if not path.exists():
+        raise ConfigError(path, "", "file not found")
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+    if not isinstance(raw, dict):
+        raise ConfigError(path, "", f"expected a mapping at the top level, got {type(raw).__name__}")
+    raw = apply_overrides(raw, overrides or [], path)
+    if seed is not None:
+        raw["seed"] = int(seed)
+    if n_jobs is not None:
+        raw.setdefault("parallel", {})
+        raw["parallel"] = {**(raw["parallel"] or {}), "n_jobs": int(n_jobs)}
+    return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
+
+
+def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir: Path | None = None) -> RunConfig:
+    """Validate a job mapping (see module docstring)."""
+    from tuner.optimizers import OPTIMIZERS
+
+    f = source
+    raw = copy.deepcopy(dict(raw))
+    unknown = sorted(set(raw) - set(TOP_KEYS))
+    if unknown:
+        allowed = ", ".join(sorted(TOP_KEYS))
+        raise ConfigError(f, unknown[0], f"unknown key; allowed top-level keys: {allowed}")
+    name = str(_get(raw, "name", (str, int), f, "", default=Path(source).stem or "job"))
+    if not name.replace("-", "").replace("_", "").replace(".", "").isalnum():
+        raise ConfigError(f, "name", f"use letters, digits, '-', '_' or '.', got {name!r}")
+    seed = _get(raw, "seed", int, f, "", default=0)
+    if seed < 0:
+        raise ConfigError(f, "seed", f"must be >= 0, got {seed}")
+    objective = _get(raw, "objective", dict, f, "", required=True)
+    if "kind" not in objective:
+        raise ConfigError(f, "objective.kind", "missing; one of function, filter, closed_loop, python")
+    parameters = _get(raw, "parameters", dict, f, "", default=None)
+    if parameters is not None:
+        try:
+            Space.from_dict(parameters)
+        except SpaceError as exc:
+            key = str(exc).split(":", 1)[0]
+            raise ConfigError(f, f"parameters.{key}", str(exc).split(": ", 1)[-1]) from None
+
+    opt = dict(_get(raw, "optimizer", dict, f, "", default={}))
+    method = _get(opt, "method", str, f, "optimizer.", default="pso")
+    if method not in OPTIMIZERS:
+        raise ConfigError(f, "optimizer.method", f"unknown optimizer {method!r}; allowed: {sorted(OPTIMIZERS)}")
+    population = _get(opt, "population", int, f, "optimizer.", default=None)
+    generations = _get(opt, "generations", int, f, "optimizer.", default=None)
+    for k, v in (("population", population), ("generations", generations)):
+        if v is not None and v < 1:
+            raise ConfigError(f, f"optimizer.{k}", f"must be >= 1, got {v}")
+    refine_raw = _get(opt, "refine", dict, f, "optimizer.", default={})
+    bad = sorted(set(refine_raw) - {"stages", "shrink"})
+    if bad:
+        raise ConfigError(f, f"optimizer.refine.{bad[0]}", "unknown key; allowed: stages, shrink")
+    stages = _get(refine_raw, "stages", int, f, "optimizer.refine.", default=1)
+    shrink = float(_get(refine_raw, "shrink", (int, float), f, "optimizer.refine.", default=0.2))
+    if stages < 1:
+        raise ConfigError(f, "optimizer.refine.stages", f"must be >= 1, got {stages}")
+    if not 0 < shrink < 1:
+        raise ConfigError(f, "optimizer.refine.shrink", f"must be in (0, 1), got {shrink}")
+    options = {k: v for k, v in opt.items() if k not in ("method", "population", "generations", "refine")}
+    allowed = set(OPTIMIZERS[method].option_names()) - {"population", "generations"}
+    for k in options:
+        if k not in allowed:
+            raise ConfigError(f, f"optimizer.{k}", f"unknown option for {method}; allowed: {sorted(allowed)}")
+    if generations is None and not any(k in options for k in ("max_evals", "target", "patience")):
+        generations = 30
+    optimizer = OptimizerConfig(method, population, generations, options, RefineConfig(stages, shrink))
+
+    par = dict(_get(raw, "parallel", dict, f, "", default={}))
+    bad = sorted(set(par) - {"backend", "n_jobs", "address"})
+    if bad:
+        raise ConfigError(f, f"parallel.{bad[0]}", "unknown key; allowed: backend, n_jobs, address")
+    backend = _get(par, "backend", str, f, "parallel.", default="loky")
+    if backend not in ("serial", "loky", "dask"):
+        raise ConfigError(f, "parallel.backend", f"unknown backend {backend!r}; allowed: serial, loky, dask")
+    n_jobs = _get(par, "n_jobs", int, f, "parallel.", default=2)
+    if n_jobs < 1:
+        raise ConfigError(f, "parallel.n_jobs", f"must be >= 1, got {n_jobs}")
+    address = _get(par, "address", str, f, "parallel.", default=None)
+    if address and backend != "dask":
+        raise ConfigError(f, "parallel.address", f"only used with backend: dask (backend is {backend!r})")
+    parallel = ParallelConfig(backend, n_jobs, address)
+    output = str(_get(raw, "output", str, f, "", default="runs"))
+
+    resolved = {
+        "name": name,
+        "description": raw.get("description", ""),
+        "seed": seed,
+        "objective": objective,
+        "parameters": parameters,
+        "optimizer": {"method": method, "population": population, "generations": generations, **options,
+                      "refine": {"stages": stages, "shrink": shrink}},
+        "parallel": {"backend": backend, "n_jobs": n_jobs, "address": address},
+        "output": output,
+    }
+    return RunConfig(name, seed, objective, parameters, optimizer, parallel, output, source,
+                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")))

@@ -1,0 +1,192 @@
+"""The ask/tell interface shared by every optimiser, and the bookkeeping they have in common.
+
+An optimiser works in the unit cube only: :meth:`Optimizer.ask` returns the next population
+``(n, dim)``; the caller evaluates it however it likes (serially, on a cluster) and hands the
+fitness back with :meth:`Optimizer.tell`. Optimisers never call the objective, never open a pool
+and never touch a file, which is what makes serial, parallel and resumed runs give the same numbers.
+
+Stopping
+--------
+``done`` becomes True when ``generations`` tells have happened, when ``max_evals`` evaluations have
+been told, when the best fitness reaches ``target``, or when the best fitness has not improved by
+more than ``tol`` (relative) for ``patience`` generations. ``stop_reason`` says which.
+"""
+
+from __future__ import annotations
+
+import copy
+import inspect
+from typing import Any, ClassVar
+
+import numpy as np
+
+__all__ = ["Optimizer", "OptionError", "latin_hypercube"]
+
+
+class OptionError(ValueError):
+    """An optimiser option with a bad name or value."""
+
+
+def latin_hypercube(rng: np.random.Generator, n: int, dim: int) -> np.ndarray:
+    """``n`` points of a Latin hypercube in ``[0, 1]^dim`` (one point per stratum per axis)."""
+    u = (rng.random((n, dim)) + np.arange(n)[:, None]) / n
+    for j in range(dim):
+        u[:, j] = u[rng.permutation(n), j]
+    return u
+
+
+class Optimizer:
+    """Base class: budget, best-so-far, stopping rules, state round trip.
+
+    Parameters
+    ----------
+    dim : int
+        Number of free parameters (the unit cube's dimension).
+    rng : numpy.random.Generator
+        The only source of randomness; its state is part of :meth:`state`.
+    population : int
+        Candidates per generation (``ask`` returns this many rows).
+    generations : int
+        Budget in generations (``None`` for no limit; then give ``max_evals`` or a target).
+    max_evals : int, optional
+        Budget in evaluations; the run stops after the generation that reaches it.
+    target : float, optional
+        Stop as soon as the best fitness is ``<= target``.
+    patience : int, optional
+        Stop when the best fitness has not improved by more than ``tol`` (relative) for this many
+        generations.
+    tol : float
+        Relative improvement that counts for ``patience`` (default 1e-9).
+    x0 : array (dim,), optional
+        Warm start in the unit cube (how each method uses it is documented there).
+    """
+
+    name: ClassVar[str] = ""
+
+    def __init__(
+        self,
+        dim: int,
+        rng: np.random.Generator,
+        *,
+        population: int = 20,
+        generations: int | None = 50,
+        max_evals: int | None = None,
+        target: float | None = None,
+        patience: int | None = None,
+        tol: float = 1e-9,
+        x0: Any = None,
+    ):
+        if int(dim) < 1:
+            raise OptionError(f"dimension must be >= 1, got {dim} (is every parameter fixed?)")
+        if int(population) < 1:
+            raise OptionError(f"population must be >= 1, got {population}")
+        if generations is not None and int(generations) < 1:
+            raise OptionError(f"generations must be >= 1, got {generations}")
+        if generations is None and max_evals is None and target is None and patience is None:
+            raise OptionError("give a budget: generations, max_evals, target or patience")
+        if patience is not None and int(patience) < 1:
+            raise OptionError(f"patience must be >= 1 generation, got {patience}")
+        self.dim = int(dim)
+        self.rng = rng
+        self.population = int(population)
+        self.generations = None if generations is None else int(generations)
+        self.max_evals = None if max_evals is None else int(max_evals)
+        self.target = None if target is None else float(target)
+        self.patience = None if patience is None else int(patience)
+        self.tol = float(tol)
+        self.x0 = None if x0 is None else self._check_point(x0, "x0")
+        self.generation = 0
+        self.n_evals = 0
+        self.best_x = np.full(self.dim, np.nan)
+        self.best_f = np.inf
+        self._last_improvement = 0
+        self.stop_reason = ""
+
+    # --- options ------------------------------------------------------------------------------
+    @classmethod
+    def option_names(cls) -> list[str]:
+        """Every keyword the constructor accepts (for config validation)."""
+        names: list[str] = []
+        for klass in cls.__mro__:
+            if "__init__" in klass.__dict__:
+                for p in inspect.signature(klass.__init__).parameters.values():
+                    if p.kind is p.KEYWORD_ONLY and p.name not in names:
+                        names.append(p.name)
+        return names
+
+    def _check_point(self, x: Any, what: str) -> np.ndarray:
+        x = np.asarray(x, dtype=float).reshape(-1)
+        if x.shape != (self.dim,) or not np.all(np.isfinite(x)):
+            raise OptionError(f"{what} must be {self.dim} finite numbers in [0, 1], got {x}")
+        return np.clip(x, 0.0, 1.0)
+
+    # --- protocol -----------------------------------------------------------------------------
+    def ask(self) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def tell(self, x: np.ndarray, f: np.ndarray) -> None:
+        """Record the fitness ``f`` (n,) of the points ``x`` (n, dim) returned by :meth:`ask`."""
+        x = np.asarray(x, dtype=float)
+        f = np.asarray(f, dtype=float)
+        if x.shape[0] != f.shape[0]:
+            raise ValueError(f"tell: {x.shape[0]} points but {f.shape[0]} fitness values")
+        f = np.where(np.isfinite(f), f, np.inf)
+        self._tell(x, f)
+        self.n_evals += len(f)
+        self.generation += 1
+        i = int(np.argmin(f)) if len(f) else 0
+        if len(f) and f[i] < self.best_f:
+            gain = self.best_f - f[i]
+            if not np.isfinite(self.best_f) or gain > self.tol * max(abs(self.best_f), 1e-300):
+                self._last_improvement = self.generation
+            self.best_f = float(f[i])
+            self.best_x = x[i].copy()
+
+    def _tell(self, x: np.ndarray, f: np.ndarray) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    @property
+    def done(self) -> bool:
+        if self.target is not None and self.best_f <= self.target:
+            self.stop_reason = f"target {self.target:g} reached"
+        elif self.generations is not None and self.generation >= self.generations:
+            self.stop_reason = f"{self.generations} generations"
+        elif self.max_evals is not None and self.n_evals >= self.max_evals:
+            self.stop_reason = f"{self.max_evals} evaluations"
+        elif self.patience is not None and self.generation - self._last_improvement >= self.patience:
+            self.stop_reason = f"no improvement for {self.patience} generations"
+        else:
+            extra = self._method_done()
+            if not extra:
+                return False
+            self.stop_reason = extra
+        return True
+
+    def _method_done(self) -> str:
+        """Method-specific termination (e.g. CMA-ES); an empty string means go on."""
+        return ""
+
+    # --- state --------------------------------------------------------------------------------
+    def state(self) -> dict[str, Any]:
+        """Everything needed to resume, RNG state included (a picklable dict)."""
+        d = {k: copy.deepcopy(v) for k, v in self.__dict__.items() if k != "rng"}
+        d["rng"] = copy.deepcopy(self.rng.bit_generator.state)
+        d["rng_class"] = type(self.rng.bit_generator).__name__
+        d["class"] = type(self).__name__
+        return d
+
+    @classmethod
+    def from_state(cls, state: dict[str, Any]) -> Optimizer:
+        state = dict(state)
+        if state.pop("class") != cls.__name__:
+            raise ValueError(f"state is not of a {cls.__name__}")
+        bitgen = getattr(np.random, state.pop("rng_class"))()
+        bitgen.state = state.pop("rng")
+        obj = cls.__new__(cls)
+        obj.__dict__.update(state)
+        obj.rng = np.random.Generator(bitgen)
+        obj._restore()
+        return obj
+
+    def _restore(self) -> None:
+        """Hook for subclasses whose state needs rebuilding after :meth:`from_state`."""
