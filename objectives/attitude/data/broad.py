@@ -31,7 +31,20 @@ def _read_mat(path: Path) -> dict:
     try:
         return scipy.io.loadmat(str(path))
     except Exception as exc:  # scipy raises several types for corrupt/truncated files
-        raise RecordingError(f"{path}: cannot read as a MATLAB .mat file ({type(exc).__name__}: {exc})") from None
+        whole = f"{type(exc).__name__}: {exc}"
+    # Find the first key that cannot be read, so the message says what is lost (truncated files
+    # keep the variables written before the cut).
+    for k in _KEYS:
+        try:
+            found = k in scipy.io.loadmat(str(path), variable_names=[k])
+            why = whole
+        except Exception as exc:
+            found, why = False, f"{type(exc).__name__}: {exc}"
+        if not found:
+            raise RecordingError(
+                f"{path}: cannot read key {k!r} from the MATLAB .mat file (truncated or corrupt? {why})"
+            )
+    raise RecordingError(f"{path}: cannot read as a MATLAB .mat file ({whole})")
 
 
 def _read_hdf5(path: Path) -> dict:
@@ -70,17 +83,42 @@ def load_broad(path: str | Path, name: str | None = None) -> Recording:
     missing = [k for k in _KEYS if k not in d]
     if missing:
         raise RecordingError(f"{path}: missing key(s) {missing}; a BROAD trial needs {list(_KEYS)}")
-    rate = float(np.asarray(d["sampling_rate"]).ravel()[0])
+    sr = np.asarray(d["sampling_rate"], dtype=float).ravel()
+    rate = float(sr[0]) if sr.size else np.nan
     if not (np.isfinite(rate) and rate > 0):
         raise RecordingError(f"{path}: 'sampling_rate' must be a positive number of Hz, got {rate}")
+    arrays = {}
+    n = None
+    for key, ncols in (("imu_gyr", 3), ("imu_acc", 3), ("imu_mag", 3), ("opt_quat", 4)):
+        try:
+            a = np.asarray(d[key], dtype=float)
+        except (TypeError, ValueError):
+            raise RecordingError(f"{path}: key {key!r} is not numeric") from None
+        if a.ndim != 2 or a.shape[1] != ncols:
+            raise RecordingError(f"{path}: key {key!r} must have shape (N, {ncols}), got {a.shape}")
+        if n is None:
+            n = a.shape[0]
+        elif a.shape[0] != n:
+            raise RecordingError(f"{path}: key {key!r} has {a.shape[0]} samples, 'imu_gyr' has {n}")
+        if key != "opt_quat":  # truth may be NaN (markers lost); the IMU signals may not
+            bad = ~np.isfinite(a).all(axis=1)
+            if bad.any():
+                raise RecordingError(
+                    f"{path}: key {key!r} has {int(bad.sum())} non-finite sample(s), first at index "
+                    f"{int(np.argmax(bad))}"
+                )
+        arrays[key] = a
+    movement = np.asarray(d["movement"]).ravel()
+    if movement.shape[0] != n:
+        raise RecordingError(f"{path}: key 'movement' has {movement.shape[0]} samples, 'imu_gyr' has {n}")
     return Recording(
         name=name or path.stem,
-        gyr=d["imu_gyr"],
-        acc=d["imu_acc"],
-        mag=d["imu_mag"],
+        gyr=arrays["imu_gyr"],
+        acc=arrays["imu_acc"],
+        mag=arrays["imu_mag"],
         dt=1.0 / rate,
-        quat=d["opt_quat"],
-        motion=np.asarray(d["movement"]).ravel(),
+        quat=arrays["opt_quat"],
+        motion=movement,
         frame="ENU",
         units={"gyr": "rad/s", "acc": "m/s^2", "mag": "uT"},
         source=str(path),

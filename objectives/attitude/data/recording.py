@@ -136,6 +136,89 @@ class Recording:
             object.__setattr__(self, k, v)
 
     # ------------------------------------------------------------------------------------------
+    @classmethod
+    def from_time(
+        cls,
+        time: Any,
+        *,
+        name: str,
+        gyr: Any,
+        acc: Any,
+        mag: Any = None,
+        quat: Any = None,
+        motion: Any = None,
+        frame: str = "ENU",
+        units: Mapping[str, str] | None = None,
+        source: str = "",
+        extra: Mapping[str, Any] | None = None,
+        jitter_tol: float = 0.05,
+        rate_hz: float | None = None,
+        rate_tol: float = 0.01,
+    ) -> Recording:
+        """A recording from sample time stamps instead of ``dt``: checks them and derives ``dt``.
+
+        Parameters
+        ----------
+        time : array (N,)
+            Time stamps, s; finite and strictly increasing.
+        jitter_tol : float
+            Largest allowed deviation of any sample interval from ``dt``, as a fraction of ``dt``
+            (0.05: every interval within 5 % of the mean). Filters assume uniform sampling.
+        rate_hz : float, optional
+            Expected sampling rate; with it, ``|1/dt - rate_hz| <= rate_tol * rate_hz`` is checked.
+        rate_tol : float
+            Relative tolerance of that check.
+        Other parameters are those of :class:`Recording`.
+
+        Returns
+        -------
+        Recording
+            With ``dt = (time[-1] - time[0]) / (N - 1)``.
+
+        Raises
+        ------
+        RecordingError
+            Naming the source and ``'time'``: wrong shape or length, non-finite stamps, a stamp not
+            after the one before it (with its index), non-uniform sampling beyond ``jitter_tol``
+            (with the worst interval), or a rate away from ``rate_hz``.
+        """
+        src = source or name or "recording"
+        t = _as_array(src, "time", time, None, None)
+        n_gyr = np.shape(gyr)[0] if np.ndim(gyr) >= 1 else None
+        if n_gyr is not None and t.shape[0] != n_gyr:
+            raise RecordingError(f"{src}: 'time' has {t.shape[0]} samples, expected {n_gyr} (as gyr)")
+        if t.shape[0] < 2:
+            raise RecordingError(f"{src}: 'time' needs at least 2 samples, got {t.shape[0]}")
+        bad = ~np.isfinite(t)
+        if bad.any():
+            raise RecordingError(f"{src}: 'time' has non-finite stamps, first at index {int(np.argmax(bad))}")
+        d = np.diff(t)
+        if np.any(d <= 0):
+            i = int(np.argmax(d <= 0)) + 1
+            raise RecordingError(
+                f"{src}: 'time' must increase strictly; sample {i} at {t[i]!r} s follows {t[i - 1]!r} s"
+            )
+        dt = float((t[-1] - t[0]) / (t.shape[0] - 1))
+        dev = np.abs(d - dt)
+        if dev.max() > jitter_tol * dt:
+            i = int(np.argmax(dev))
+            raise RecordingError(
+                f"{src}: 'time' is not uniformly sampled: interval {i} -> {i + 1} is {d[i]:.6g} s, mean "
+                f"dt is {dt:.6g} s (tolerance {jitter_tol:.3g} dt); resample the recording first"
+            )
+        if rate_hz is not None and abs(1.0 / dt - rate_hz) > rate_tol * rate_hz:
+            raise RecordingError(
+                f"{src}: 'time' gives a rate of {1.0 / dt:.6g} Hz, expected {rate_hz:.6g} Hz "
+                f"(tolerance {rate_tol:.3g})"
+            )
+        kwargs: dict[str, Any] = {}
+        if units is not None:
+            kwargs["units"] = dict(units)
+        return cls(
+            name=name, gyr=gyr, acc=acc, mag=mag, dt=dt, quat=quat, motion=motion, frame=frame,
+            source=source, extra=dict(extra or {}), **kwargs,
+        )
+
     @property
     def n(self) -> int:
         """Number of samples."""
