@@ -1,0 +1,300 @@
+"""Madgwick's gradient-descent orientation filter (MARG and IMU), with gyro bias drift compensation.
+
+S. O. H. Madgwick, "An efficient orientation filter for inertial and inertial/magnetic sensor
+arrays", report, University of Bristol, 2010 (the "report" below), and Madgwick et al., ICORR 2011.
+
+Two variants of the magnetometer term (``variant``):
+
+``paper`` (default)
+    The earth-field reference of report eqs. 45-46: ``h = q m q*``, ``b = (|h_xy|, 0, h_z)``, used
+    as ``b`` in the objective function of eq. 29.
+``original_c``
+    The widely copied 2010 C code (``MadgwickAHRS.c``, x-io Technologies) stores ``|h_xy|`` and
+    ``h_z`` in variables named ``_2bx`` and ``_2bz`` and uses them as ``2 b_x`` and ``2 b_z``: its
+    reference field is half as long as the measured (unit) field. Documented publicly in issue 1
+    of the BROAD repository (dlaidig/broad) and issue 50 of the Arduino MadgwickAHRS library. The
+    BROAD published results were made with this code; the two variants are otherwise identical.
+
+Conventions: the kernel works like the C code, in the NWU earth frame (x north, y west, z up) with
+``q`` sensor-to-earth ``(w, x, y, z)`` and ``q_dot = 0.5 q (x) (0, omega)``; the class converts the
+output to the recording's frame (ENU/NED).
+
+Degenerate samples (zero or non-finite acc or mag, non-finite gyr), handled as the C code does
+where it defines the behaviour and never producing NaN from one bad sample:
+
+- acc zero or non-finite: no correction; the sample propagates with the gyroscope only;
+- mag zero or non-finite (MARG mode): the IMU update (gravity only) for this sample;
+- gyr non-finite: treated as zero rate (the orientation is held, corrections still apply).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from tuner.space import Real
+
+__all__ = ["Madgwick", "madgwick_batch", "VARIANTS"]
+
+#: name -> factor k with ``2 b_x = k |h_xy|``, ``2 b_z = k h_z`` (paper: 2; the 2010 C code: 1)
+VARIANTS = {"paper": 2.0, "original_c": 1.0}
+
+# no 'nnan'/'ninf': the kernel tests for non-finite input
+_FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
+
+
+@njit(cache=True, fastmath=_FM)
+def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
+    """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
+
+    Parameters
+    ----------
+    gyr, acc, mag : (N, 3) float64
+        rad/s, any unit (normalised), any unit (normalised); ``mag`` may be (0, 3) for IMU only.
+    coef : (5,) float64
+        ``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k`` the
+        field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1).
+    q0 : (4,) float64
+        Initial sensor-to-earth quaternion (NWU).
+    out : (N, 4) float64
+        Written: the estimate after each sample's update.
+    bias_out : (N, 3) or (0, 3) float64
+        Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample.
+    """
+    dt = coef[0]
+    beta = coef[1]
+    zeta = coef[2]
+    k = coef[3]
+    use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
+    write_bias = bias_out.shape[0] == gyr.shape[0]
+    q0_, q1, q2, q3 = q0[0], q0[1], q0[2], q0[3]
+    bx_ = 0.0
+    by_ = 0.0
+    bz_ = 0.0
+    for i in range(gyr.shape[0]):
+        gx = gyr[i, 0]
+        gy = gyr[i, 1]
+        gz = gyr[i, 2]
+        if not (math.isfinite(gx) and math.isfinite(gy) and math.isfinite(gz)):
+            gx = 0.0
+            gy = 0.0
+            gz = 0.0
+        if write_bias:
+            bias_out[i, 0] = bx_
+            bias_out[i, 1] = by_
+            bias_out[i, 2] = bz_
+        # eq. 49: bias-compensated rate
+        gx -= bx_
+        gy -= by_
+        gz -= bz_
+        # eq. 12: rate of change from the gyroscope, q_dot = 0.5 q (x) (0, w)
+        qd0 = 0.5 * (-q1 * gx - q2 * gy - q3 * gz)
+        qd1 = 0.5 * (q0_ * gx + q2 * gz - q3 * gy)
+        qd2 = 0.5 * (q0_ * gy - q1 * gz + q3 * gx)
+        qd3 = 0.5 * (q0_ * gz + q1 * gy - q2 * gx)
+
+        ax = acc[i, 0]
+        ay = acc[i, 1]
+        az = acc[i, 2]
+        an = ax * ax + ay * ay + az * az
+        if an > 0.0 and an < math.inf:
+            r = 1.0 / math.sqrt(an)
+            ax *= r
+            ay *= r
+            az *= r
+            # eq. 25: f_g = R(q)^T (0, 0, 1) - a
+            f1 = 2.0 * (q1 * q3 - q0_ * q2) - ax
+            f2 = 2.0 * (q0_ * q1 + q2 * q3) - ay
+            f3 = 1.0 - 2.0 * (q1 * q1 + q2 * q2) - az
+            # eq. 34: J_g^T f_g (J_g of eq. 26)
+            s0 = -2.0 * q2 * f1 + 2.0 * q1 * f2
+            s1 = 2.0 * q3 * f1 + 2.0 * q0_ * f2 - 4.0 * q1 * f3
+            s2 = -2.0 * q0_ * f1 + 2.0 * q3 * f2 - 4.0 * q2 * f3
+            s3 = 2.0 * q1 * f1 + 2.0 * q2 * f2
+            mn = 0.0
+            mx = 0.0
+            my = 0.0
+            mz = 0.0
+            if use_mag:
+                mx = mag[i, 0]
+                my = mag[i, 1]
+                mz = mag[i, 2]
+                mn = mx * mx + my * my + mz * mz
+            if mn > 0.0 and mn < math.inf:
+                r = 1.0 / math.sqrt(mn)
+                mx *= r
+                my *= r
+                mz *= r
+                # eq. 45: h = q (x) m (x) q*
+                hx = (mx * (1.0 - 2.0 * (q2 * q2 + q3 * q3)) + 2.0 * my * (q1 * q2 - q0_ * q3)
+                      + 2.0 * mz * (q1 * q3 + q0_ * q2))
+                hy = (2.0 * mx * (q1 * q2 + q0_ * q3) + my * (1.0 - 2.0 * (q1 * q1 + q3 * q3))
+                      + 2.0 * mz * (q2 * q3 - q0_ * q1))
+                hz = (2.0 * mx * (q1 * q3 - q0_ * q2) + 2.0 * my * (q2 * q3 + q0_ * q1)
+                      + mz * (1.0 - 2.0 * (q1 * q1 + q2 * q2)))
+                # eq. 46 (paper: k = 2) or the C code's half-length field (k = 1)
+                tbx = k * math.sqrt(hx * hx + hy * hy)  # 2 b_x
+                tbz = k * hz  # 2 b_z
+                # eq. 29: f_b = R(q)^T b - m
+                e1 = tbx * (0.5 - q2 * q2 - q3 * q3) + tbz * (q1 * q3 - q0_ * q2) - mx
+                e2 = tbx * (q1 * q2 - q0_ * q3) + tbz * (q0_ * q1 + q2 * q3) - my
+                e3 = tbx * (q0_ * q2 + q1 * q3) + tbz * (0.5 - q1 * q1 - q2 * q2) - mz
+                # eq. 34: + J_b^T f_b (J_b of eq. 30)
+                s0 += -tbz * q2 * e1 + (-tbx * q3 + tbz * q1) * e2 + tbx * q2 * e3
+                s1 += tbz * q3 * e1 + (tbx * q2 + tbz * q0_) * e2 + (tbx * q3 - 2.0 * tbz * q1) * e3
+                s2 += ((-2.0 * tbx * q2 - tbz * q0_) * e1 + (tbx * q1 + tbz * q3) * e2
+                       + (tbx * q0_ - 2.0 * tbz * q2) * e3)
+                s3 += (-2.0 * tbx * q3 + tbz * q1) * e1 + (-tbx * q0_ + tbz * q2) * e2 + tbx * q1 * e3
+            sn = s0 * s0 + s1 * s1 + s2 * s2 + s3 * s3
+            if sn > 0.0 and sn < math.inf:
+                r = 1.0 / math.sqrt(sn)
+                s0 *= r
+                s1 *= r
+                s2 *= r
+                s3 *= r
+                # eq. 42-43: q_dot = q_dot_w - beta * grad / |grad|
+                qd0 -= beta * s0
+                qd1 -= beta * s1
+                qd2 -= beta * s2
+                qd3 -= beta * s3
+                if zeta != 0.0:
+                    # eqs. 47-48: w_eps = 2 q* (x) q_dot_eps, w_b += zeta w_eps dt
+                    c = 2.0 * zeta * dt
+                    bx_ += c * (q0_ * s1 - q1 * s0 - q2 * s3 + q3 * s2)
+                    by_ += c * (q0_ * s2 + q1 * s3 - q2 * s0 - q3 * s1)
+                    bz_ += c * (q0_ * s3 - q1 * s2 + q2 * s1 - q3 * s0)
+        # eq. 13 (Euler step) and normalisation
+        n0 = q0_ + qd0 * dt
+        n1 = q1 + qd1 * dt
+        n2 = q2 + qd2 * dt
+        n3 = q3 + qd3 * dt
+        r = 1.0 / math.sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3)
+        q0_ = n0 * r
+        q1 = n1 * r
+        q2 = n2 * r
+        q3 = n3 * r
+        out[i, 0] = q0_
+        out[i, 1] = q1
+        out[i, 2] = q2
+        out[i, 3] = q3
+
+
+def _check_gain(filt: str, key: str, x) -> None:
+    """ValueError unless ``x`` is a finite real number >= 0."""
+    ok = not isinstance(x, bool) and isinstance(x, (int, float, np.integer, np.floating))
+    if not (ok and np.isfinite(x) and x >= 0):
+        raise ValueError(f"{filt}: {key} must be a finite number >= 0, got {x!r}")
+
+
+def _as_c(name: str, a, ncols: int) -> np.ndarray:
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != ncols:
+        raise ValueError(f"{name} must have shape (N, {ncols}), got {a.shape}")
+    return a
+
+
+def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float = 0.0,
+                   variant: str = "paper", with_bias: bool = False):
+    """Run the Madgwick kernel on raw arrays (NWU working frame, no frame conversion).
+
+    Parameters
+    ----------
+    gyr, acc : (N, 3)
+        rad/s; any unit (normalised per sample).
+    mag : (N, 3) or None
+        Any unit; None runs the IMU (gravity only) version.
+    dt : float
+        Sample time, s (``1 / sampleFreq`` of the C code).
+    q0 : (4,)
+        Initial sensor-to-earth quaternion (w, x, y, z), NWU.
+    beta : float
+        Gain of the gradient step, rad/s (report eq. 33).
+    zeta : float
+        Gain of the gyro bias drift compensation, 1/s (report eq. 48); 0 disables it.
+    variant : {"paper", "original_c"}
+        See the module docstring.
+    with_bias : bool
+        Also return the (N, 3) bias estimate.
+
+    Returns
+    -------
+    quat : (N, 4), or (quat, bias) when ``with_bias``.
+    """
+    if variant not in VARIANTS:
+        raise ValueError(f"variant must be one of {sorted(VARIANTS)}, got {variant!r}")
+    gyr = _as_c("gyr", gyr, 3)
+    acc = _as_c("acc", acc, 3)
+    n = gyr.shape[0]
+    if acc.shape[0] != n:
+        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
+    if mag is None:
+        mag = np.empty((0, 3))
+    else:
+        mag = _as_c("mag", mag, 3)
+        if mag.shape[0] != n:
+            raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
+    for name, v in (("dt", dt), ("beta", beta), ("zeta", zeta)):
+        if not np.isfinite(v) or v < 0 or (name == "dt" and v == 0):
+            raise ValueError(f"{name} must be finite and {'> 0' if name == 'dt' else '>= 0'}, got {v!r}")
+    q0 = np.asarray(q0, dtype=np.float64).reshape(-1)
+    if q0.shape != (4,) or not np.all(np.isfinite(q0)) or np.linalg.norm(q0) == 0:
+        raise ValueError(f"q0 must be a finite non-zero (4,) quaternion, got {q0!r}")
+    q0 = q0 / np.linalg.norm(q0)
+    coef = np.array([dt, beta, zeta, VARIANTS[variant], 1.0 if mag.shape[0] else 0.0])
+    out = np.empty((n, 4))
+    bias = np.empty((n if with_bias else 0, 3))
+    _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias)
+    return (out, bias) if with_bias else out
+
+
+class Madgwick(AttitudeFilter):
+    """Madgwick's gradient-descent filter; output sensor-to-earth in the recording's frame.
+
+    Parameters
+    ----------
+    beta : float
+        Gradient step gain, rad/s (report eq. 33: ``sqrt(3/4) * gyro error``). Default 0.1.
+    zeta : float
+        Gyro bias drift gain, 1/s (report eq. 48: ``sqrt(3/4) * bias drift``). Default 0 (off).
+    variant : {"paper", "original_c"}
+        Field reference of the report (default) or the 2010 C code's (half length).
+    use_mag : bool
+        MARG (True, default) or IMU version (False).
+
+    The kernel works in NWU (``working_frame``); :meth:`run` returns quaternions in ``rec.frame``.
+    ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s, when ``zeta > 0``.
+    """
+
+    name = "madgwick"
+    working_frame = "NWU"
+    needs_mag = True
+    params = (
+        Real("beta", 1e-3, 1.0, scale="log", unit="rad/s", doc="gradient step gain (eq. 33)"),
+        Real("zeta", fixed=0.0, unit="1/s", doc="gyro bias drift gain (eq. 48), 0 = off"),
+        Real("variant", fixed="paper", doc="'paper' or 'original_c' (2010 C code field scale)"),
+        Real("use_mag", fixed=True, doc="MARG (true) or IMU (false)"),
+    )
+    defaults = {"beta": 0.1, "zeta": 0.0, "variant": "paper", "use_mag": True}
+
+    def _check(self) -> None:
+        v = self.values
+        if v["variant"] not in VARIANTS:
+            raise ValueError(f"madgwick: variant must be one of {sorted(VARIANTS)}, got {v['variant']!r}")
+        for key in ("beta", "zeta"):
+            _check_gain("madgwick", key, v[key])
+        if not isinstance(v["use_mag"], (bool, np.bool_)):
+            raise ValueError(f"madgwick: use_mag must be true or false, got {v['use_mag']!r}")
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        v = self.values
+        mag = rec.mag if v["use_mag"] else None
+        zeta = float(v["zeta"])
+        res = madgwick_batch(rec.gyr, rec.acc, mag, rec.dt, q0, float(v["beta"]), zeta, v["variant"],
+                             with_bias=zeta > 0)
+        if zeta > 0:
+            return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
+        return FilterResult(res, self.working_frame)

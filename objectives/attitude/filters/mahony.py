@@ -1,0 +1,244 @@
+"""Mahony's explicit complementary filter on SO(3) with gyro-bias integral (MARG and IMU).
+
+R. Mahony, T. Hamel, J.-M. Pflimlin, "Nonlinear complementary filters on the special orthogonal
+group", IEEE TAC 53(5), 2008, section V ("explicit complementary filter with bias correction",
+eq. 32 for the quaternion form, here with ``k_i = 1`` weights for both directions):
+
+    omega_mes = a x v_hat + m x w_hat                     (v_hat, w_hat predicted in the sensor frame)
+    b_dot     = -Ki omega_mes
+    q_dot     = 0.5 q (x) (0, omega_y - b + Kp omega_mes)
+
+implemented as in the widely used 2010 C code (``MahonyAHRS.c``, x-io Technologies; the BROAD
+example code), so that BROAD's published numbers are reproduced:
+
+- ``Kp``, ``Ki`` are the paper's gains; the C code's ``twoKp = 2 Kp`` and ``twoKi = 2 Ki`` multiply
+  half-errors, which is the same thing;
+- the earth-field reference is rebuilt each sample from the measurement, ``h = q m q*``,
+  ``b = (|h_xy|, 0, h_z)``, so the magnetometer only corrects heading (no dip angle parameter);
+- the integral ``I = -b`` accumulates ``Ki omega_mes dt`` and is reset to zero when ``Ki <= 0``;
+- forward-Euler quaternion step and normalisation.
+
+Working frame: NWU (x north, y west, z up), ``q`` sensor-to-earth (w, x, y, z); the class converts
+the output to the recording's frame.
+
+Degenerate samples: acc zero or non-finite: no correction (the C code also skips the integral
+there; this kernel still applies the integral bias estimate, which is the better bias model and
+changes nothing on finite data); mag zero or non-finite (MARG): the IMU update for the sample; gyr
+non-finite: treated as zero rate (orientation held, correction still applied).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.madgwick import _FM, _as_c, _check_gain
+from tuner.space import Real
+
+__all__ = ["Mahony", "mahony_batch"]
+
+
+@njit(cache=True, fastmath=_FM)
+def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
+    """Mahony filter over whole arrays (see module docstring).
+
+    Parameters
+    ----------
+    gyr, acc, mag : (N, 3) float64
+        rad/s, any unit, any unit; ``mag`` may be (0, 3) for the IMU version.
+    coef : (4,) float64
+        ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` (0/1).
+    q0 : (4,) float64
+        Initial sensor-to-earth quaternion (NWU).
+    out : (N, 4) float64
+        Written: estimate after each sample.
+    bias_out : (N, 3) or (0, 3) float64
+        Written when not empty: gyro bias estimate ``b = -I`` used at each sample, rad/s.
+    """
+    dt = coef[0]
+    kp = coef[1]
+    ki = coef[2]
+    use_mag = coef[3] != 0.0 and mag.shape[0] == gyr.shape[0]
+    write_bias = bias_out.shape[0] == gyr.shape[0]
+    q0_, q1, q2, q3 = q0[0], q0[1], q0[2], q0[3]
+    ix = 0.0
+    iy = 0.0
+    iz = 0.0
+    for i in range(gyr.shape[0]):
+        gx = gyr[i, 0]
+        gy = gyr[i, 1]
+        gz = gyr[i, 2]
+        if not (math.isfinite(gx) and math.isfinite(gy) and math.isfinite(gz)):
+            gx = 0.0
+            gy = 0.0
+            gz = 0.0
+        ax = acc[i, 0]
+        ay = acc[i, 1]
+        az = acc[i, 2]
+        an = ax * ax + ay * ay + az * az
+        if an > 0.0 and an < math.inf:
+            r = 1.0 / math.sqrt(an)
+            ax *= r
+            ay *= r
+            az *= r
+            # predicted gravity direction v_hat = R(q)^T (0, 0, 1)
+            vx = 2.0 * (q1 * q3 - q0_ * q2)
+            vy = 2.0 * (q0_ * q1 + q2 * q3)
+            vz = q0_ * q0_ - q1 * q1 - q2 * q2 + q3 * q3
+            # omega_mes = a x v_hat
+            ex = ay * vz - az * vy
+            ey = az * vx - ax * vz
+            ez = ax * vy - ay * vx
+            mn = 0.0
+            mx = 0.0
+            my = 0.0
+            mz = 0.0
+            if use_mag:
+                mx = mag[i, 0]
+                my = mag[i, 1]
+                mz = mag[i, 2]
+                mn = mx * mx + my * my + mz * mz
+            if mn > 0.0 and mn < math.inf:
+                r = 1.0 / math.sqrt(mn)
+                mx *= r
+                my *= r
+                mz *= r
+                hx = (mx * (1.0 - 2.0 * (q2 * q2 + q3 * q3)) + 2.0 * my * (q1 * q2 - q0_ * q3)
+                      + 2.0 * mz * (q1 * q3 + q0_ * q2))
+                hy = (2.0 * mx * (q1 * q2 + q0_ * q3) + my * (1.0 - 2.0 * (q1 * q1 + q3 * q3))
+                      + 2.0 * mz * (q2 * q3 - q0_ * q1))
+                bx = math.sqrt(hx * hx + hy * hy)
+                bz = (2.0 * mx * (q1 * q3 - q0_ * q2) + 2.0 * my * (q2 * q3 + q0_ * q1)
+                      + mz * (1.0 - 2.0 * (q1 * q1 + q2 * q2)))
+                # predicted field direction w_hat = R(q)^T (bx, 0, bz)
+                wx = 2.0 * (bx * (0.5 - q2 * q2 - q3 * q3) + bz * (q1 * q3 - q0_ * q2))
+                wy = 2.0 * (bx * (q1 * q2 - q0_ * q3) + bz * (q0_ * q1 + q2 * q3))
+                wz = 2.0 * (bx * (q0_ * q2 + q1 * q3) + bz * (0.5 - q1 * q1 - q2 * q2))
+                ex += my * wz - mz * wy
+                ey += mz * wx - mx * wz
+                ez += mx * wy - my * wx
+            if ki > 0.0:
+                ix += ki * ex * dt
+                iy += ki * ey * dt
+                iz += ki * ez * dt
+            else:
+                ix = 0.0
+                iy = 0.0
+                iz = 0.0
+            gx += kp * ex
+            gy += kp * ey
+            gz += kp * ez
+        if write_bias:
+            bias_out[i, 0] = -ix
+            bias_out[i, 1] = -iy
+            bias_out[i, 2] = -iz
+        gx += ix
+        gy += iy
+        gz += iz
+        h = 0.5 * dt
+        gx *= h
+        gy *= h
+        gz *= h
+        n0 = q0_ + (-q1 * gx - q2 * gy - q3 * gz)
+        n1 = q1 + (q0_ * gx + q2 * gz - q3 * gy)
+        n2 = q2 + (q0_ * gy - q1 * gz + q3 * gx)
+        n3 = q3 + (q0_ * gz + q1 * gy - q2 * gx)
+        r = 1.0 / math.sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3)
+        q0_ = n0 * r
+        q1 = n1 * r
+        q2 = n2 * r
+        q3 = n3 * r
+        out[i, 0] = q0_
+        out[i, 1] = q1
+        out[i, 2] = q2
+        out[i, 3] = q3
+
+
+def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
+                 with_bias: bool = False):
+    """Run the Mahony kernel on raw arrays (NWU working frame, no frame conversion).
+
+    Parameters
+    ----------
+    gyr, acc : (N, 3)
+        rad/s; any unit.
+    mag : (N, 3) or None
+        Any unit; None runs the IMU version.
+    dt : float
+        Sample time, s.
+    q0 : (4,)
+        Initial sensor-to-earth quaternion, NWU.
+    kp, ki : float
+        Proportional gain, rad/s, and integral gain, rad/s^2 (per unit of ``omega_mes``).
+    with_bias : bool
+        Also return the (N, 3) gyro bias estimate, rad/s.
+    """
+    gyr = _as_c("gyr", gyr, 3)
+    acc = _as_c("acc", acc, 3)
+    n = gyr.shape[0]
+    if acc.shape[0] != n:
+        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
+    if mag is None:
+        mag = np.empty((0, 3))
+    else:
+        mag = _as_c("mag", mag, 3)
+        if mag.shape[0] != n:
+            raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
+    for name, v in (("dt", dt), ("kp", kp), ("ki", ki)):
+        if not np.isfinite(v) or v < 0 or (name == "dt" and v == 0):
+            raise ValueError(f"{name} must be finite and {'> 0' if name == 'dt' else '>= 0'}, got {v!r}")
+    q0 = np.asarray(q0, dtype=np.float64).reshape(-1)
+    if q0.shape != (4,) or not np.all(np.isfinite(q0)) or np.linalg.norm(q0) == 0:
+        raise ValueError(f"q0 must be a finite non-zero (4,) quaternion, got {q0!r}")
+    q0 = q0 / np.linalg.norm(q0)
+    coef = np.array([dt, kp, ki, 1.0 if mag.shape[0] else 0.0])
+    out = np.empty((n, 4))
+    bias = np.empty((n if with_bias else 0, 3))
+    _mahony_kernel(gyr, acc, mag, coef, q0, out, bias)
+    return (out, bias) if with_bias else out
+
+
+class Mahony(AttitudeFilter):
+    """Mahony's explicit complementary filter; output sensor-to-earth in the recording's frame.
+
+    Parameters
+    ----------
+    Kp : float
+        Proportional gain, rad/s. Default 0.5 (the C code's ``twoKp = 1``).
+    Ki : float
+        Integral (bias) gain, rad/s^2. Default 0.
+    use_mag : bool
+        MARG (True, default) or IMU version.
+
+    Works in NWU; ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s, when ``Ki > 0``.
+    """
+
+    name = "mahony"
+    working_frame = "NWU"
+    needs_mag = True
+    params = (
+        Real("Kp", 1e-2, 10.0, scale="log", unit="rad/s", doc="proportional gain"),
+        Real("Ki", 1e-5, 1.0, scale="log", unit="rad/s^2", doc="integral gain (gyro bias)"),
+        Real("use_mag", fixed=True, doc="MARG (true) or IMU (false)"),
+    )
+    defaults = {"Kp": 0.5, "Ki": 0.0, "use_mag": True}
+
+    def _check(self) -> None:
+        v = self.values
+        for key in ("Kp", "Ki"):
+            _check_gain("mahony", key, v[key])
+        if not isinstance(v["use_mag"], (bool, np.bool_)):
+            raise ValueError(f"mahony: use_mag must be true or false, got {v['use_mag']!r}")
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        v = self.values
+        mag = rec.mag if v["use_mag"] else None
+        ki = float(v["Ki"])
+        res = mahony_batch(rec.gyr, rec.acc, mag, rec.dt, q0, float(v["Kp"]), ki, with_bias=ki > 0)
+        if ki > 0:
+            return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
+        return FilterResult(res, self.working_frame)
