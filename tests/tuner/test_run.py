@@ -1,0 +1,159 @@
+"""Runs end to end: reproducibility across backends, kill and resume, failures recorded, refinement."""
+
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from tuner.config import config_from_dict
+from tuner.objective import PENALTY
+from tuner.run import resume, run
+
+
+def job(tmp_path, **over):
+    raw = {"name": "t", "seed": 3,
+           "objective": {"kind": "function", "function": "rastrigin", "dim": 4},
+           "optimizer": {"method": "pso", "population": 8, "generations": 6},
+           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
+    for k, v in over.items():
+        raw[k] = {**raw.get(k, {}), **v} if isinstance(v, dict) else v
+    return config_from_dict(raw, source=str(tmp_path / "job.yaml"), base_dir=tmp_path)
+
+
+def history(run_dir):
+    return pd.read_csv(Path(run_dir) / "history.csv", keep_default_na=False)
+
+
+@pytest.mark.parametrize("method", ["pso", "cmaes", "de", "random"])
+def test_loky_history_equals_serial(tmp_path, method):
+    """Same config and seed: identical history.csv serially and on 2 loky workers.
+
+    The ``seconds`` column (wall time of each evaluation) is the only one allowed to differ.
+    """
+    a = run(job(tmp_path, optimizer={"method": method}), run_dir=tmp_path / "a", quiet=True)
+    b = run(job(tmp_path, optimizer={"method": method}, parallel={"backend": "loky", "n_jobs": 2}),
+            run_dir=tmp_path / "b", quiet=True)
+    ha, hb = history(a.run_dir).drop(columns="seconds"), history(b.run_dir).drop(columns="seconds")
+    pd.testing.assert_frame_equal(ha, hb)
+    assert a.best_params == b.best_params and a.best_fitness == b.best_fitness
+    assert len(ha) == a.n_evals
+
+
+def test_failures_are_recorded_and_run_goes_on(tmp_path):
+    res = run(job(tmp_path, objective={"fail_every": 5, "nan_every": 7}, optimizer={"generations": 5}),
+              run_dir=tmp_path / "f", quiet=True)
+    h = history(res.run_dir)
+    failed = h[h["status"] == "failed"]
+    assert res.status == "finished" and len(h) == 40
+    assert len(failed) > 0
+    assert failed["error"].str.contains("RuntimeError: synthetic failure").any()
+    assert failed["error"].str.contains("non-finite fitness nan").any()
+    assert (failed["fitness"] == PENALTY).all()
+    ok = h[h["status"] == "ok"]
+    assert res.best_fitness == ok["fitness"].min()
+    best_row = ok.loc[ok["fitness"].idxmin()]
+    assert all(best_row[k] == pytest.approx(v) for k, v in res.best_params.items())
+    meta = yaml.safe_load((res.run_dir / "meta.json").read_text())
+    assert meta["n_failed"] == len(failed)
+
+
+def test_run_directory_contents(tmp_path):
+    res = run(job(tmp_path), quiet=True)
+    d = res.run_dir
+    assert d.parent == tmp_path / "runs" and d.name.split("-")[1] == "t"
+    for f in ("config.yaml", "meta.json", "history.csv", "best.yaml", "checkpoint.pkl", "report.md",
+              "figures/convergence.png"):
+        assert (d / f).exists(), f
+    cfg = yaml.safe_load((d / "config.yaml").read_text())
+    assert cfg["parameters"]["x0"] == {"low": -5.12, "high": 5.12}
+    assert cfg["parallel"] == {"backend": "serial", "n_jobs": 2, "address": None}
+    best = yaml.safe_load((d / "best.yaml").read_text())
+    assert best["fitness"] == res.best_fitness and set(best["params"]) == {"x0", "x1", "x2", "x3"}
+    with pytest.raises(Exception, match="exists and is not empty"):
+        run(job(tmp_path), run_dir=d, quiet=True)
+
+
+def test_run_leaves_global_rng_alone(tmp_path):
+    state = np.random.get_state()[1].copy()
+    run(job(tmp_path, optimizer={"method": "cmaes"}), run_dir=tmp_path / "g", quiet=True)
+    assert np.array_equal(np.random.get_state()[1], state)
+
+
+def test_refinement_stages_narrow_bounds(tmp_path):
+    res = run(job(tmp_path, optimizer={"generations": 4, "refine": {"stages": 2, "shrink": 0.2}}),
+              run_dir=tmp_path / "r", quiet=True)
+    h = history(res.run_dir)
+    assert sorted(h["stage"].unique()) == [0, 1] and len(h) == 64
+    s1 = h[h["stage"] == 1]
+    width = s1[["x0", "x1", "x2", "x3"]].max() - s1[["x0", "x1", "x2", "x3"]].min()
+    assert (width <= 0.2 * 10.24 + 1e-9).all()
+    assert res.best_fitness <= h[h["stage"] == 0]["fitness"].min()
+
+
+def _write_job(tmp_path, name, **objective):
+    cfg = {"name": name, "seed": 11,
+           "objective": {"kind": "function", "function": "rosenbrock", "dim": 3, **objective},
+           "optimizer": {"method": "de", "population": 6, "generations": 12},
+           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
+    p = tmp_path / f"{name}.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
+    ref = run(config_from_dict(yaml.safe_load(_write_job(tmp_path, "ref").read_text()), base_dir=tmp_path),
+              run_dir=tmp_path / "ref", quiet=True)
+    job_file = _write_job(tmp_path, "killed", sleep_s=0.02)
+    run_dir = tmp_path / "killed"
+    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    ck = run_dir / "checkpoint.pkl"
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        if ck.exists():
+            try:
+                if pickle.loads(ck.read_bytes())["optimizer"]["generation"] >= 3:
+                    break
+            except Exception:
+                pass
+        time.sleep(0.02)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = pickle.loads(ck.read_bytes())["n_evals"]
+    assert 0 < done < 72, "the run must have been killed part-way"
+    meta = yaml.safe_load((run_dir / "meta.json").read_text())
+    assert meta["status"] == "running"  # killed: no chance to say otherwise
+    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q"], capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    res = yaml.safe_load((run_dir / "best.yaml").read_text())
+    assert res["params"] == ref.best_params and res["fitness"] == ref.best_fitness
+    h_ref, h_res = history(ref.run_dir).drop(columns="seconds"), history(run_dir).drop(columns="seconds")
+    pd.testing.assert_frame_equal(h_ref, h_res)
+
+
+def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
+    job_file = _write_job(tmp_path, "int", sleep_s=0.05)
+    run_dir = tmp_path / "int"
+    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    ck = run_dir / "checkpoint.pkl"
+    deadline = time.time() + 60
+    while not ck.exists() and time.time() < deadline:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=60)
+    assert proc.returncode == 1
+    assert yaml.safe_load((run_dir / "meta.json").read_text())["status"] == "interrupted"
+    res = resume(run_dir, quiet=True)
+    assert res.status == "finished" and res.n_evals == 72
+    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir)], capture_output=True, text=True)
+    assert out.returncode == 2 and "already finished" in out.stderr
