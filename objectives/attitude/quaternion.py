@@ -138,6 +138,9 @@ def to_frame(q: np.ndarray, src: str, dst: str) -> np.ndarray:
 FRAME_CODES = {"ENU": 0, "NED": 1, "NWU": 2}
 
 _SMALL_ANGLE = 1e-8  # rad; below it exp/log use their Taylor series
+# cos(pitch) below which euler_zyx treats the attitude as gimbal-locked: there the generic
+# formulas lose ~1e-16/cos(pitch) rad, the locked branch ~cos(pitch) rad; 1e-8 balances both.
+_GIMBAL_LOCK = 1e-8
 
 
 def _frame_code(frame: str) -> int:
@@ -299,9 +302,17 @@ def _euler_into(w, x, y, z, out, i):
     r31 = 2.0 * (x * z - w * y)
     r32 = 2.0 * (y * z + w * x)
     r33 = w * w - x * x - y * y + z * z
-    out[i, 0] = math.atan2(r32, r33)
-    out[i, 1] = math.atan2(-r31, math.sqrt(r11 * r11 + r21 * r21))
-    out[i, 2] = math.atan2(r21, r11)
+    cp = math.sqrt(r11 * r11 + r21 * r21)  # cos(pitch) times |q|^2
+    out[i, 1] = math.atan2(-r31, cp)
+    if not (cp <= _GIMBAL_LOCK * (w * w + x * x + y * y + z * z)):  # NaN takes this branch
+        out[i, 0] = math.atan2(r32, r33)
+        out[i, 2] = math.atan2(r21, r11)
+    else:
+        # |pitch| = pi/2: only roll -+ yaw is defined; report yaw = 0 and put it all in roll
+        r12 = 2.0 * (x * y - w * z)
+        r22 = w * w - x * x + y * y - z * z
+        out[i, 0] = math.atan2(-r12 if r31 > 0.0 else r12, r22)
+        out[i, 2] = 0.0
 
 
 @njit(cache=True)
@@ -348,7 +359,9 @@ def euler_zyx(q: np.ndarray) -> np.ndarray:
     are homogeneous, so ``q`` need not be exactly normalised.
 
     Gimbal lock: at ``|pitch| = pi/2`` roll and yaw are not unique (only their difference or sum
-    is); errors between Euler angles there are meaningless.
+    is); when ``cos(pitch) < 1e-8`` the function reports ``yaw = 0`` and the whole turn about the
+    vertical in roll, so :func:`quat_from_euler_zyx` still inverts it. Errors between Euler angles
+    near the lock are meaningless; compare quaternions there.
 
     Parameters
     ----------
