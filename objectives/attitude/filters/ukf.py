@@ -37,8 +37,9 @@ Implementation notes and deviations
   compares both.
 - Eq. 37 is ``max(CM - P~yy, R0)`` taken element by element with ``R0`` the nominal ``R_k`` of
   eq. 25 at the same sample (section 5.2: "negative values are replaced by the nominal value").
-  The element-wise maximum can lose positive definiteness; when ``P~yy + R_hat`` has no Cholesky
-  factor the sample uses the nominal ``R0`` (counted in the ``fallback`` diagnostic).
+  The element-wise maximum can lose positive definiteness; when ``R_hat`` has no Cholesky factor
+  (an indefinite ``R_hat`` would make eq. 33 indefinite) the sample uses the nominal ``R0``
+  (counted in the ``fallback`` diagnostic).
 - Hampel gain (eq. 36): the window holds the raw innovations ``v_j`` of the last ``N`` samples
   including the current one; medians and MAD are taken over the samples available during the first
   ``N - 1`` steps. Where the deviation from the median is zero the gain is 1; where the MAD is zero
@@ -143,7 +144,7 @@ def _aqua_enu(ax, ay, az, bx, by, bz):
     t0, t1, t2, t3 = _qm(a0, -a1, -a2, -a3, 0.0, bx, by, bz)
     _, lx, ly, _lz = _qm(t0, t1, t2, t3, a0, a1, a2, a3)
     gam = lx * lx + ly * ly
-    if not gam > 1e-300:
+    if not gam > 1e-12:  # unit vectors: field within 1e-6 rad of gravity
         return False, 1.0, 0.0, 0.0, 0.0
     sg = math.sqrt(gam)
     if lx >= 0.0:
@@ -472,7 +473,8 @@ def _ukf_kernel(gyr, acc, mag, dt, q0, coef, robust, window,
                     for c in range(3):
                         Rh[r, c] = max(Syy[r, c] / nwin - P[r, c], R0[r, c])
                         Pyy[r, c] = P[r, c] + Rh[r, c]
-                use_nominal = not _inv3_spd(Pyy, Lyy, Syy)
+                # R_hat must be a covariance (positive definite), else eq. 33 loses definiteness
+                use_nominal = not (_chol(Rh, Lyy, 3) and _inv3_spd(Pyy, Lyy, Syy))
                 out_fallback[k] = use_nominal
                 # gain of the current innovation (eq. 38)
                 vv = (vx, vy, vz)
@@ -649,7 +651,7 @@ class QRAUKF(QUKF):
     n_sigma : float, confidence region of the Hampel identifier in MAD standard deviations (paper 3).
 
     Diagnostics add ``lam`` (N, 3) Hampel gains and ``fallback`` (N,) samples where eq. 37 gave no
-    positive definite innovation covariance and the nominal R0 was used.
+    positive definite covariance and the nominal R0 was used.
     """
 
     name = "qraukf"
