@@ -350,7 +350,7 @@ def _check_sets(mf_kind: np.ndarray, mf_params: np.ndarray, rules: np.ndarray) -
                     raise ValueError(f"input {j} set {s}: Gaussian needs finite c and sigma > 0, got {p[:2]}")
             else:
                 q = p[:3] if k == TRI else p
-                if np.any(np.isnan(q)) or np.any(np.diff(q) < 0):
+                if np.any(np.isnan(q)) or np.any(q[1:] < q[:-1]):
                     raise ValueError(f"input {j} set {s}: {'tri' if k == TRI else 'trap'} parameters must "
                                      f"be non-decreasing, got {q}")
 

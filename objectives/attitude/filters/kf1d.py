@@ -1,0 +1,531 @@
+"""1-D tilt filters of the thesis (Odry 2020, section 3.1): KF, fuzzy-adaptive KF, Mahony and Madgwick.
+
+All four estimate the tilt angle ``theta`` about the sensor **y** axis from the rate ``gyr[:, 1]`` and
+the accelerometer's x and z components (the tilt bench of thesis 3.1.2, :func:`tilt1d` of
+``objectives.attitude.data.synthetic``). The output quaternion is the rotation about y by the
+estimate, ``(cos(theta/2), 0, sin(theta/2), 0)`` in the recording's frame; ``diagnostics["angle"]``
+holds ``theta`` (N,) rad.
+
+Angle convention
+----------------
+``theta`` is the rotation about the sensor y axis that takes the sensor frame to the recording's
+earth frame (the truth ``rec.extra["angle"]`` of the tilt bench). The accelerometer realisation of
+eq. 3.6 in our axes is ``theta_A = atan2(-s ax, s az)`` with ``s = +1`` in z-up frames (ENU) and
+``s = -1`` in NED (the specific force points up). The initial angle comes from the common initial
+quaternion (``q0``: first accelerometer sample by default, ``"truth"``, or explicit) through the
+sensor's up vector, so it does not depend on heading.
+
+KF1D (thesis eqs. 3.9-3.13, 3.17)
+---------------------------------
+State ``x = (theta, omega_0)`` (angle, gyro bias), input ``u = Omega = gyr[:, 1]``::
+
+    x_k^- = Phi x_{k-1} + Gamma u_{k-1},  Phi = [[1, -Ts], [0, 1]],  Gamma = [Ts, 0]^T      (3.9, 3.11)
+    P_k^- = Phi P_{k-1} Phi^T + Q,  Q = diag(q00, q11)                                        (3.11, 3.17)
+    G_k = P_k^- H^T (H P_k^- H^T + R)^-1,  H = [1, 0],  R = rho                               (3.12, 3.17)
+    x_k = x_k^- + G_k (theta_A,k - H x_k^-),  P_k = (I - G_k H) P_k^-                          (3.13)
+
+Sample ``k`` is propagated with gyro sample ``k - 1`` (the rate held over ``[t_{k-1}, t_k]``) and
+corrected with accelerometer sample ``k``; sample 0 is the initial state ``(theta_0, 0)``, ``P_0``
+(thesis: ``0_2x2``). The residual is wrapped to ``(-pi, pi]``.
+
+Units and rate: ``q00``, ``q11``, ``rho`` are per-sample variances as in the thesis (800 Hz; the
+thesis states them in degree units). With ``P_0 = 0`` the gain depends only on the ratios of Q and R,
+so the same numbers give the same estimate whether angles are in degrees or radians; with a nonzero
+``P_0`` (options ``p0_theta``, ``p0_bias``), all five are in rad^2 (and (rad/s)^2) units.
+
+AKF1D (thesis 3.1.4, eqs. 3.19-3.24, Table 3.2)
+-----------------------------------------------
+``R_k = K_k rho`` where ``K_k`` is a zero-order Sugeno system (min-AND, weighted average, eq. 3.24)
+of the vibration frequency ``f_hat`` (Hz, eqs. 3.19-3.21 on ``gyr[:, 1]``) and the average external
+acceleration ``alpha_hat`` (g, eq. 3.22), each covered by Z, S, B sets, with the 9 rules of Table 3.2
+(``K_{1 + i_f + i_a}``). Both measures come from :mod:`objectives.attitude.disturbance` (packets of
+``window`` samples, causal hold). Deviations / documented choices (Fig. 3.9 is missing from the text):
+
+- the sets: "one triangular and two trapezoidal" per input over the ranges the thesis gives (f up to
+  6.5 Hz, alpha up to 0.35 g): ``Z = trap(-inf, -inf, 0, r/2)``, ``S = tri(0, r/2, r)``,
+  ``B = trap(r/2, r, inf, inf)`` with ``r = f_range_hz`` or ``acc_range_g`` (a uniform partition);
+- the singletons ``K1..K5`` (not in the text, "chosen intuitively via iterative tuning"): default
+  ``(1, 3, 10, 30, 100)``, half-decade steps so that the biggest disturbance makes the accelerometer
+  100 times less trusted; all are options that can be searched;
+- ``omega_thr`` default 10 deg/s = 0.1745 rad/s and ``f_thr`` 8 Hz (thesis values; the FAEKF paper
+  uses 0.26 rad/s and the FAEKF config 10 Hz).
+
+Mahony1D and Madgwick1D (thesis 3.1.5, Tables 3.4-3.5)
+-------------------------------------------------------
+The thesis runs Madgwick's sample code (MahonyAHRSupdateIMU, MadgwickAHRSupdateIMU) on the bench
+data. On the tilt bench the attitude is a rotation about y only, so the quaternion stays
+``(q0, 0, q2, 0)``; these classes run exactly that code restricted to ``(q0, q2)``, with ``ay`` and the
+x/z rates dropped (they carry only noise on the bench) and the accelerometer normalised over
+``(ax, az)``. Mahony: ``e = a x v`` (= ``sin(theta_A - theta)``), ``I += Ki e Ts`` (only when
+``Ki > 0``, else ``I = 0``), ``omega = Omega + Kp e + I``. Madgwick: the normalised gradient step
+``s = J^T f / |J^T f|``, ``q_dot = q (x) omega / 2 - beta s``. As in the sample code, call ``k`` uses
+gyro and accelerometer sample ``k`` to go from ``t_k`` to ``t_{k+1}``; the output at sample ``k`` is the
+state after call ``k - 1`` (sample 0 is the initial state).
+
+Integration (option ``exact_step``): ``True`` (default) rotates ``(q0, q2)`` by the exact angle
+``omega Ts`` (the rate is held constant over the sample, as the synthetic benches define it);
+``False`` is the sample code's first-order step ``q += q_dot Ts`` then normalisation. They differ by
+``(omega Ts)^3 / 12`` rad per sample (4e-7 rad at 800 deg/s and 800 Hz). Madgwick's normalised step
+has magnitude ``beta`` whenever the gradient is not exactly zero, so even on perfect data its error
+chatters at the level ``beta Ts``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+from numba import njit
+
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
+from tuner.space import Real
+
+__all__ = ["KF1D", "AKF1D", "Mahony1D", "Madgwick1D", "kf1d_kernel", "mahony1d_kernel",
+           "madgwick1d_kernel", "tilt_from_quat", "quat_from_tilt", "akf1d_fis"]
+
+_TWO_PI = 2.0 * math.pi
+
+
+# --- kernels -------------------------------------------------------------------------------------
+@njit(cache=True)
+def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, out_theta, out_bias):
+    """2-state tilt KF (thesis eqs. 3.9-3.13) over whole arrays.
+
+    Parameters
+    ----------
+    gyr_y : (N,) rate about y, rad/s.
+    acc_x, acc_z : (N,) specific force x and z, any unit.
+    up_sign : +1.0 (z-up earth frame) or -1.0 (NED).
+    coef : (7,) ``dt, q00, q11, rho, p0_theta, p0_bias, theta0``.
+    kscale : (N,) scale of R per sample (AKF1D), or (1,) constant scale (KF1D: ones(1)).
+    out_theta, out_bias : (N,) outputs, rad and rad/s.
+    """
+    n = gyr_y.shape[0]
+    dt = coef[0]
+    q00 = coef[1]
+    q11 = coef[2]
+    rho = coef[3]
+    p00 = coef[4]
+    p01 = 0.0
+    p11 = coef[5]
+    th = coef[6]
+    b = 0.0
+    per_sample = kscale.shape[0] > 1
+    r = rho * kscale[0]
+    out_theta[0] = th
+    out_bias[0] = b
+    dt2 = dt * dt
+    for k in range(1, n):
+        # time update (3.11)
+        th += dt * (gyr_y[k - 1] - b)
+        m00 = p00 - 2.0 * dt * p01 + dt2 * p11 + q00
+        m01 = p01 - dt * p11
+        m11 = p11 + q11
+        # measurement update (3.12, 3.13)
+        if per_sample:
+            r = rho * kscale[k]
+        z = math.atan2(-up_sign * acc_x[k], up_sign * acc_z[k])
+        res = z - th
+        if res > math.pi or res < -math.pi:
+            res -= _TWO_PI * math.floor((res + math.pi) / _TWO_PI)
+        s = m00 + r
+        g0 = m00 / s
+        g1 = m01 / s
+        th += g0 * res
+        b += g1 * res
+        p00 = (1.0 - g0) * m00
+        p01 = (1.0 - g0) * m01
+        p11 = m11 - g1 * m01
+        out_theta[k] = th
+        out_bias[k] = b
+
+
+@njit(cache=True, inline="always")
+def _step(q0, q2, w, dt, exact):
+    """Rotate (q0, q2) by the rate w about y over dt: exact or the first-order quaternion step."""
+    if exact:
+        c = math.cos(0.5 * w * dt)
+        s = math.sin(0.5 * w * dt)
+        return c * q0 - s * q2, s * q0 + c * q2
+    h = 0.5 * w * dt
+    return q0 - h * q2, q2 + h * q0
+
+
+@njit(cache=True)
+def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, theta0, exact, out_theta, out_bias):
+    """Mahony's IMU update (sample code) restricted to rotations about y; see the module docstring.
+
+    ``out_bias`` receives ``-I`` (the integral term estimates minus the gyro bias), rad/s.
+    """
+    n = gyr_y.shape[0]
+    q0 = math.cos(0.5 * theta0)
+    q2 = math.sin(0.5 * theta0)
+    integ = 0.0
+    out_theta[0] = theta0
+    out_bias[0] = 0.0
+    for k in range(n - 1):
+        w = gyr_y[k]
+        ax = up_sign * acc_x[k]
+        az = up_sign * acc_z[k]
+        nrm = math.sqrt(ax * ax + az * az)
+        if nrm > 0.0:
+            ax /= nrm
+            az /= nrm
+            vx = -2.0 * q0 * q2           # estimated up direction (sample code: halfv * 2)
+            vz = q0 * q0 - q2 * q2
+            e = az * vx - ax * vz          # y component of a x v
+            if ki > 0.0:
+                integ += ki * e * dt
+                w += integ
+            else:
+                integ = 0.0
+            w += kp * e
+        q0, q2 = _step(q0, q2, w, dt, exact)
+        inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
+        q0 *= inv
+        q2 *= inv
+        out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
+        out_bias[k + 1] = -integ
+
+
+@njit(cache=True)
+def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, theta0, exact, out_theta):
+    """Madgwick's IMU update (sample code) restricted to rotations about y; see the module docstring."""
+    n = gyr_y.shape[0]
+    q0 = math.cos(0.5 * theta0)
+    q2 = math.sin(0.5 * theta0)
+    out_theta[0] = theta0
+    for k in range(n - 1):
+        w = gyr_y[k]
+        ax = up_sign * acc_x[k]
+        az = up_sign * acc_z[k]
+        nrm = math.sqrt(ax * ax + az * az)
+        d0 = 0.0
+        d2 = 0.0
+        if nrm > 0.0:
+            ax /= nrm
+            az /= nrm
+            # gradient J^T f of the sample code with q1 = q3 = 0 and ay = 0
+            s0 = 4.0 * q0 * q2 * q2 + 2.0 * q2 * ax
+            s2 = 4.0 * q0 * q0 * q2 + 2.0 * q0 * ax - 4.0 * q2 + 8.0 * q2 * q2 * q2 + 4.0 * q2 * az
+            sn = math.sqrt(s0 * s0 + s2 * s2)
+            if sn > 0.0:
+                d0 = -beta * s0 / sn
+                d2 = -beta * s2 / sn
+        if exact:
+            q0, q2 = _step(q0, q2, w, dt, True)
+            q0 += d0 * dt
+            q2 += d2 * dt
+        else:
+            q0, q2 = q0 + (-0.5 * q2 * w + d0) * dt, q2 + (0.5 * q0 * w + d2) * dt
+        inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
+        q0 *= inv
+        q2 *= inv
+        out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
+
+
+# --- helpers ------------------------------------------------------------------------------------
+def _up_sign(frame: str) -> float:
+    return -1.0 if frame.upper() == "NED" else 1.0
+
+
+def tilt_from_quat(q: np.ndarray, frame: str, q_frame: str = "ENU") -> float:
+    """Tilt angle about the sensor y axis (in ``frame``'s convention) of a quaternion in ``q_frame``.
+
+    Uses only the sensor's up vector, so the heading of ``q`` does not matter.
+    """
+    from objectives.attitude.quaternion import to_frame
+
+    w, x, y, z = to_frame(np.asarray(q, float), q_frame, "ENU")
+    ux = 2.0 * (x * z - w * y)       # third row of R(q): earth up in the sensor frame
+    uz = w * w - x * x - y * y + z * z
+    s = _up_sign(frame)
+    return math.atan2(-s * ux, s * uz)
+
+
+def quat_from_tilt(theta: np.ndarray) -> np.ndarray:
+    """(N, 4) rotations about y by ``theta`` (N,) rad: ``(cos(theta/2), 0, sin(theta/2), 0)``."""
+    theta = np.asarray(theta, dtype=float)
+    q = np.zeros(theta.shape + (4,))
+    q[..., 0] = np.cos(0.5 * theta)
+    q[..., 2] = np.sin(0.5 * theta)
+    return q
+
+
+def _inputs(rec: Recording) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    gy = np.ascontiguousarray(rec.gyr[:, 1], dtype=np.float64)
+    ax = np.ascontiguousarray(rec.acc[:, 0], dtype=np.float64)
+    az = np.ascontiguousarray(rec.acc[:, 2], dtype=np.float64)
+    return gy, ax, az
+
+
+def _positive(flt: str, name: str, value: Any, allow_zero: bool = False) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{flt}: {name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise ValueError(f"{flt}: {name} must be finite and {'>= 0' if allow_zero else '> 0'}, got {value!r}")
+    return v
+
+
+def _check_bool(flt: str, name: str, value: Any) -> bool:
+    if not isinstance(value, (bool, np.bool_)) and value not in (0, 1):
+        raise ValueError(f"{flt}: {name} must be true or false, got {value!r}")
+    return bool(value)
+
+
+# --- KF1D ----------------------------------------------------------------------------------------
+_P0_OPTIONS = (
+    Real("p0_theta", fixed=0.0, unit="rad^2", doc="initial angle variance (thesis 3.1.3.1: P0 = 0)"),
+    Real("p0_bias", fixed=0.0, unit="(rad/s)^2", doc="initial bias variance (thesis 3.1.3.1: P0 = 0)"),
+)
+
+
+class KF1D(AttitudeFilter):
+    """2-state tilt Kalman filter of thesis eqs. 3.9-3.13 (see the module docstring).
+
+    Parameters
+    ----------
+    rho : float
+        Measurement noise variance of the accelerometer angle (eq. 3.17 ``R = rho``), per sample.
+    q00, q11 : float
+        Process noise variances of the angle and of the bias random walk (eq. 3.17), per sample.
+    p0_theta, p0_bias : float
+        Fixed options: ``P0 = diag(p0_theta, p0_bias)`` (thesis: 0).
+
+    Defaults are the thesis's initial values (3.1.3.1): ``q00 = 5e-7``, ``q11 = 5e-9``,
+    ``rho = 1e5 q00 = 0.05``. The default search space spans both runs of Table 3.1: rho in
+    [0.008, 0.45], q00 in [7e-9, 2e-6]; q11 in [1e-13, 2e-8] (the second run's q11 bounds are
+    unreadable in the text; its optimum 3.08e-12 lies below the first run's 1e-10, so the lower bound
+    is a documented choice). Thesis optimum (second run, Table 3.1): rho 0.35459, q00 6.38e-8,
+    q11 3.08e-12, F = 1.9077 deg^2.
+
+    Diagnostics: ``angle`` (N,) rad, ``gyr_bias`` (N,) rad/s.
+    """
+
+    name: ClassVar[str] = "kf1d"
+    params: ClassVar[tuple[Real, ...]] = (
+        Real("rho", 0.008, 0.45, scale="log", unit="angle^2 per sample",
+             doc="accelerometer-angle noise variance R (eq. 3.17)"),
+        Real("q00", 7e-9, 2e-6, scale="log", unit="angle^2 per sample", doc="angle process noise (eq. 3.17)"),
+        Real("q11", 1e-13, 2e-8, scale="log", unit="(angle/s)^2 per sample",
+             doc="gyro-bias random-walk variance (eq. 3.17)"),
+    ) + _P0_OPTIONS
+    defaults: ClassVar[dict[str, Any]] = {
+        "rho": 0.05, "q00": 5e-7, "q11": 5e-9, "p0_theta": 0.0, "p0_bias": 0.0,
+    }
+
+    def _check(self) -> None:
+        v = self.values
+        for key in ("rho", "q00", "q11"):
+            v[key] = _positive(self.name, key, v[key])
+        for key in ("p0_theta", "p0_bias"):
+            v[key] = _positive(self.name, key, v[key], allow_zero=True)
+
+    def _coef(self, rec: Recording, theta0: float) -> np.ndarray:
+        v = self.values
+        return np.array([rec.dt, v["q00"], v["q11"], v["rho"], v["p0_theta"], v["p0_bias"], theta0])
+
+    def _kf(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        gy, ax, az = _inputs(rec)
+        th = np.empty(rec.n)
+        b = np.empty(rec.n)
+        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
+        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), self._coef(rec, theta0), kscale, th, b)
+        return th, b
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        th, b = self._kf(rec, q0, np.ones(1))
+        return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
+
+
+# --- AKF1D ---------------------------------------------------------------------------------------
+#: K1..K5 defaults (not in the text; see the module docstring)
+AKF1D_K_DEFAULTS = (1.0, 3.0, 10.0, 30.0, 100.0)
+
+
+def akf1d_fis(f_range_hz: float, acc_range_g: float, kappa: Any) -> SugenoFIS:
+    """The 9-rule Sugeno system of thesis Table 3.2 / eq. 3.24 with the sets of the module docstring.
+
+    Inputs ``(f_hat Hz, alpha_hat g)``; rule ``(i_f, i_a)`` -> ``K_{1 + i_f + i_a}``.
+    """
+    params = np.zeros((2, 3, 4))
+    kinds = np.array([[TRAP, TRI, TRAP], [TRAP, TRI, TRAP]])
+    for j, r in enumerate((float(f_range_hz), float(acc_range_g))):
+        h = 0.5 * r
+        params[j, 0] = (-np.inf, -np.inf, 0.0, h)
+        params[j, 1] = (0.0, h, r, 0.0)
+        params[j, 2] = (h, r, np.inf, np.inf)
+    rules = grid_rules([3, 3])
+    kappa = np.asarray(kappa, dtype=float)
+    return SugenoFIS(kinds, params, rules, kappa[rules.sum(axis=1)], and_op="min")
+
+
+class AKF1D(KF1D):
+    """Fuzzy-adaptive tilt KF of thesis 3.1.4: ``R_k = K_k rho`` (eq. 3.24); see the module docstring.
+
+    Parameters
+    ----------
+    rho, q00, q11, p0_theta, p0_bias : as :class:`KF1D`.
+        Defaults: the initial values of Table 3.3 (rho 0.05, q00 7e-8, q11 5e-12); search space: both
+        runs of Table 3.3 (rho [0.005, 0.43], q00 [1e-8, 8e-7], q11 [1e-12, 5e-11]). Thesis optimum
+        (second run): rho 0.31969, q00 5.86e-7, q11 6.43e-12, F = 1.6990 deg^2.
+    window, fft_length : int, fixed
+        Packet length L = 400 and FFT length 512 (eqs. 3.19-3.22).
+    f_thr : float, fixed
+        Highest vibration frequency considered, Hz (thesis: 8).
+    omega_thr : float, fixed
+        Amplitude threshold, rad/s (thesis: 10 deg/s).
+    f_range_hz, acc_range_g : float, fixed
+        Ranges of the fuzzy inputs (thesis: 6.5 Hz and 0.35 g).
+    K1..K5 : float, fixed
+        Singleton consequents of Table 3.2.
+
+    Diagnostics: ``angle``, ``gyr_bias``, ``K`` (N,), ``vib_freq_hz`` (N,), ``ext_acc`` (N,) g.
+    """
+
+    name: ClassVar[str] = "akf1d"
+    params: ClassVar[tuple[Real, ...]] = (
+        Real("rho", 0.005, 0.43, scale="log", unit="angle^2 per sample",
+             doc="accelerometer-angle noise variance before fuzzy scaling (eq. 3.24)"),
+        Real("q00", 1e-8, 8e-7, scale="log", unit="angle^2 per sample", doc="angle process noise (eq. 3.17)"),
+        Real("q11", 1e-12, 5e-11, scale="log", unit="(angle/s)^2 per sample",
+             doc="gyro-bias random-walk variance (eq. 3.17)"),
+    ) + _P0_OPTIONS + (
+        Real("window", fixed=400, unit="samples", doc="packet length L (eqs. 3.19-3.22)"),
+        Real("fft_length", fixed=512, unit="samples", doc="FFT length L_FFT (eq. 3.19)"),
+        Real("f_thr", fixed=8.0, unit="Hz", doc="highest vibration frequency considered (eq. 3.21)"),
+        Real("omega_thr", fixed=math.radians(10.0), unit="rad/s", doc="amplitude threshold (eq. 3.21)"),
+        Real("f_range_hz", fixed=6.5, unit="Hz", doc="range of the vibration input (sets Z, S, B)"),
+        Real("acc_range_g", fixed=0.35, unit="g", doc="range of the external-acceleration input"),
+    ) + tuple(Real(f"K{i + 1}", fixed=k, unit="1", doc=f"singleton K{i + 1} of Table 3.2")
+              for i, k in enumerate(AKF1D_K_DEFAULTS))
+    defaults: ClassVar[dict[str, Any]] = {
+        "rho": 0.05, "q00": 7e-8, "q11": 5e-12, "p0_theta": 0.0, "p0_bias": 0.0,
+        "window": 400, "fft_length": 512, "f_thr": 8.0, "omega_thr": math.radians(10.0),
+        "f_range_hz": 6.5, "acc_range_g": 0.35,
+        **{f"K{i + 1}": k for i, k in enumerate(AKF1D_K_DEFAULTS)},
+    }
+
+    def _check(self) -> None:
+        super()._check()
+        v = self.values
+        for key in ("window", "fft_length"):
+            if isinstance(v[key], bool) or int(v[key]) != v[key] or int(v[key]) < 2:
+                raise ValueError(f"{self.name}: {key} must be an integer >= 2, got {v[key]!r}")
+            v[key] = int(v[key])
+        if v["fft_length"] < v["window"]:
+            raise ValueError(f"{self.name}: fft_length ({v['fft_length']}) must be >= window ({v['window']})")
+        for key in ("f_thr", "f_range_hz", "acc_range_g"):
+            v[key] = _positive(self.name, key, v[key])
+        v["omega_thr"] = _positive(self.name, "omega_thr", v["omega_thr"], allow_zero=True)
+        for i in range(5):
+            v[f"K{i + 1}"] = _positive(self.name, f"K{i + 1}", v[f"K{i + 1}"])
+
+    def fis(self) -> SugenoFIS:
+        """The fuzzy system of eq. 3.24 with this filter's options."""
+        v = self.values
+        return akf1d_fis(v["f_range_hz"], v["acc_range_g"], [v[f"K{i + 1}"] for i in range(5)])
+
+    def disturbances(self, rec: Recording) -> tuple[np.ndarray, np.ndarray]:
+        """``(f_hat Hz, alpha_hat g)`` (N,) each: eqs. 3.19-3.21 on ``gyr[:, 1]`` and eq. 3.22."""
+        from objectives.attitude import disturbance as dis
+
+        v = self.values
+        vib = dis.vibration_frequency(rec.gyr, rec.dt, v["window"], v["fft_length"], v["omega_thr"],
+                                      axis=1, f_thr=v["f_thr"])
+        ext = dis.external_acceleration(rec.acc, v["window"])
+        return vib, ext
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        vib, ext = self.disturbances(rec)
+        K = np.ascontiguousarray(self.fis()(np.stack([vib, ext], axis=1)))
+        th, b = self._kf(rec, q0, K)
+        return FilterResult(quat_from_tilt(th), rec.frame,
+                            {"angle": th, "gyr_bias": b, "K": K, "vib_freq_hz": vib, "ext_acc": ext})
+
+
+# --- Mahony1D / Madgwick1D -----------------------------------------------------------------------
+_EXACT = Real("exact_step", fixed=True,
+              doc="exact rotation per sample (true) or the sample code's first-order step (false)")
+
+
+class Mahony1D(AttitudeFilter):
+    """Mahony's filter (sample code) on the tilt bench, reduced to rotations about y (thesis 3.1.5.1).
+
+    Parameters
+    ----------
+    Kp : float
+        Proportional gain, rad/s per unit error (the sample code's ``twoKp / 2``).
+    Ki : float
+        Integral gain, rad/s^2 per unit error; 0 disables the integral (thesis initial value).
+    exact_step : bool, fixed
+        See the module docstring.
+
+    Defaults: the thesis's initial values (Kp 0.5, Ki 0). Search space: both runs of Table 3.4,
+    Kp in [0.125, 0.7], Ki in [0, 0.005]. Thesis optimum (second run): Kp 0.2613, Ki about 9e-5
+    (partly unreadable), F = 1.7849 deg^2.
+
+    Diagnostics: ``angle`` (N,) rad, ``gyr_bias`` (N,) rad/s (minus the integral term).
+    """
+
+    name: ClassVar[str] = "mahony1d"
+    params: ClassVar[tuple[Real, ...]] = (
+        Real("Kp", 0.125, 0.7, unit="rad/s", doc="proportional gain (Table 3.4)"),
+        Real("Ki", 0.0, 0.005, unit="rad/s^2", doc="integral gain (Table 3.4)"),
+        _EXACT,
+    )
+    defaults: ClassVar[dict[str, Any]] = {"Kp": 0.5, "Ki": 0.0, "exact_step": True}
+
+    def _check(self) -> None:
+        v = self.values
+        v["Kp"] = _positive(self.name, "Kp", v["Kp"], allow_zero=True)
+        v["Ki"] = _positive(self.name, "Ki", v["Ki"], allow_zero=True)
+        v["exact_step"] = _check_bool(self.name, "exact_step", v["exact_step"])
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        gy, ax, az = _inputs(rec)
+        th = np.empty(rec.n)
+        b = np.empty(rec.n)
+        v = self.values
+        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt,
+                        tilt_from_quat(q0, rec.frame, self.working_frame), v["exact_step"], th, b)
+        return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
+
+
+class Madgwick1D(AttitudeFilter):
+    """Madgwick's filter (sample code) on the tilt bench, reduced to rotations about y (thesis 3.1.5.2).
+
+    Parameters
+    ----------
+    beta : float
+        Gradient-descent gain, rad/s (thesis initial 0.1; optimum 0.0387, Table 3.5).
+    exact_step : bool, fixed
+        See the module docstring.
+
+    Search space: both runs of Table 3.5, beta in [0.01, 0.15].
+    Diagnostics: ``angle`` (N,) rad.
+    """
+
+    name: ClassVar[str] = "madgwick1d"
+    params: ClassVar[tuple[Real, ...]] = (
+        Real("beta", 0.01, 0.15, scale="log", unit="rad/s", doc="gradient step gain (Table 3.5)"),
+        _EXACT,
+    )
+    defaults: ClassVar[dict[str, Any]] = {"beta": 0.1, "exact_step": True}
+
+    def _check(self) -> None:
+        self.values["beta"] = _positive(self.name, "beta", self.values["beta"], allow_zero=True)
+        self.values["exact_step"] = _check_bool(self.name, "exact_step", self.values["exact_step"])
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        gy, ax, az = _inputs(rec)
+        th = np.empty(rec.n)
+        v = self.values
+        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt,
+                          tilt_from_quat(q0, rec.frame, self.working_frame), v["exact_step"], th)
+        return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th})
