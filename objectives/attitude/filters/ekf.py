@@ -77,7 +77,6 @@ __all__ = [
     "ekf_kernel", "fuzzy_scale", "rule_consequent_index", "Disturbances", "faekf_rules",
 ]
 
-G_STD = 9.80665  # m/s^2 per g, for the external-acceleration input in g
 
 # indices into the coefficient array of the kernel
 _C_DT, _C_QQ, _C_QW, _C_RHO, _C_P0Q, _C_P0B, _C_MAG, _C_EXACT = range(8)
