@@ -248,12 +248,12 @@ def _median(buf, n):
 
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _meas_ut(a, b, sig_a, sig_b, Y, out_y, R):
+def _meas_ut(a, b, sig_a, sig_b, Y, Dm, out_y, R):
     """Eq. 25: quaternion pseudo-measurement (ENU) and its covariance R (3x3) by the UT of eqs. 9-15.
 
     ``a`` and ``b`` are (3,) raw acc and mag; the UT runs on the normalised vectors with the noise
     scaled by the norms (h of eq. 22 does not depend on the vectors' lengths). Returns False when the
-    vectors are degenerate. ``Y`` is a (12, 4) scratch array.
+    vectors are degenerate. ``Y`` (12, 4) and ``Dm`` (12, 3) are scratch arrays.
     """
     na = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
     nb = math.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
@@ -291,18 +291,22 @@ def _meas_ut(a, b, sig_a, sig_b, Y, out_y, R):
         if not ok:
             return False
         Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3] = w, x, y, z
-    return _wmean_cov(Y, 12, r0, r1, r2, r3, out_y, R)
+    return _wmean_cov(Y, 12, r0, r1, r2, r3, out_y, R, Dm)
 
 
 @njit(cache=True)
-def _wmean_cov(Y, m, r0, r1, r2, r3, out_y, P):
-    """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3), covariance P."""
+def _wmean_cov(Y, m, r0, r1, r2, r3, out_y, P, D):
+    """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3), covariance P.
+
+    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` of the last iteration.
+    """
     w = 1.0 / m
     for _ in range(_MAX_MEAN_ITER):
         sx = sy = sz = 0.0
         cxx = cxy = cxz = cyy = cyz = czz = 0.0
         for j in range(m):
             dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
+            D[j, 0], D[j, 1], D[j, 2] = dx, dy, dz
             sx += dx
             sy += dy
             sz += dz
@@ -352,6 +356,7 @@ def _ukf_kernel(gyr, acc, mag, dt, q0, coef, robust, window,
     D = np.empty((18, 6))       # their deviations from the mean
     Bs = np.empty((18, 3))      # bias parts
     Ym = np.empty((12, 4))      # measurement UT sigma images (eq. 25)
+    Dm = np.empty((12, 3))
     ymeas = np.empty(4)
     emean = np.empty(4)
     R0 = np.zeros((3, 3))
@@ -414,12 +419,10 @@ def _ukf_kernel(gyr, acc, mag, dt, q0, coef, robust, window,
                     a0, a1, a2, a3 = _r2q((wx - bj0 - nq0) * dt, (wy - bj1 - nq1) * dt, (wz - bj2 - nq2) * dt)
                     E[j, 0], E[j, 1], E[j, 2], E[j, 3] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
                     Bs[j, 0], Bs[j, 1], Bs[j, 2] = bj0, bj1, bj2
-                _wmean_cov(E, 18, r0, r1, r2, r3, emean, Pyy)
+                _wmean_cov(E, 18, r0, r1, r2, r3, emean, Pyy, D)
                 e0, e1, e2, e3 = emean[0], emean[1], emean[2], emean[3]
                 # bias mean (sigma points symmetric, mean unchanged) and deviations, eq. 14
                 for j in range(18):
-                    dx, dy, dz = _qdiff(E[j, 0], E[j, 1], E[j, 2], E[j, 3], e0, e1, e2, e3)
-                    D[j, 0], D[j, 1], D[j, 2] = dx, dy, dz
                     D[j, 3], D[j, 4], D[j, 5] = Bs[j, 0] - b[0], Bs[j, 1] - b[1], Bs[j, 2] - b[2]
                 for r in range(6):
                     for c in range(r + 1):
@@ -437,7 +440,7 @@ def _ukf_kernel(gyr, acc, mag, dt, q0, coef, robust, window,
         skipped = True
         ok = math.isfinite(mag[k, 0] + mag[k, 1] + mag[k, 2] + acc[k, 0] + acc[k, 1] + acc[k, 2])
         if ok:
-            ok = _meas_ut(acc[k], mag[k], sig_a, sig_m, Ym, ymeas, R0)
+            ok = _meas_ut(acc[k], mag[k], sig_a, sig_m, Ym, Dm, ymeas, R0)
         lx = ly = lz = 1.0
         if ok:
             # eq. 28 closed form: y_hat = e, P~yy = P_ee, Pxy = P[:, :3]; eq. 30 innovation
