@@ -1,0 +1,76 @@
+"""What every WMP controller shares: named parameters, default search space, kernel parameter array.
+
+A controller is a numba step function dispatched by an integer ``kind`` inside the closed-loop
+kernel (see :mod:`objectives.control.controllers.kernels`) plus a thin subclass of
+:class:`Controller` that declares
+
+- ``name``: the YAML name (``controller: pid``);
+- ``kind``: the ``KIND_*`` constant of its branch in ``kernels.controller_step``;
+- ``params``: tuple of :class:`tuner.space.Real` with default search bounds (options as
+  ``Real(name, fixed=default)``);
+- ``defaults``: initial values of every parameter (thesis Table 2.7 where it gives them);
+- ``state_size``: length of the zeroed float state array the step function uses;
+
+and implements ``_build(values) -> np.ndarray``, the float parameter array of its step function.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+
+from objectives.control.wmp import SensorParams, WMPParams
+from tuner.space import Real, Space
+
+__all__ = ["Controller"]
+
+
+class Controller:
+    """Base class; instances are cheap and picklable (plain dataclass-like attributes).
+
+    Parameters
+    ----------
+    plant : plant parameters the design may depend on (LQR linearises the model).
+    sensors : sampling period and sensor settings.
+    """
+
+    name: ClassVar[str] = ""
+    kind: ClassVar[int] = -1
+    params: ClassVar[tuple[Real, ...]] = ()
+    defaults: ClassVar[dict[str, Any]] = {}
+    state_size: ClassVar[int] = 0
+
+    def __init__(self, plant: WMPParams | None = None, sensors: SensorParams | None = None):
+        self.plant = plant or WMPParams()
+        self.sensors = sensors or SensorParams()
+
+    @classmethod
+    def default_space(cls) -> Space:
+        return Space(cls.params)
+
+    @classmethod
+    def resolve(cls, values: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults updated with ``values``; unknown names are a ``ValueError`` listing the known ones."""
+        values = dict(values or {})
+        known = [p.name for p in cls.params]
+        unknown = sorted(set(values) - set(known))
+        if unknown:
+            raise ValueError(f"controller {cls.name!r}: unknown parameter(s) {unknown}; known: {known}")
+        out = dict(cls.defaults)
+        out.update(values)
+        missing = [n for n in known if n not in out]
+        if missing:
+            raise ValueError(f"controller {cls.name!r}: no value for {missing}")
+        return out
+
+    def param_array(self, values: Mapping[str, Any] | None = None) -> np.ndarray:
+        """The float64 parameter array of the kernel step for ``values`` (defaults filled in)."""
+        arr = np.ascontiguousarray(self._build(self.resolve(values)), dtype=float)
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"controller {self.name!r}: non-finite parameter array for {dict(values or {})}")
+        return arr
+
+    def _build(self, values: dict[str, Any]) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError

@@ -1,0 +1,656 @@
+"""The wheeled mobile pendulum (WMP) of thesis section 2.1: 8-state nonlinear model and closed loop.
+
+State ``x = (theta1, theta2, theta3, dtheta1, dtheta2, dtheta3, I1, I2)`` (rad, rad/s, A): wheel
+angles (absolute, about the axle), inner-body (IB) angle (0 = centre of mass straight below the axle,
+positive = centre of mass ahead of the axle), their rates, motor currents. Inputs: motor terminal
+voltages ``u = (u1, u2)`` (V). Outputs (eq. 2.12) ``y = (nu, theta3, omega3, xi, I_A)``: linear speed
+``nu = r (dtheta1 + dtheta2) / 2`` (m/s), theta3 (rad), omega3 = dtheta3 (rad/s), yaw rate
+``xi = r (dtheta2 - dtheta1) / d`` (rad/s), average current ``I_A = (I1 + I2) / 2`` (A).
+
+Equations implemented (thesis numbers):
+
+- inertia matrix M(q) and vector V(q, qdot): appendix eq. (2), checked here against a Lagrange
+  derivation from eqs. 2.1-2.7 (tests/reference/wmp_reference.py derives them numerically from the
+  Lagrangian; the appendix's ``m13 = ... - k^2 Jr`` is read as ``- k^2 J_r``). The appendix's
+  ``3/2 m_w r^2`` assumes the wheels are uniform discs, ``J_w = m_w r^2 / 2`` (J_w is absent from
+  Table 2.1); ``J_w_kgm2`` overrides it;
+- motor electrics eq. 2.8, torques eq. 2.9, viscous friction eq. 2.10 (f_m,1 = f_m,2 = f_m and
+  f_w,1 = f_w,2 = f_w), state equation 2.12.
+
+Integration. The electrical time constant L/R = 26 uH / 2.3 Ohm = 11.3 us is four orders of magnitude
+below the mechanical ones (pendulum ~ 0.5 s, electrically damped wheel ~ 30 ms), so explicit RK4 on
+the full 8-state system would need a step below ~30 us (RK4's stability limit is h |lambda| < 2.78).
+We integrate instead with a singular-perturbation RK4 plus an exact current transient: within a
+substep ``h`` (default Ts/10 = 1 ms) the current is split into its quasi-static value
+``I_ss = (u - k_E k (dtheta_i - dtheta3)) / R`` (eq. 2.8 with L dI/dt = 0), evaluated at every RK4
+stage from the stage velocities, plus the transient ``(I_n - I_ss,n) exp(-R t / L)``, the exact
+solution of eq. 2.8 for frozen velocities, whose torque impulse is added in closed form (it matters
+at every voltage step of the controller). The scheme is unconditionally stable for the electrical
+part (it runs even with h = Ts, ~900 L/R), fourth order for the mechanics, and drops only the current
+lag ``(L/R) dI_ss/dt``, a relative error ~ (L/R) / tau_mech ~ 5e-4 independent of h. It is checked
+against scipy's Radau on the full eq. 2.12 (tests/control/test_wmp.py).
+
+Caching: every kernel is ``cache=True`` except the closed-loop driver :func:`_simulate`. Numba's
+cache does not notice changes in functions it calls from other modules (the controller steps of
+``controllers/kernels.py`` and, later, ``controllers/fuzzy.py``), so a cached driver could silently
+run stale controller code. The driver therefore compiles once per process (~2 s) while its callees
+come from the cache.
+
+Sensors (thesis Table 1.1, sampled at Ts = 0.01 s, section 2.2.3.1): see :class:`SensorParams`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, fields, replace
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from objectives.control.controllers.kernels import controller_step
+
+__all__ = [
+    "WMPParams",
+    "SensorParams",
+    "STATUS_OK",
+    "STATUS_FELL",
+    "STATUS_DIVERGED",
+    "STATUS_NAMES",
+    "derivatives",
+    "simulate_open_loop",
+    "simulate_closed_loop",
+    "mass_matrix",
+]
+
+STATUS_OK = 0
+STATUS_FELL = 1
+STATUS_DIVERGED = 2
+STATUS_NAMES = {STATUS_OK: "ok", STATUS_FELL: "fell", STATUS_DIVERGED: "diverged"}
+
+# indices into the plant coefficient array built by WMPParams.coeffs()
+_L, _R, _MW, _D, _MB, _JA, _JB, _RES, _IND, _KE, _KM, _JR, _FM, _FW, _K, _G, _JW, _UMAX = range(18)
+N_COEFFS = 18
+
+
+@dataclass(frozen=True)
+class WMPParams:
+    """Physical parameters of the robot (thesis Table 2.1), SI units.
+
+    Table 2.1 gives l, r, d in mm, masses in g, inertias in g mm^2, k_E in mV s, k_M in mN m / A,
+    frictions in mN m s; they are converted here (g mm^2 = 1e-9 kg m^2).
+
+    Attributes
+    ----------
+    l_m : distance of the IB centre of mass from the wheel axis (8.36 mm).
+    r_m : wheel radius (31.5 mm).
+    m_w_kg : mass of one wheel (31.5 g).
+    d_m : distance between the wheels (177 mm).
+    m_b_kg : mass of the inner body (360.4 g).
+    J_A_kgm2, J_B_kgm2 : IB moments of inertia about the wheel axis A and the vertical axis B.
+    R_ohm, L_H : rotor resistance (2.3 Ohm) and inductance (26 uH).
+    k_E_Vs : back-EMF constant (2.05 mV s / rad); k_M_NmA : torque constant (2.05 mN m / A).
+    J_r_kgm2 : rotor inertia (12 g mm^2). gear : gear ratio k (64).
+    f_m_Nms, f_w_Nms : viscous friction at the motors (0.021 mN m s) and the wheels (0.18 mN m s).
+    g_ms2 : gravitational acceleration.
+    J_w_kgm2 : wheel inertia about its axle; ``None`` means a uniform disc m_w r^2 / 2 (the
+        appendix's 3/2 m_w r^2 term).
+    u_max_V : voltage saturation of the drivers (3.3 V supply, section 1.3).
+    """
+
+    l_m: float = 8.36e-3
+    r_m: float = 31.5e-3
+    m_w_kg: float = 31.5e-3
+    d_m: float = 0.177
+    m_b_kg: float = 0.3604
+    J_A_kgm2: float = 81367e-9
+    J_B_kgm2: float = 574620e-9
+    R_ohm: float = 2.3
+    L_H: float = 26e-6
+    k_E_Vs: float = 2.05e-3
+    k_M_NmA: float = 2.05e-3
+    J_r_kgm2: float = 12e-9
+    f_m_Nms: float = 0.021e-3
+    f_w_Nms: float = 0.18e-3
+    gear: float = 64.0
+    g_ms2: float = 9.81
+    J_w_kgm2: float | None = None
+    u_max_V: float = 3.3
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        """Raise ``ValueError`` naming every parameter outside its physical range."""
+        problems = []
+        positive = [
+            "r_m",
+            "m_w_kg",
+            "d_m",
+            "m_b_kg",
+            "J_A_kgm2",
+            "J_B_kgm2",
+            "R_ohm",
+            "L_H",
+            "gear",
+            "u_max_V",
+        ]
+        nonneg = ["l_m", "k_E_Vs", "k_M_NmA", "J_r_kgm2", "f_m_Nms", "f_w_Nms", "g_ms2"]
+        for name in positive + nonneg + ["J_w_kgm2"]:
+            v = getattr(self, name)
+            if v is None and name == "J_w_kgm2":
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                problems.append(f"{name}={v!r} is not a finite number")
+            elif name in positive and v <= 0:
+                problems.append(f"{name}={v!r} must be > 0")
+            elif v < 0:
+                problems.append(f"{name}={v!r} must be >= 0")
+        if problems:
+            raise ValueError("invalid WMP parameters: " + "; ".join(problems))
+
+    @classmethod
+    def from_dict(cls, overrides: Mapping[str, Any] | None) -> WMPParams:
+        """Table 2.1 values with ``overrides`` (a YAML mapping) applied; unknown keys are errors."""
+        overrides = dict(overrides or {})
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(overrides) - known)
+        if unknown:
+            raise ValueError(f"unknown WMP parameter(s) {unknown}; known: {sorted(known)}")
+        return replace(cls(), **overrides)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @property
+    def wheel_inertia(self) -> float:
+        return 0.5 * self.m_w_kg * self.r_m**2 if self.J_w_kgm2 is None else float(self.J_w_kgm2)
+
+    def coeffs(self) -> np.ndarray:
+        """The (18,) float64 coefficient array the kernels read."""
+        c = np.empty(N_COEFFS)
+        c[_L], c[_R], c[_MW], c[_D], c[_MB] = self.l_m, self.r_m, self.m_w_kg, self.d_m, self.m_b_kg
+        c[_JA], c[_JB], c[_RES], c[_IND] = self.J_A_kgm2, self.J_B_kgm2, self.R_ohm, self.L_H
+        c[_KE], c[_KM], c[_JR], c[_FM], c[_FW] = (
+            self.k_E_Vs,
+            self.k_M_NmA,
+            self.J_r_kgm2,
+            self.f_m_Nms,
+            self.f_w_Nms,
+        )
+        c[_K], c[_G], c[_JW], c[_UMAX] = self.gear, self.g_ms2, self.wheel_inertia, self.u_max_V
+        return c
+
+
+@dataclass(frozen=True)
+class SensorParams:
+    """Sampled sensors of the robot (thesis Table 1.1) and the theta3 Kalman filter (eq. 2.20).
+
+    Resolutions follow Table 1.1; noise levels are not given in the thesis and are documented
+    choices from the sensors' data sheets. Set every ``*_noise`` and ``*_lsb`` to 0 for ideal sensors.
+
+    Attributes
+    ----------
+    Ts_s : controller and sensor period (0.01 s, section 2.2.2.2).
+    gyro_noise_dps, gyro_lsb_dps, gyro_bias_dps : L3G4200D rate noise (std, deg/s; 0.03 dps/sqrt(Hz)
+        over ~100 Hz -> 0.3), resolution (16 bit at +-500 dps -> 17.5 mdps) and constant bias.
+    acc_noise_g, acc_lsb_g : LIS331DL noise (std per axis, g) and resolution (8 bit over +-2 g).
+    enc_lsb_deg : encoder resolution at the wheel, relative to the IB (PA2-100, 400 counts per motor
+        revolution through the 64:1 gear -> 0.0141 deg, Table 1.1).
+    cur_noise_A, cur_lsb_A : INA198 current measurement noise (std) and resolution. Table 1.1 gives
+        0.8 mV per step of the sensor output; with the assumed 0.1 Ohm shunt and gain 50 that is 0.16 mA.
+    pwm_bits : resolution of the PWM drive (10 bit, section 2.2.3.1); 0 disables quantisation.
+    kf_q_theta, kf_q_bias, kf_r : process noise variances of theta3 (rad^2) and gyro bias
+        (rad^2/s^2) per step and the accelerometer-angle variance (rad^2) of the KF of eq. 2.20. The
+        thesis derived them offline from measurements it does not list; these are our choices.
+    """
+
+    Ts_s: float = 0.01
+    gyro_noise_dps: float = 0.3
+    gyro_lsb_dps: float = 0.0175
+    gyro_bias_dps: float = 0.0
+    acc_noise_g: float = 0.01
+    acc_lsb_g: float = 4.0 / 256.0
+    enc_lsb_deg: float = 0.0141
+    cur_noise_A: float = 0.002
+    cur_lsb_A: float = 1.6e-4
+    pwm_bits: int = 10
+    kf_q_theta: float = 1e-6
+    kf_q_bias: float = 1e-9
+    kf_r: float = 3e-3
+
+    def __post_init__(self) -> None:
+        problems = []
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                problems.append(f"{f.name}={v!r} is not a finite number")
+            elif f.name in ("Ts_s", "kf_r") and v <= 0:
+                problems.append(f"{f.name}={v!r} must be > 0")
+            elif v < 0:
+                problems.append(f"{f.name}={v!r} must be >= 0")
+        if problems:
+            raise ValueError("invalid sensor parameters: " + "; ".join(problems))
+
+    @classmethod
+    def from_dict(cls, overrides: Mapping[str, Any] | None) -> SensorParams:
+        overrides = dict(overrides or {})
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(overrides) - known)
+        if unknown:
+            raise ValueError(f"unknown sensor parameter(s) {unknown}; known: {sorted(known)}")
+        return replace(cls(), **overrides)
+
+    @classmethod
+    def ideal(cls, Ts_s: float = 0.01) -> SensorParams:
+        """Noise-free, unquantised sensors (the KF still runs)."""
+        return cls(Ts_s, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0)
+
+    def coeffs(self, u_max_V: float) -> np.ndarray:
+        """The (13,) float64 array the kernel reads (SI units: rad, m/s^2, A, V)."""
+        d2r = math.pi / 180.0
+        g0 = 9.80665
+        u_lsb = 2.0 * u_max_V / (2**self.pwm_bits - 1) if self.pwm_bits > 0 else 0.0
+        return np.array(
+            [
+                self.gyro_noise_dps * d2r,
+                self.gyro_lsb_dps * d2r,
+                self.gyro_bias_dps * d2r,
+                self.acc_noise_g * g0,
+                self.acc_lsb_g * g0,
+                self.enc_lsb_deg * d2r,
+                self.cur_noise_A,
+                self.cur_lsb_A,
+                self.kf_q_theta,
+                self.kf_q_bias,
+                self.kf_r,
+                self.Ts_s,
+                u_lsb,
+            ]
+        )
+
+
+# --------------------------------------------------------------------------------------------------
+# model kernels
+# --------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def _accelerations(th3, w1, w2, w3, i1, i2, c, acc):
+    """Solve M(q) qdd = tau_a - tau_f - V(q, qdot) (eqs. 2.9-2.11, appendix eq. 2) into acc (3,).
+
+    Uses the structure of M (m11 = m22, m13 = m23) to solve in sum/difference coordinates.
+    """
+    l, r, d, mb = c[_L], c[_R], c[_D], c[_MB]
+    k2jr = c[_K] * c[_K] * c[_JR]
+    sn = math.sin(th3)
+    cs = math.cos(th3)
+    rd2 = r * r / (d * d)
+    cc = l * l * rd2 * mb  # l^2 r^2 m_b / d^2
+    m11 = c[_MW] * r * r + c[_JW] + 0.25 * mb * r * r + k2jr + cc * sn * sn + c[_JB] * rd2
+    m12 = 0.25 * mb * r * r - cc * sn * sn - c[_JB] * rd2
+    m13 = 0.5 * mb * l * r * cs - k2jr
+    m33 = mb * l * l + c[_JA] + 2.0 * k2jr
+    # V (appendix)
+    wd = w1 - w2
+    v1 = 2.0 * cc * sn * cs * w3 * wd - 0.5 * mb * l * r * sn * w3 * w3
+    v2 = -2.0 * cc * sn * cs * w3 * wd - 0.5 * mb * l * r * sn * w3 * w3
+    v3 = -cc * sn * cs * wd * wd + mb * c[_G] * l * sn
+    # torques (2.9) and friction (2.10)
+    km = c[_KM] * c[_K]
+    fm, fw = c[_FM], c[_FW]
+    f1 = km * i1 - ((fm + fw) * w1 - fm * w3) - v1
+    f2 = km * i2 - ((fm + fw) * w2 - fm * w3) - v2
+    f3 = -km * (i1 + i2) - (-fm * w1 - fm * w2 + 2.0 * fm * w3) - v3
+    a = m11 + m12
+    det = a * m33 - 2.0 * m13 * m13
+    sig = ((f1 + f2) * m33 - 2.0 * m13 * f3) / det
+    acc[2] = (a * f3 - m13 * (f1 + f2)) / det
+    dlt = (f1 - f2) / (m11 - m12)
+    acc[0] = 0.5 * (sig + dlt)
+    acc[1] = 0.5 * (sig - dlt)
+
+
+@njit(cache=True)
+def _derivatives(x, u, c, out):
+    """Full state equation 2.12: out (8,) = h(x, u) (rad/s, rad/s^2, A/s)."""
+    acc = np.empty(3)
+    _accelerations(x[2], x[3], x[4], x[5], x[6], x[7], c, acc)
+    out[0] = x[3]
+    out[1] = x[4]
+    out[2] = x[5]
+    out[3] = acc[0]
+    out[4] = acc[1]
+    out[5] = acc[2]
+    ke = c[_KE] * c[_K]
+    out[6] = (u[0] - ke * (x[3] - x[5]) - c[_RES] * x[6]) / c[_IND]
+    out[7] = (u[1] - ke * (x[4] - x[5]) - c[_RES] * x[7]) / c[_IND]
+
+
+@njit(cache=True)
+def _stage(x, kq, kw, a, u0, u1, dI1, dI2, decay, c, outq, outw, acc):
+    """One RK4 stage at x + a*(kq, kw); currents = quasi-static + ``decay`` times the transient."""
+    th3 = x[2] + a * kq[2]
+    w1 = x[3] + a * kw[0]
+    w2 = x[4] + a * kw[1]
+    w3 = x[5] + a * kw[2]
+    ke = c[_KE] * c[_K]
+    i1 = (u0 - ke * (w1 - w3)) / c[_RES] + dI1 * decay
+    i2 = (u1 - ke * (w2 - w3)) / c[_RES] + dI2 * decay
+    _accelerations(th3, w1, w2, w3, i1, i2, c, acc)
+    outq[0] = w1
+    outq[1] = w2
+    outq[2] = w3
+    outw[0] = acc[0]
+    outw[1] = acc[1]
+    outw[2] = acc[2]
+
+
+@njit(cache=True)
+def _step(x, u0, u1, h, c, s):
+    """Advance x (8,) in place by h with constant voltages (exponential/singular-perturbation RK4).
+
+    s is a (27,) scratch array (no allocation per step).
+    """
+    ke = c[_KE] * c[_K]
+    res = c[_RES]
+    tau = c[_IND] / res
+    dI1 = x[6] - (u0 - ke * (x[3] - x[5])) / res
+    dI2 = x[7] - (u1 - ke * (x[4] - x[5])) / res
+    e_full = math.exp(-h / tau)
+    k1q, k1w = s[0:3], s[3:6]
+    k2q, k2w = s[6:9], s[9:12]
+    k3q, k3w = s[12:15], s[15:18]
+    k4q, k4w = s[18:21], s[21:24]
+    acc = s[24:27]
+    # mechanics with the quasi-static current (RK4)
+    _stage(x, k1q, k1w, 0.0, u0, u1, dI1, dI2, 0.0, c, k1q, k1w, acc)
+    _stage(x, k1q, k1w, 0.5 * h, u0, u1, dI1, dI2, 0.0, c, k2q, k2w, acc)
+    _stage(x, k2q, k2w, 0.5 * h, u0, u1, dI1, dI2, 0.0, c, k3q, k3w, acc)
+    _stage(x, k3q, k3w, h, u0, u1, dI1, dI2, 0.0, c, k4q, k4w, acc)
+    # the transient current (I_n - I_ss) exp(-t R / L) adds a torque impulse integrated exactly
+    # (M and the other forces frozen over the ~10 us it lasts): acc difference times its integrals
+    i1 = (u0 - ke * (x[3] - x[5])) / res
+    i2 = (u1 - ke * (x[4] - x[5])) / res
+    _accelerations(x[2], x[3], x[4], x[5], i1 + dI1, i2 + dI2, c, acc)
+    a0, a1, a2 = acc[0], acc[1], acc[2]
+    _accelerations(x[2], x[3], x[4], x[5], i1, i2, c, acc)
+    phi1 = tau * (1.0 - e_full)  # int_0^h exp(-t/tau) dt
+    phi2 = tau * h - tau * phi1  # int_0^h int_0^t exp(-s/tau) ds dt
+    da0, da1, da2 = a0 - acc[0], a1 - acc[1], a2 - acc[2]
+    for j in range(3):
+        x[j] += h / 6.0 * (k1q[j] + 2.0 * k2q[j] + 2.0 * k3q[j] + k4q[j])
+        x[3 + j] += h / 6.0 * (k1w[j] + 2.0 * k2w[j] + 2.0 * k3w[j] + k4w[j])
+    x[0] += phi2 * da0
+    x[1] += phi2 * da1
+    x[2] += phi2 * da2
+    x[3] += phi1 * da0
+    x[4] += phi1 * da1
+    x[5] += phi1 * da2
+    x[6] = (u0 - ke * (x[3] - x[5])) / res + dI1 * e_full
+    x[7] = (u1 - ke * (x[4] - x[5])) / res + dI2 * e_full
+
+
+@njit(cache=True)
+def _quant(v, lsb):
+    if lsb > 0.0:
+        return lsb * math.floor(v / lsb + 0.5)
+    return v
+
+
+@njit(cache=False)  # see the note on caching in the module docstring
+def _simulate(x0, c, sc, ref, noise, kind, cp, cs, n_sub, fall_limit, x_out, y_out, m_out, u_out):
+    """Closed loop over the whole profile in one call.
+
+    Parameters
+    ----------
+    x0 : (8,) initial state.  c : (18,) plant coefficients.  sc : (13,) sensor coefficients.
+    ref : (N, 2) nu_d (m/s), xi_d (rad/s) per controller period.
+    noise : (N, 4) standard normal draws (gyro, acc forward, acc up, current).
+    kind, cp, cs : controller kind, parameter array, state array (modified).
+    n_sub : integration substeps per Ts.  fall_limit : |theta3| limit (rad).
+    x_out (N, 8), y_out (N, 5), m_out (N, 5), u_out (N, 2) : per-sample state, true outputs,
+        measurements and applied (saturated, quantised) voltages; rows after a failure stay NaN.
+
+    Returns
+    -------
+    (status, n_done) : STATUS_* code and the number of completed samples.
+    """
+    n = ref.shape[0]
+    ts = sc[11]
+    h = ts / n_sub
+    r, d, g = c[_R], c[_D], c[_G]
+    umax = c[_UMAX]
+    x = x0.copy()
+    scratch = np.empty(27)
+    acc = np.empty(3)
+    meas = np.empty(5)
+    u = np.zeros(2)
+    rk = np.empty(2)
+    # Kalman filter (eq. 2.20) state and covariance
+    th_hat = x[2]
+    b_hat = 0.0
+    p00 = sc[10]
+    p01 = 0.0
+    p11 = 1e-6
+    enc1_prev = _quant(x[0] - x[2], sc[5])
+    enc2_prev = _quant(x[1] - x[2], sc[5])
+    for k in range(n):
+        # --- true outputs and sensors at t = k Ts
+        _accelerations(x[2], x[3], x[4], x[5], x[6], x[7], c, acc)
+        y_out[k, 0] = 0.5 * r * (x[3] + x[4])
+        y_out[k, 1] = x[2]
+        y_out[k, 2] = x[5]
+        y_out[k, 3] = r * (x[4] - x[3]) / d
+        y_out[k, 4] = 0.5 * (x[6] + x[7])
+        for j in range(8):
+            x_out[k, j] = x[j]
+        gyro = _quant(x[5] + sc[2] + sc[0] * noise[k, 0], sc[1])
+        sdd = 0.5 * r * (acc[0] + acc[1])
+        sn = math.sin(x[2])
+        cn = math.cos(x[2])
+        a_f = _quant(sdd * cn + g * sn + sc[3] * noise[k, 1], sc[4])
+        a_u = _quant(g * cn - sdd * sn + sc[3] * noise[k, 2], sc[4])
+        th_acc = math.atan2(a_f, a_u)
+        enc1 = _quant(x[0] - x[2], sc[5])
+        enc2 = _quant(x[1] - x[2], sc[5])
+        if k > 0:
+            # KF predict with the gyro as input, then update with the accelerometer angle
+            th_hat += ts * (gyro - b_hat)
+            q00 = p00 - ts * (p01 + p01) + ts * ts * p11 + sc[8]
+            q01 = p01 - ts * p11
+            q11 = p11 + sc[9]
+            p00, p01, p11 = q00, q01, q11
+        sk = p00 + sc[10]
+        g0 = p00 / sk
+        g1 = p01 / sk
+        innov = th_acc - th_hat
+        th_hat += g0 * innov
+        b_hat += g1 * innov
+        p11 = p11 - g1 * p01
+        p01 = p01 - g0 * p01
+        p00 = p00 - g0 * p00
+        meas[0] = 0.5 * r * ((enc1 - enc1_prev) + (enc2 - enc2_prev)) / ts + r * gyro
+        meas[1] = th_hat
+        meas[2] = gyro
+        meas[3] = r * ((enc2 - enc2_prev) - (enc1 - enc1_prev)) / (d * ts)
+        meas[4] = _quant(0.5 * (x[6] + x[7]) + sc[6] * noise[k, 3], sc[7])
+        enc1_prev = enc1
+        enc2_prev = enc2
+        for j in range(5):
+            m_out[k, j] = meas[j]
+        # --- controller
+        rk[0] = ref[k, 0]
+        rk[1] = ref[k, 1]
+        controller_step(kind, cp, cs, rk, meas, x, r, d, u)
+        for j in range(2):
+            if not math.isfinite(u[j]):
+                return 2, k
+            if u[j] > umax:
+                u[j] = umax
+            elif u[j] < -umax:
+                u[j] = -umax
+            u[j] = _quant(u[j], sc[12])
+            u_out[k, j] = u[j]
+        # --- plant over one period
+        for _ in range(n_sub):
+            _step(x, u[0], u[1], h, c, scratch)
+        bad = False
+        for j in range(8):
+            if not math.isfinite(x[j]):
+                bad = True
+        if bad or abs(x[3]) > 1e4 or abs(x[4]) > 1e4 or abs(x[5]) > 1e4:
+            return 2, k + 1
+        if abs(x[2]) > fall_limit:
+            return 1, k + 1
+    return 0, n
+
+
+# --------------------------------------------------------------------------------------------------
+# public wrappers
+# --------------------------------------------------------------------------------------------------
+def derivatives(x: np.ndarray, u: np.ndarray, params: WMPParams | None = None) -> np.ndarray:
+    """State derivative of eq. 2.12, shape (8,), for state x (8,) and voltages u (2,)."""
+    x = np.ascontiguousarray(x, dtype=float)
+    u = np.ascontiguousarray(u, dtype=float)
+    if x.shape != (8,) or u.shape != (2,):
+        raise ValueError(f"expected x of shape (8,) and u of shape (2,), got {x.shape} and {u.shape}")
+    out = np.empty(8)
+    _derivatives(x, u, (params or WMPParams()).coeffs(), out)
+    return out
+
+
+def mass_matrix(theta3: float, params: WMPParams | None = None) -> np.ndarray:
+    """M(q) of appendix eq. (2), shape (3, 3) (kg m^2)."""
+    p = params or WMPParams()
+    sn, cs = math.sin(theta3), math.cos(theta3)
+    k2jr = p.gear**2 * p.J_r_kgm2
+    rd2 = p.r_m**2 / p.d_m**2
+    cc = p.l_m**2 * rd2 * p.m_b_kg
+    m11 = (
+        p.m_w_kg * p.r_m**2
+        + p.wheel_inertia
+        + 0.25 * p.m_b_kg * p.r_m**2
+        + k2jr
+        + cc * sn**2
+        + p.J_B_kgm2 * rd2
+    )
+    m12 = 0.25 * p.m_b_kg * p.r_m**2 - cc * sn**2 - p.J_B_kgm2 * rd2
+    m13 = 0.5 * p.m_b_kg * p.l_m * p.r_m * cs - k2jr
+    m33 = p.m_b_kg * p.l_m**2 + p.J_A_kgm2 + 2 * k2jr
+    return np.array([[m11, m12, m13], [m12, m11, m13], [m13, m13, m33]])
+
+
+def _check_common(n_sub: int, x0: np.ndarray | None) -> np.ndarray:
+    if not isinstance(n_sub, (int, np.integer)) or n_sub < 1:
+        raise ValueError(f"n_sub must be a positive integer, got {n_sub!r}")
+    x0 = np.zeros(8) if x0 is None else np.ascontiguousarray(x0, dtype=float).copy()
+    if x0.shape != (8,) or not np.all(np.isfinite(x0)):
+        raise ValueError(f"x0 must be a finite array of shape (8,), got {x0!r}")
+    return x0
+
+
+def simulate_closed_loop(
+    kind: int,
+    cparams: np.ndarray,
+    state_size: int,
+    ref: np.ndarray,
+    noise: np.ndarray | None = None,
+    params: WMPParams | None = None,
+    sensors: SensorParams | None = None,
+    x0: np.ndarray | None = None,
+    n_sub: int = 10,
+    fall_limit_deg: float = 90.0,
+) -> dict[str, Any]:
+    """Run the closed loop over a reference profile (one kernel call).
+
+    Parameters
+    ----------
+    kind : controller kind (``controllers.kernels.KIND_*``).
+    cparams : (p,) controller parameter array; state_size : length of its zeroed state array.
+    ref : (N, 2) desired speed (m/s) and yaw rate (rad/s), one row per controller period.
+    noise : (N, 4) standard normal draws; ``None`` means noise-free (zeros).
+    params, sensors : plant and sensor parameters (Table 2.1, Table 1.1 defaults).
+    x0 : (8,) initial state (rest by default). n_sub : substeps per Ts. fall_limit_deg : |theta3|
+        beyond which the robot counts as fallen (deg).
+
+    Returns
+    -------
+    dict with ``t`` (N,) s, ``x`` (N, 8), ``y`` (N, 5) true outputs, ``meas`` (N, 5) sensed signals,
+    ``u`` (N, 2) applied voltages, ``status`` (int), ``status_name``, ``n_done`` (int). Rows from
+    ``n_done`` on are NaN when the run stopped early.
+    """
+    params = params or WMPParams()
+    sensors = sensors or SensorParams()
+    x0 = _check_common(n_sub, x0)
+    ref = np.ascontiguousarray(ref, dtype=float)
+    if ref.ndim != 2 or ref.shape[1] != 2 or ref.shape[0] < 1 or not np.all(np.isfinite(ref)):
+        raise ValueError(f"ref must be a finite (N, 2) array, got shape {ref.shape}")
+    n = ref.shape[0]
+    if noise is None:
+        noise = np.zeros((n, 4))
+    noise = np.ascontiguousarray(noise, dtype=float)
+    if noise.shape != (n, 4):
+        raise ValueError(f"noise must have shape ({n}, 4), got {noise.shape}")
+    if not 0 < fall_limit_deg <= 180:
+        raise ValueError(f"fall_limit_deg must be in (0, 180], got {fall_limit_deg}")
+    cp = np.ascontiguousarray(cparams, dtype=float)
+    cs = np.zeros(int(state_size))
+    x_out = np.full((n, 8), np.nan)
+    y_out = np.full((n, 5), np.nan)
+    m_out = np.full((n, 5), np.nan)
+    u_out = np.full((n, 2), np.nan)
+    status, n_done = _simulate(
+        x0,
+        params.coeffs(),
+        sensors.coeffs(params.u_max_V),
+        ref,
+        noise,
+        int(kind),
+        cp,
+        cs,
+        int(n_sub),
+        math.radians(fall_limit_deg),
+        x_out,
+        y_out,
+        m_out,
+        u_out,
+    )
+    return {
+        "t": np.arange(n) * sensors.Ts_s,
+        "x": x_out,
+        "y": y_out,
+        "meas": m_out,
+        "u": u_out,
+        "status": int(status),
+        "status_name": STATUS_NAMES[int(status)],
+        "n_done": int(n_done),
+    }
+
+
+def simulate_open_loop(
+    u: tuple[float, float],
+    duration_s: float,
+    params: WMPParams | None = None,
+    x0: np.ndarray | None = None,
+    Ts_s: float = 0.01,
+    n_sub: int = 10,
+    fall_limit_deg: float = 180.0,
+) -> dict[str, Any]:
+    """Constant voltages ``u`` (V) for ``duration_s`` with ideal sensors; same output as closed loop."""
+    from objectives.control.controllers.kernels import KIND_OPEN_LOOP
+
+    n = int(round(duration_s / Ts_s))
+    if n < 1:
+        raise ValueError(f"duration_s={duration_s} is shorter than one period Ts={Ts_s}")
+    return simulate_closed_loop(
+        KIND_OPEN_LOOP,
+        np.asarray(u, float),
+        0,
+        np.zeros((n, 2)),
+        None,
+        params,
+        replace(SensorParams.ideal(Ts_s), pwm_bits=0),
+        x0,
+        n_sub,
+        fall_limit_deg,
+    )
