@@ -1,0 +1,365 @@
+"""The filter objective: run a filter on recordings against ground truth and score it.
+
+YAML section (``objective:``)::
+
+    kind: filter
+    filter: faekf                       # any name of objectives.attitude.filters.FILTERS
+    fixed: {window: 400}                # filter values that are not searched (override defaults)
+    data:                               # a list of data specs (tune and report on all of them) ...
+      - synthetic: {generator: bench6dof, duration_s: 60, seed: 1}
+    # ... or a split into tuning and held-out recordings
+    data:
+      train: [{broad: {dir: ../shared/data/broad, trials: [01_undisturbed_slow_rotation_A]}}]
+      test:  [{broad: {dir: ../shared/data/broad, trials: [03_undisturbed_slow_rotation_C]}}]
+    # ... or k-fold over one list: fold `fold` of `k` is held out (recordings assigned round-robin)
+    data: {all: [...], kfold: {k: 4, fold: 0}}
+    metric: euler_mse_geomean           # see METRICS
+    metric_options: {weights: [1, 1, 1], normalize: false}
+    q0: accmag                          # initial orientation: accmag (first sample) or truth
+    warmup_s: 0.0                       # seconds at the start of each recording left out of metrics
+    report: {traces: true, per_trial_optimum: false, per_trial_budget: 120}
+
+Metrics (lower is better):
+
+``euler_mse_geomean``  FAEKF paper eq. 35 over the recordings (rad^2); ``metric_options.weights``
+                       are per-axis exponents, ``normalize: true`` takes the geometric mean of all
+                       MSEs instead of the paper's cube root of the product.
+``euler_rmse_mean``    mean over recordings of the mean per-axis Euler RMSE (deg).
+``mse_1d``             thesis eq. 3.18 on the tilt angle (rad^2), mean over recordings.
+``broad_mean_rmse``    mean over recordings of BROAD's total RMSE (deg) on motion samples: the
+                       criterion of BROAD's trial-agnostic good parameters (TAGP).
+``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
+
+A filter whose output is not finite scores the penalty and the evaluation is recorded as failed
+with the recording's name. Recordings are loaded once per worker process (lazily, on first call)
+and are not pickled with the objective.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.scoring import error_sums
+from tuner.objective import Evaluation
+from tuner.space import Real, Space
+
+__all__ = ["FilterObjective", "METRICS"]
+
+METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
+_KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "q0", "warmup_s", "report")
+#: filter values on which precomputed fuzzy inputs (disturbance measures) depend
+_CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
+
+
+def _split_data(data: Any) -> tuple[list, list]:
+    """(train specs, test specs) from the ``data`` value (see module docstring)."""
+    if isinstance(data, list):
+        return list(data), []
+    if not isinstance(data, Mapping):
+        raise ValueError(f"objective.data: expected a list of data specs or {{train, test}}, got {data!r}")
+    if "train" in data:
+        bad = sorted(set(data) - {"train", "test"})
+        if bad:
+            raise ValueError(f"objective.data.{bad[0]}: unknown key; allowed: train, test")
+        train, test = data["train"], data.get("test", [])
+        for key, v in (("train", train), ("test", test)):
+            if not isinstance(v, list) or (key == "train" and not v):
+                raise ValueError(f"objective.data.{key}: expected a non-empty list of data specs")
+        return list(train), list(test)
+    if "all" in data:
+        bad = sorted(set(data) - {"all", "kfold"})
+        if bad:
+            raise ValueError(f"objective.data.{bad[0]}: unknown key; allowed: all, kfold")
+        items = data["all"]
+        kf = data.get("kfold") or {}
+        if not isinstance(items, list) or not items:
+            raise ValueError("objective.data.all: expected a non-empty list of data specs")
+        if not isinstance(kf, Mapping) or set(kf) - {"k", "fold"}:
+            raise ValueError("objective.data.kfold: expected {k: int, fold: int}")
+        return [("kfold", items, int(kf.get("k", 0)), int(kf.get("fold", 0)))], []
+    raise ValueError("objective.data: a mapping needs 'train' (and 'test') or 'all' (with 'kfold')")
+
+
+def _check_specs(specs: list, base_dir: Path, where: str) -> None:
+    """Fail early (at config load) on missing files and unknown kinds, without loading data."""
+    from objectives.attitude.data.loaders import KINDS
+
+    for i, spec in enumerate(specs):
+        if not isinstance(spec, Mapping) or len(spec) != 1:
+            raise ValueError(f"{where}[{i}]: expected a one-key mapping out of {list(KINDS)}, got {spec!r}")
+        (kind, opts), = spec.items()
+        if kind not in KINDS:
+            raise ValueError(f"{where}[{i}]: unknown data kind {kind!r}; allowed: {list(KINDS)}")
+        opts = opts or {}
+        if kind == "csv":
+            p = Path(str(opts.get("path", "")))
+            p = p if p.is_absolute() else base_dir / p
+            if not p.is_file():
+                raise ValueError(f"{where}[{i}].csv.path: file not found: {p}")
+        if kind == "broad":
+            from objectives.attitude.data.broad import default_broad_dir
+
+            d = Path(str(opts["dir"])) if opts.get("dir") else default_broad_dir()
+            d = d if d.is_absolute() else base_dir / d
+            if not d.is_dir():
+                raise ValueError(f"{where}[{i}].broad.dir: directory not found: {d}")
+
+
+@dataclass
+class FilterObjective:
+    """Picklable objective scoring a filter's parameters on recordings (see module docstring)."""
+
+    filter: str
+    train_specs: list
+    test_specs: list = field(default_factory=list)
+    fixed: dict = field(default_factory=dict)
+    metric: str = "euler_mse_geomean"
+    metric_options: dict = field(default_factory=dict)
+    q0: Any = "accmag"
+    warmup_s: float = 0.0
+    report: dict = field(default_factory=dict)
+    base_dir: str = "."
+
+    def __post_init__(self) -> None:
+        from objectives.attitude.filters import get_filter
+
+        self._cls = get_filter(self.filter)
+        if self.metric not in METRICS:
+            raise ValueError(f"objective.metric: unknown metric {self.metric!r}; allowed: {list(METRICS)}")
+        unknown = sorted(set(self.fixed) - set(self._cls.defaults))
+        if unknown:
+            raise ValueError(f"objective.fixed.{unknown[0]}: not a parameter of {self.filter}; "
+                             f"known: {sorted(self._cls.defaults)}")
+        bad = sorted(set(self.metric_options) - {"weights", "normalize"})
+        if bad:
+            raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize")
+        w = self.metric_options.get("weights", (1.0, 1.0, 1.0))
+        if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
+            raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
+        if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth")):
+            q = np.asarray(self.q0, float)
+            if q.shape != (4,):
+                raise ValueError(f"objective.q0: expected accmag, truth or 4 numbers, got {self.q0!r}")
+        if self.warmup_s < 0:
+            raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
+        self._cache: dict[str, Any] = {}
+
+    # --- construction -------------------------------------------------------------------------
+    @classmethod
+    def from_config(cls, section: Mapping[str, Any], base_dir: Path | None = None) -> FilterObjective:
+        unknown = sorted(set(section) - set(_KEYS))
+        if unknown:
+            raise ValueError(f"objective.{unknown[0]}: unknown key; allowed: {sorted(_KEYS)}")
+        if "filter" not in section:
+            from objectives.attitude.filters import filter_names
+
+            raise ValueError(f"objective.filter: missing; one of {filter_names()}")
+        if "data" not in section:
+            raise ValueError("objective.data: missing; a list of data specs or {train, test}")
+        base = Path(base_dir) if base_dir else Path.cwd()
+        train, test = _split_data(section["data"])
+        if train and isinstance(train[0], tuple):  # k-fold
+            _, items, k, fold = train[0]
+            if not 2 <= k <= len(items) or not 0 <= fold < k:
+                raise ValueError(f"objective.data.kfold: need 2 <= k <= {len(items)} and 0 <= fold < k, "
+                                 f"got k={k}, fold={fold}")
+            _check_specs(items, base, "objective.data.all")
+            train = [("kfold-train", items, k, fold)]
+            test = [("kfold-test", items, k, fold)]
+        else:
+            _check_specs(train, base, "objective.data.train" if test else "objective.data")
+            _check_specs(test, base, "objective.data.test")
+        fixed = section.get("fixed") or {}
+        if not isinstance(fixed, Mapping):
+            raise ValueError(f"objective.fixed: expected a mapping, got {fixed!r}")
+        from objectives.attitude.filters import get_filter
+
+        try:
+            get_filter(section["filter"])
+        except ValueError as exc:
+            raise ValueError(f"objective.filter: {exc}") from None
+        return cls(
+            filter=section["filter"], train_specs=train, test_specs=test, fixed=dict(fixed),
+            metric=section.get("metric", "euler_mse_geomean"),
+            metric_options=dict(section.get("metric_options") or {}),
+            q0=section.get("q0", "accmag"), warmup_s=float(section.get("warmup_s", 0.0)),
+            report=dict(section.get("report") or {}), base_dir=str(base),
+        )
+
+    def with_data(self, data: Any) -> FilterObjective:
+        """The same objective on other data (``tuner evaluate --data``): all of it is 'train'."""
+        train, test = _split_data(data)
+        specs = train + test
+        _check_specs(specs, Path(self.base_dir), "data")
+        return FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
+                               self.q0, self.warmup_s, dict(self.report), self.base_dir)
+
+    def __getstate__(self) -> dict[str, Any]:
+        d = dict(self.__dict__)
+        d["_cache"] = {}  # loaded recordings stay in the process that loaded them
+        d.pop("_cls", None)
+        return d
+
+    def __setstate__(self, d: dict[str, Any]) -> None:
+        from objectives.attitude.filters import get_filter
+
+        self.__dict__.update(d)
+        self._cls = get_filter(self.filter)
+
+    # --- search space ------------------------------------------------------------------------
+    def default_space(self) -> Space:
+        """The filter's default space with the ``fixed`` values pinned."""
+        space_fn = self._cls.space
+        tune_fuzzy = self.fixed.get("tune_fuzzy")
+        try:
+            base = space_fn(tune_fuzzy=tune_fuzzy) if tune_fuzzy is not None else space_fn()
+        except TypeError:
+            base = space_fn()
+        params = []
+        for p in base.params:
+            params.append(Real(p.name, fixed=self.fixed[p.name], unit=p.unit, doc=p.doc)
+                          if p.name in self.fixed else p)
+        return Space(params)
+
+    # --- data ---------------------------------------------------------------------------------
+    def _load(self, specs: list) -> list[Recording]:
+        from objectives.attitude.data.loaders import load_recordings
+
+        base = Path(self.base_dir)
+        out: list[Recording] = []
+        for spec in specs:
+            if isinstance(spec, tuple):  # k-fold: round-robin assignment of the listed recordings
+                which, items, k, fold = spec
+                recs = [r for s in items for r in load_recordings(s, base)]
+                out += [r for i, r in enumerate(recs) if (i % k == fold) == (which == "kfold-test")]
+            else:
+                out += load_recordings(spec, base)
+        return out
+
+    def recordings(self, which: str = "train") -> list[Recording]:
+        if which not in self._cache:
+            specs = self.train_specs if which == "train" else self.test_specs
+            try:
+                self._cache[which] = self._load(specs)
+            except RecordingError:
+                raise
+        return self._cache[which]
+
+    # --- scoring ------------------------------------------------------------------------------
+    def make_filter(self, params: Mapping[str, Any]):
+        values = {**self.fixed, **{k: v for k, v in params.items() if k in self._cls.defaults}}
+        return self._cls(**values)
+
+    def _run(self, flt, rec: Recording, idx: tuple[str, int]):
+        dist_fn = getattr(flt, "disturbances", None)
+        if callable(dist_fn):  # fuzzy inputs depend only on fixed window options: compute once
+            key = ("dist", idx, tuple((k, flt.values.get(k)) for k in _CONTEXT_KEYS))
+            if key not in self._cache:
+                self._cache[key] = dist_fn(rec)
+            return flt.run_detailed(rec, self.q0, disturbances=self._cache[key])
+        return flt.run_detailed(rec, self.q0)
+
+    def _mask(self, rec: Recording) -> np.ndarray:
+        mask = rec.motion.copy()
+        if self.warmup_s > 0:
+            mask[: int(round(self.warmup_s / rec.dt))] = False
+        return mask
+
+    def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False) -> dict[str, Any]:
+        """Fitness and per-recording metrics of ``params`` on the train or test recordings.
+
+        Returns ``{"fitness": float, "recordings": {name: {metric: value}}, "failed": str}`` (and
+        ``"outputs": {name: FilterResult}`` with ``keep_outputs``).
+        """
+        recs = self.recordings(which)
+        if not recs:
+            return {"fitness": math.nan, "recordings": {}, "failed": ""}
+        flt = self.make_filter(params)
+        per: dict[str, dict[str, float]] = {}
+        outputs: dict[str, Any] = {}
+        sums: list[Any] = []
+        failed = ""
+        for i, rec in enumerate(recs):
+            res = self._run(flt, rec, (which, i))
+            q = res.quat
+            mask = self._mask(rec)
+            m: dict[str, float] = {}
+            if rec.quat is not None:
+                es = error_sums(q, rec.quat, mask)
+                if es.n == 0:
+                    raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
+                if es.n_nonfinite and not failed:
+                    failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
+                m.update(es.as_dict())
+                sums.append(es)
+            elif not np.isfinite(q).all() and not failed:
+                failed = f"filter diverged on {rec.name}: non-finite output"
+            if self.metric == "mse_1d":
+                m["mse_1d"] = self._mse_1d(rec, res, mask)
+            per[rec.name] = m
+            if keep_outputs:
+                outputs[rec.name] = res
+        fitness = self._combine(sums, per)
+        out = {"fitness": float(fitness), "recordings": per, "failed": failed}
+        if keep_outputs:
+            out["outputs"] = outputs
+        return out
+
+    @staticmethod
+    def _mse_1d(rec: Recording, res: Any, mask: np.ndarray) -> float:
+        from objectives.attitude import metrics as M
+        from objectives.attitude.quaternion import euler_zyx
+
+        est = res.diagnostics.get("angle")
+        true = rec.extra.get("angle")
+        if est is None:
+            est = euler_zyx(res.quat)[:, 1]
+        if true is None:
+            if rec.quat is None:
+                raise ValueError(f"{rec.name}: mse_1d needs extra['angle'] or truth quaternions")
+            true = euler_zyx(rec.quat)[:, 1]
+        return M.mse_1d(est, true, mask)
+
+    def _combine(self, sums: list[Any], per: dict[str, dict[str, float]]) -> float:
+        """The configured metric from the per-recording sums (definitions in the module docstring)."""
+        if self.metric == "mse_1d":
+            return float(np.mean([m["mse_1d"] for m in per.values()]))
+        if not sums:
+            raise ValueError(f"metric {self.metric} needs truth quaternions in the recordings")
+        if self.metric == "euler_mse_geomean":  # eq. 35, as metrics.euler_mse_geomean
+            w = np.asarray(self.metric_options.get("weights", (1.0, 1.0, 1.0)), float)
+            with np.errstate(divide="ignore"):
+                log_sum = sum(float(np.sum(np.where(w > 0, w * np.log(s.mse_rad2), 0.0))) for s in sums)
+            root = w.sum() * (len(sums) if self.metric_options.get("normalize", False) else 1)
+            return float(np.exp(log_sum / root))
+        if self.metric == "euler_rmse_mean":
+            return float(np.mean([np.mean(s.rmse_deg) for s in sums]))
+        if self.metric == "broad_mean_rmse":
+            return float(np.mean([s.broad_rmse_deg[0] for s in sums]))
+        total = sum(s.broad_ms_rad2[0] * s.n for s in sums) / sum(s.n for s in sums)
+        return float(np.degrees(np.sqrt(total)))
+
+    def __call__(self, params: Mapping[str, Any]) -> Evaluation:
+        s = self.score(params, "train")
+        metrics = {}
+        recs = s["recordings"]
+        for name, m in recs.items():
+            for k, v in m.items():
+                metrics[f"{name}.{k}" if len(recs) > 1 else k] = v
+        if s["failed"]:
+            return Evaluation.failed(s["failed"], metrics)
+        return Evaluation(s["fitness"], metrics)
+
+    # --- after the run ------------------------------------------------------------------------
+    def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:
+        """Train and test scores of the best parameters, a summary table and report figures."""
+        from objectives.attitude.report import filter_report
+
+        return filter_report(self, Path(run_dir), dict(best))
