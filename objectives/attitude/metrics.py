@@ -123,19 +123,14 @@ def euler_errors(q_est: np.ndarray, q_true: np.ndarray) -> np.ndarray:
         Errors in rad. Rows where the truth is not finite are NaN (metrics skip them); rows where
         the truth is finite but the estimate is not are ``pi`` on every axis (maximal error).
     """
-    from objectives.attitude.quaternion import euler_zyx
+    from objectives.attitude.quaternion import _euler_error_kernel
 
     q_est = _quat_rows(q_est, "q_est")
     q_true = _quat_rows(q_true, "q_true")
     if q_est.shape != q_true.shape:
         raise ValueError(f"q_est {q_est.shape} and q_true {q_true.shape} differ in shape")
-    truth_ok = np.isfinite(q_true).all(axis=1)
-    est_ok = np.isfinite(q_est).all(axis=1) & (np.abs(q_est).sum(axis=1) > 0)
-    with np.errstate(invalid="ignore"):
-        e = wrap_angle(euler_zyx(q_true) - euler_zyx(q_est))
-    e = np.asarray(e).reshape(-1, 3)
-    e[~est_ok] = np.pi
-    e[~truth_ok] = np.nan
+    e = np.empty((q_true.shape[0], 3))
+    _euler_error_kernel(np.ascontiguousarray(q_est), np.ascontiguousarray(q_true), e)
     return e
 
 

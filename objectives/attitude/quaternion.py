@@ -381,6 +381,40 @@ def euler_zyx(q: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
+def _euler_error_kernel(q_est, q_true, out):
+    """``wrap(euler(q_true) - euler(q_est))`` per row into ``out`` (N, 3), in one pass.
+
+    Truth rows with a non-finite value give NaN; otherwise estimate rows that are non-finite or
+    zero give ``pi``. Used by :func:`objectives.attitude.metrics.euler_errors`.
+    """
+    two_pi = 2.0 * math.pi
+    for i in range(q_true.shape[0]):
+        tw, tx, ty, tz = q_true[i, 0], q_true[i, 1], q_true[i, 2], q_true[i, 3]
+        if not (math.isfinite(tw) and math.isfinite(tx) and math.isfinite(ty) and math.isfinite(tz)):
+            out[i, 0] = math.nan
+            out[i, 1] = math.nan
+            out[i, 2] = math.nan
+            continue
+        ew, ex, ey, ez = q_est[i, 0], q_est[i, 1], q_est[i, 2], q_est[i, 3]
+        ok = math.isfinite(ew) and math.isfinite(ex) and math.isfinite(ey) and math.isfinite(ez)
+        if not ok or (ew == 0.0 and ex == 0.0 and ey == 0.0 and ez == 0.0):
+            out[i, 0] = math.pi
+            out[i, 1] = math.pi
+            out[i, 2] = math.pi
+            continue
+        _euler_into(tw, tx, ty, tz, out, i)
+        a0, a1, a2 = out[i, 0], out[i, 1], out[i, 2]
+        _euler_into(ew, ex, ey, ez, out, i)
+        for k, a in ((0, a0), (1, a1), (2, a2)):
+            d = a - out[i, k]  # in (-2 pi, 2 pi)
+            if d >= math.pi:
+                d -= two_pi
+            elif d < -math.pi:
+                d += two_pi
+            out[i, k] = d
+
+
+@njit(cache=True)
 def _quat_from_euler_kernel(e, out):
     for i in range(e.shape[0]):
         cr, sr = math.cos(0.5 * e[i, 0]), math.sin(0.5 * e[i, 0])

@@ -163,3 +163,16 @@ def test_broad_errors_match_loop_reference():
         [r.total_rmse_deg, r.heading_rmse_deg, r.inclination_rmse_deg],
         ref.broad_rmse_loop(est, true, motion), rtol=1e-10,
     )
+
+
+def test_euler_errors_kernel_matches_numpy_composition():
+    from objectives.attitude.quaternion import euler_zyx
+
+    rng = np.random.default_rng(12)
+    qt = rng.normal(size=(500, 4))
+    qe = qt + 0.3 * rng.normal(size=qt.shape)
+    expect = np.angle(np.exp(1j * (euler_zyx(qt) - euler_zyx(qe))))
+    e = M.euler_errors(qe, qt)
+    diff = np.abs(e - expect)
+    assert np.all((diff < 1e-12) | (np.abs(diff - 2 * math.pi) < 1e-12))  # +-pi ends may differ
+    assert np.all((e >= -math.pi) & (e < math.pi))
