@@ -361,7 +361,9 @@ def akf1d_fis(f_range_hz: float, acc_range_g: float, kappa: Any) -> SugenoFIS:
         params[j, 1] = (0.0, h, r, 0.0)
         params[j, 2] = (h, r, np.inf, np.inf)
     rules = grid_rules([3, 3])
-    kappa = np.asarray(kappa, dtype=float)
+    kappa = np.asarray(kappa, dtype=float).reshape(-1)
+    if kappa.shape != (5,):
+        raise ValueError(f"akf1d: need the 5 singletons K1..K5, got {kappa.size}")
     return SugenoFIS(kinds, params, rules, kappa[rules.sum(axis=1)], and_op="min")
 
 
