@@ -1,0 +1,367 @@
+"""Linear, nonlinear (PI) and cascaded complementary filters on Euler angles: LCF, NCF, CCF.
+
+Narkhede, Poddar, Walambe, Ghinea, Kotecha, "Cascaded Complementary Filter Architecture for Sensor
+Fusion in Attitude Estimation", Sensors 21, 1937 (2021), equations (1)-(14).
+
+All three work on the ZYX Euler angles ``x = (roll phi, pitch theta, yaw psi)`` of the
+sensor-to-earth rotation in the NED earth frame (``working_frame = "NED"``; the class converts the
+output quaternion ``q = q_z(psi) q_y(theta) q_x(phi)`` to the recording's frame).
+
+Measurement angles ``x_a`` (the paper's accelerometer/magnetometer estimate):
+
+- roll and pitch from the accelerometer, eqs. (4)-(5), evaluated with ``atan2`` (full range). The
+  paper writes them for a sensor that reads gravity (+g along body z when level, z down); our
+  accelerometer reads specific force, so the kernel uses ``d = -acc``:
+  ``phi_a = atan2(d_y, d_z)``, ``theta_a = atan2(-d_x, d_y sin phi_a + d_z cos phi_a)``;
+- yaw from the tilt-compensated magnetometer, eq. (6), with ``atan2`` and ``phi_a``, ``theta_a``
+  (the current estimate's roll and pitch when the accelerometer sample is unusable). Yaw is
+  relative to magnetic north (declination is not modelled).
+
+Gyroscope path: the Euler-angle rates of eqs. (1)-(3) at the current estimate. The text of the
+paper has two typesetting errors there; the kernel uses the standard ZYX kinematics
+``phi' = p + (q sin phi + r cos phi) tan theta``, ``theta' = q cos phi - r sin phi``,
+``psi' = (q sin phi + r cos phi) / cos theta`` (the paper prints ``- r sin theta`` in (2) and a
+leading ``p +`` in (3)). ``|cos theta|`` is clamped to 1e-6 near the gimbal-lock pitch of +-90 deg.
+
+Discrete filters (step ``dt``, previous estimate ``x``, error ``e = wrap(x_a - x)``):
+
+- LCF, eq. (8): ``x+ = pred + (1 - alpha) wrap(x_a - pred)``, ``pred = x + dt x_g'``;
+- NCF, eq. (10): ``I += Ki e dt``, ``x+ = x + dt (x_g' + Kp e + I)``;
+- CCF, eqs. (12)-(14): the NCF prediction ``pred = x + dt (x_g' + Kp e + I)`` followed by the LCF
+  blend of eq. (14). The paper's eq. (13) subtracts ``delta omega`` while eq. (14) adds the PI
+  term; the kernel follows eq. (14) (the sign that makes the loop converge), so the gyro bias
+  estimate is ``-I``.
+
+``alpha`` is the paper's per-sample weight, so the LCF time constant
+``tau = alpha dt / (1 - alpha)`` depends on the sampling rate (keep the seed's definition: an
+``alpha`` tuned at one rate must be converted for another). ``Kp`` (1/s) and ``Ki`` (1/s^2) are
+continuous-time gains and rate-independent. The paper's grid (Tables 1-2) is ``Kp`` in
+{0.1, 1, 25, 75} and ``Ki`` in {0.01, 0.1, 1}, with ``alpha = 0.7`` for CCF.
+
+Angle wrap: every angle error and every estimate is wrapped to (-pi, pi]; a pitch that leaves
+[-pi/2, pi/2] after a gyro step is mapped to the equivalent ZYX triple
+``(phi + pi, pi - theta, psi + pi)``.
+
+Degenerate samples: acc zero or non-finite: no correction of any angle (gyro propagation only, the
+integral is not updated); mag zero or non-finite, or ``use_mag: false``: no yaw correction
+(yaw from the gyroscope only); gyr non-finite: zero rate for that sample.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.madgwick import _FM, _as_c, _check_gain
+from tuner.space import Real
+
+__all__ = ["LCF", "NCF", "CCF", "complementary_batch", "quat_from_euler_zyx", "euler_zyx_from_quat"]
+
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+
+
+@njit(cache=True, inline="always")
+def _wrap(a):
+    """Angle wrapped to [-pi, pi)."""
+    return a - _TWO_PI * math.floor((a + _PI) / _TWO_PI)
+
+
+@njit(cache=True, fastmath=_FM)
+def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
+    """LCF / NCF / CCF over whole arrays (see module docstring for the equations).
+
+    Parameters
+    ----------
+    gyr, acc, mag : (N, 3) float64
+        rad/s, any unit, any unit; ``mag`` may be (0, 3).
+    coef : (5,) float64
+        ``dt`` s, ``alpha`` (1 = no LCF blend), ``Kp`` 1/s, ``Ki`` 1/s^2, ``use_mag`` (0/1).
+    x0 : (3,) float64
+        Initial roll, pitch, yaw, rad (ZYX, NED).
+    out : (N, 4) float64
+        Written: sensor-to-earth quaternion (NED) of the estimate after each sample.
+    euler_out, bias_out : (N, 3) or (0, 3) float64
+        Written when not empty: the Euler estimate, rad; the Euler-rate bias estimate ``-I``, rad/s.
+    """
+    dt = coef[0]
+    alpha = coef[1]
+    kp = coef[2]
+    ki = coef[3]
+    use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
+    w_euler = euler_out.shape[0] == gyr.shape[0]
+    w_bias = bias_out.shape[0] == gyr.shape[0]
+    blend = 1.0 - alpha
+    phi = x0[0]
+    th = x0[1]
+    psi = x0[2]
+    i0 = 0.0
+    i1 = 0.0
+    i2 = 0.0
+    for i in range(gyr.shape[0]):
+        p = gyr[i, 0]
+        q = gyr[i, 1]
+        r = gyr[i, 2]
+        if not (math.isfinite(p) and math.isfinite(q) and math.isfinite(r)):
+            p = 0.0
+            q = 0.0
+            r = 0.0
+        sp = math.sin(phi)
+        cp = math.cos(phi)
+        ct = math.cos(th)
+        if abs(ct) < 1e-6:
+            ct = 1e-6 if ct >= 0.0 else -1e-6
+        u = q * sp + r * cp
+        # eqs. (1)-(3), standard ZYX kinematics
+        d0 = p + u * math.sin(th) / ct
+        d1 = q * cp - r * sp
+        d2 = u / ct
+        # measurement angles, eqs. (4)-(6)
+        dx = -acc[i, 0]
+        dy = -acc[i, 1]
+        dz = -acc[i, 2]
+        an = dx * dx + dy * dy + dz * dz
+        acc_ok = an > 0.0 and an < math.inf
+        yaw_ok = False
+        phi_a = 0.0
+        th_a = 0.0
+        psi_m = 0.0
+        e0 = 0.0
+        e1 = 0.0
+        e2 = 0.0
+        if acc_ok:
+            phi_a = math.atan2(dy, dz)
+            spa = math.sin(phi_a)
+            cpa = math.cos(phi_a)
+            th_a = math.atan2(-dx, dy * spa + dz * cpa)
+            e0 = _wrap(phi_a - phi)
+            e1 = _wrap(th_a - th)
+            if use_mag:
+                mx = mag[i, 0]
+                my = mag[i, 1]
+                mz = mag[i, 2]
+                mn = mx * mx + my * my + mz * mz
+                if mn > 0.0 and mn < math.inf:
+                    sta = math.sin(th_a)
+                    cta = math.cos(th_a)
+                    psi_m = math.atan2(mz * spa - my * cpa, mx * cta + my * sta * spa + mz * sta * cpa)
+                    e2 = _wrap(psi_m - psi)
+                    yaw_ok = True
+        elif use_mag:
+            mx = mag[i, 0]
+            my = mag[i, 1]
+            mz = mag[i, 2]
+            mn = mx * mx + my * my + mz * mz
+            if mn > 0.0 and mn < math.inf:
+                st = math.sin(th)
+                ct2 = math.cos(th)
+                psi_m = math.atan2(mz * sp - my * cp, mx * ct2 + my * st * sp + mz * st * cp)
+                e2 = _wrap(psi_m - psi)
+                yaw_ok = True
+        if acc_ok:
+            # eqs. (10), (12): PI on the angle error (roll, pitch; yaw when observed)
+            i0 += ki * e0 * dt
+            i1 += ki * e1 * dt
+            if yaw_ok:
+                i2 += ki * e2 * dt
+            d0 += kp * e0
+            d1 += kp * e1
+            if yaw_ok:
+                d2 += kp * e2
+        d0 += i0
+        d1 += i1
+        d2 += i2
+        if w_bias:
+            bias_out[i, 0] = -i0
+            bias_out[i, 1] = -i1
+            bias_out[i, 2] = -i2
+        # gyro (NCF) prediction
+        phi = phi + dt * d0
+        th = th + dt * d1
+        psi = psi + dt * d2
+        if th > 0.5 * _PI:
+            th = _PI - th
+            phi += _PI
+            psi += _PI
+        elif th < -0.5 * _PI:
+            th = -_PI - th
+            phi += _PI
+            psi += _PI
+        # eqs. (8), (14): linear blend with the measurement angles
+        if acc_ok and blend != 0.0:
+            phi += blend * _wrap(phi_a - phi)
+            th += blend * _wrap(th_a - th)
+            if yaw_ok:
+                psi += blend * _wrap(psi_m - psi)
+        phi = _wrap(phi)
+        psi = _wrap(psi)
+        if w_euler:
+            euler_out[i, 0] = phi
+            euler_out[i, 1] = th
+            euler_out[i, 2] = psi
+        # q = q_z(psi) q_y(theta) q_x(phi)
+        c1 = math.cos(0.5 * phi)
+        s1 = math.sin(0.5 * phi)
+        c2 = math.cos(0.5 * th)
+        s2 = math.sin(0.5 * th)
+        c3 = math.cos(0.5 * psi)
+        s3 = math.sin(0.5 * psi)
+        out[i, 0] = c1 * c2 * c3 + s1 * s2 * s3
+        out[i, 1] = s1 * c2 * c3 - c1 * s2 * s3
+        out[i, 2] = c1 * s2 * c3 + s1 * c2 * s3
+        out[i, 3] = c1 * c2 * s3 - s1 * s2 * c3
+
+
+def quat_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
+    """Quaternions ``q_z(yaw) q_y(pitch) q_x(roll)`` of (N, 3) or (3,) ``(roll, pitch, yaw)``, rad."""
+    e = np.asarray(euler, dtype=float)
+    h = 0.5 * e
+    c1, c2, c3 = np.cos(h[..., 0]), np.cos(h[..., 1]), np.cos(h[..., 2])
+    s1, s2, s3 = np.sin(h[..., 0]), np.sin(h[..., 1]), np.sin(h[..., 2])
+    return np.stack([c1 * c2 * c3 + s1 * s2 * s3, s1 * c2 * c3 - c1 * s2 * s3,
+                     c1 * s2 * c3 + s1 * c2 * s3, c1 * c2 * s3 - s1 * s2 * c3], axis=-1)
+
+
+def euler_zyx_from_quat(q: np.ndarray) -> np.ndarray:
+    """``(roll, pitch, yaw)``, rad, of (N, 4) or (4,) quaternions (inverse of :func:`quat_from_euler_zyx`)."""
+    q = np.asarray(q, dtype=float)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    roll = np.arctan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+    pitch = np.arcsin(np.clip(2 * (w * y - z * x), -1.0, 1.0))
+    yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return np.stack([roll, pitch, yaw], axis=-1)
+
+
+def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp: float = 0.0,
+                        ki: float = 0.0, detailed: bool = False):
+    """Run the complementary-filter kernel on raw arrays (NED working frame).
+
+    ``alpha < 1, kp = ki = 0`` is the LCF, ``alpha = 1`` the NCF, both the CCF.
+
+    Parameters
+    ----------
+    gyr, acc : (N, 3)
+        rad/s; specific force, any unit.
+    mag : (N, 3) or None
+        Any unit; None: yaw from the gyroscope only.
+    dt : float
+        Sample time, s.
+    euler0 : (3,)
+        Initial roll, pitch, yaw, rad (ZYX, NED).
+    alpha : float in [0, 1]
+        Per-sample LCF weight of the gyro path.
+    kp, ki : float >= 0
+        PI gains, 1/s and 1/s^2.
+    detailed : bool
+        Also return the (N, 3) Euler estimate and the (N, 3) Euler-rate bias estimate.
+
+    Returns
+    -------
+    quat : (N, 4) sensor-to-earth NED, or (quat, euler, bias) when ``detailed``.
+    """
+    gyr = _as_c("gyr", gyr, 3)
+    acc = _as_c("acc", acc, 3)
+    n = gyr.shape[0]
+    if acc.shape[0] != n:
+        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
+    if mag is None:
+        mag = np.empty((0, 3))
+    else:
+        mag = _as_c("mag", mag, 3)
+        if mag.shape[0] != n:
+            raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+    if not (np.isfinite(alpha) and 0.0 <= alpha <= 1.0):
+        raise ValueError(f"alpha must be in [0, 1], got {alpha!r}")
+    for name, v in (("kp", kp), ("ki", ki)):
+        if not (np.isfinite(v) and v >= 0):
+            raise ValueError(f"{name} must be finite and >= 0, got {v!r}")
+    x0 = np.asarray(euler0, dtype=np.float64).reshape(-1)
+    if x0.shape != (3,) or not np.all(np.isfinite(x0)):
+        raise ValueError(f"euler0 must be a finite (3,) array of radians, got {euler0!r}")
+    coef = np.array([dt, alpha, kp, ki, 1.0 if mag.shape[0] else 0.0])
+    out = np.empty((n, 4))
+    m = n if detailed else 0
+    euler = np.empty((m, 3))
+    bias = np.empty((m, 3))
+    _cf_kernel(gyr, acc, mag, coef, x0, out, euler, bias)
+    return (out, euler, bias) if detailed else out
+
+
+class _ComplementaryBase(AttitudeFilter):
+    """Shared run logic; output sensor-to-earth in the recording's frame (kernel: NED, ZYX Euler).
+
+    ``run_detailed`` adds diagnostics ``euler`` (N, 3) roll/pitch/yaw in NED, rad, and
+    ``gyr_bias`` (N, 3), the Euler-rate bias estimate ``-I``, rad/s (zero for the LCF).
+    """
+
+    working_frame = "NED"
+    needs_mag = True
+
+    def _gains(self) -> tuple[float, float, float]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _check(self) -> None:
+        v = self.values
+        for key in ("Kp", "Ki"):
+            if key in v:
+                _check_gain(self.name, key, v[key])
+        if "alpha" in v:
+            a = v["alpha"]
+            ok = not isinstance(a, bool) and isinstance(a, (int, float, np.integer, np.floating))
+            if not (ok and 0.0 <= a <= 1.0):
+                raise ValueError(f"{self.name}: alpha must be a number in [0, 1], got {a!r}")
+        if not isinstance(v["use_mag"], (bool, np.bool_)):
+            raise ValueError(f"{self.name}: use_mag must be true or false, got {v['use_mag']!r}")
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        alpha, kp, ki = self._gains()
+        mag = rec.mag if self.values["use_mag"] else None
+        q, euler, bias = complementary_batch(rec.gyr, rec.acc, mag, rec.dt, euler_zyx_from_quat(q0),
+                                             alpha, kp, ki, detailed=True)
+        return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias})
+
+
+_ALPHA = Real("alpha", 0.5, 0.9999, unit="1", doc="gyro weight per sample, eq. (8)")
+_KP = Real("Kp", 0.01, 100.0, scale="log", unit="1/s", doc="proportional gain of eq. (10)")
+_KI = Real("Ki", 1e-3, 10.0, scale="log", unit="1/s^2", doc="integral gain of eq. (10)")
+_USE_MAG = Real("use_mag", fixed=True, doc="yaw from the magnetometer (true) or gyro only (false)")
+
+
+class LCF(_ComplementaryBase):
+    """Linear complementary filter, eq. (8). Parameter ``alpha`` (default 0.98), ``use_mag``."""
+
+    name = "lcf"
+    params = (_ALPHA, _USE_MAG)
+    defaults = {"alpha": 0.98, "use_mag": True}
+
+    def _gains(self):
+        return float(self.values["alpha"]), 0.0, 0.0
+
+
+class NCF(_ComplementaryBase):
+    """Nonlinear (PI) complementary filter, eq. (10). ``Kp`` (default 25), ``Ki`` (0.1; Table 4)."""
+
+    name = "ncf"
+    params = (_KP, _KI, _USE_MAG)
+    defaults = {"Kp": 25.0, "Ki": 0.1, "use_mag": True}
+
+    def _gains(self):
+        return 1.0, float(self.values["Kp"]), float(self.values["Ki"])
+
+
+class CCF(_ComplementaryBase):
+    """Cascaded complementary filter, eq. (14). ``alpha`` (default 0.7, section 4), ``Kp`` 25, ``Ki`` 0.1."""
+
+    name = "ccf"
+    params = (_ALPHA, _KP, _KI, _USE_MAG)
+    defaults = {"alpha": 0.7, "Kp": 25.0, "Ki": 0.1, "use_mag": True}
+
+    def _gains(self):
+        v = self.values
+        return float(v["alpha"]), float(v["Kp"]), float(v["Ki"])

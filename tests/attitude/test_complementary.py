@@ -1,0 +1,164 @@
+"""LCF, NCF and CCF (Narkhede et al. 2021): slow reference, the Kp/Ki grid of Tables 1-2, angle
+wrap, frames, degenerate input."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from objectives.attitude.data.synthetic import simulate_imu
+from objectives.attitude.filters import get_filter
+from objectives.attitude.filters.complementary import (
+    CCF,
+    LCF,
+    NCF,
+    complementary_batch,
+    euler_zyx_from_quat,
+    quat_from_euler_zyx,
+)
+from objectives.attitude.metrics import broad_errors
+from objectives.attitude.quaternion import to_frame
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
+from complementary_reference import complementary_ref, measured_angles, wrap  # noqa: E402
+
+DT = 0.01
+
+
+def _euler_traj(n, yaw_amp=1.5):
+    t = np.arange(n) * DT
+    return np.stack([0.5 * np.sin(0.5 * t), 0.4 * np.sin(0.3 * t + 1), yaw_amp * np.sin(0.1 * t)], 1)
+
+
+@pytest.fixture(scope="module")
+def biased():
+    """100 Hz, 30 s, gyro bias 0.1 rad/s per axis, small noise (NED)."""
+    return simulate_imu(quat_from_euler_zyx(_euler_traj(3000)), DT, frame="NED", rng=np.random.default_rng(1),
+                        gyr_noise=0.001, acc_noise=0.002, mag_noise=0.001, gyr_bias=(0.1, -0.1, 0.1))
+
+
+def test_euler_helpers_round_trip():
+    e = np.array([[0.3, -1.2, 3.0], [-2.9, 0.7, -0.4], [0.0, 0.0, 0.0]])
+    assert np.allclose(euler_zyx_from_quat(quat_from_euler_zyx(e)), e, atol=1e-12)
+
+
+def test_measurement_angles_eqs_4_to_6():
+    """The kernel's x_a (LCF with alpha = 0 outputs x_a) equals the rotation-matrix reference and the
+    truth on noise-free data, over the full roll and yaw range."""
+    e = np.array([[0.3, -1.2, 3.0], [-2.9, 0.7, -3.1], [1.7, 0.2, 0.1], [0.0, 1.3, -1.6]])
+    rec = simulate_imu(quat_from_euler_zyx(e), DT, frame="NED")
+    out = complementary_batch(rec.gyr, rec.acc, rec.mag, DT, np.zeros(3), alpha=0.0, detailed=True)[1]
+    ref = np.array([measured_angles(a, m) for a, m in zip(rec.acc, rec.mag)], float)
+    assert np.abs(wrap(out - ref)).max() < 1e-9
+    assert np.abs(wrap(out - e)).max() < 1e-9
+
+
+@pytest.mark.parametrize("alpha,kp,ki", [(0.98, 0.0, 0.0), (1.0, 2.0, 0.5), (0.7, 25.0, 0.1), (0.9, 1.0, 1.0)])
+@pytest.mark.parametrize("use_mag", [True, False])
+def test_kernel_matches_reference(biased, alpha, kp, ki, use_mag):
+    r = biased.slice(0, 800)
+    mag = r.mag if use_mag else None
+    x0 = np.array([0.1, -0.2, 0.3])
+    got = complementary_batch(r.gyr, r.acc, mag, DT, x0, alpha, kp, ki, detailed=True)[1]
+    ref = complementary_ref(r.gyr, r.acc, mag, DT, x0, alpha, kp, ki)
+    assert np.abs(wrap(got - ref)).max() < 1e-9
+
+
+def test_ccf_insensitive_to_kp_ki_while_ncf_is_not(biased):
+    """Direction of Tables 1-2: over the paper's grid Kp in {75, 25, 1, 0.1}, Ki in {0.01, 0.1, 1}
+    (alpha = 0.7 for CCF), the NCF's error changes by an order of magnitude and more while the CCF's
+    stays within a factor of two (on a recording with a large gyro bias)."""
+    rec = biased
+    ncf, ccf = [], []
+    for kp in (75.0, 25.0, 1.0, 0.1):
+        for ki in (0.01, 0.1, 1.0):
+            ncf.append(broad_errors(NCF(Kp=kp, Ki=ki).run(rec), rec.quat).total_rmse_deg)
+            ccf.append(broad_errors(CCF(alpha=0.7, Kp=kp, Ki=ki).run(rec), rec.quat).total_rmse_deg)
+    ncf, ccf = np.array(ncf), np.array(ccf)
+    assert ncf.max() / ncf.min() > 10
+    assert ccf.max() / ccf.min() < 2.5
+    assert ncf.std() / ncf.mean() > 3 * ccf.std() / ccf.mean()
+
+
+def test_lcf_has_no_bias_estimate_but_ncf_finds_it(biased):
+    rec = biased
+    lcf = LCF(alpha=0.98).run_detailed(rec)
+    ncf = NCF(Kp=1.0, Ki=0.5).run_detailed(rec)
+    assert np.all(lcf.diagnostics["gyr_bias"] == 0)
+    # Euler-rate bias: the body bias mapped by the ZYX kinematics; averaged over the last 10 s it
+    # has the sign pattern and size of the true (0.1, -0.1, 0.1) rad/s near level attitude
+    b = ncf.diagnostics["gyr_bias"][-1000:].mean(axis=0)
+    assert np.all(np.abs(b) > 0.05) and b[1] < 0
+    assert broad_errors(ncf.quat, rec.quat).total_rmse_deg < broad_errors(lcf.quat, rec.quat).total_rmse_deg
+
+
+def test_yaw_wraps_without_jumps():
+    """A steady yaw rotation through +-180 deg: the estimate follows without a 360 deg excursion."""
+    n = 2000
+    t = np.arange(n) * DT
+    e = np.stack([0.2 * np.ones(n), -0.1 * np.ones(n), wrap(0.8 * t + 2.5)], 1)
+    rec = simulate_imu(quat_from_euler_zyx(e), DT, frame="NED")
+    for f in (LCF(alpha=0.95), NCF(Kp=2.0, Ki=0.1), CCF()):
+        est = f.run_detailed(rec)
+        assert np.abs(wrap(est.diagnostics["euler"][:, 2] - e[:, 2])).max() < 0.01
+        assert broad_errors(est.quat, rec.quat).total_rmse_deg < 0.5
+
+
+@pytest.mark.parametrize("cls", [LCF, NCF, CCF])
+def test_output_frame_follows_recording(cls):
+    e = _euler_traj(600)
+    q_ned = quat_from_euler_zyx(e)
+    kw = dict(rng=None)
+    rec_ned = simulate_imu(q_ned, DT, frame="NED", **kw)
+    rec_enu = simulate_imu(to_frame(q_ned, "NED", "ENU"), DT, frame="ENU", **kw)
+    a = cls().run(rec_ned)
+    b = cls().run(rec_enu)
+    d = np.minimum(np.abs(to_frame(b, "ENU", "NED") - a).max(1), np.abs(to_frame(b, "ENU", "NED") + a).max(1))
+    assert d.max() < 1e-9
+    assert broad_errors(a, rec_ned.quat).total_rmse_deg < 0.5
+
+
+def test_no_mag_leaves_yaw_to_the_gyroscope():
+    e = _euler_traj(1000)
+    rec = simulate_imu(quat_from_euler_zyx(e), DT, frame="NED", gyr_bias=(0.0, 0.0, 0.05))
+    with_mag = CCF().run_detailed(rec).diagnostics["euler"][:, 2]
+    no_mag = CCF(use_mag=False).run_detailed(rec, q0="truth").diagnostics["euler"][:, 2]
+    # without the magnetometer the yaw drifts with the z bias (about 0.05 rad/s x 10 s, attitude-mapped)
+    assert np.abs(wrap(with_mag - e[:, 2])).max() < 0.05
+    assert np.abs(wrap(no_mag[-1] - e[-1, 2])) > 0.2
+
+
+@pytest.mark.parametrize("alpha,kp,ki", [(0.98, 0.0, 0.0), (1.0, 2.0, 0.5), (0.7, 25.0, 0.1)])
+def test_degenerate_samples(biased, alpha, kp, ki):
+    r = biased.slice(0, 1000)
+    g, a, m = r.gyr.copy(), r.acc.copy(), r.mag.copy()
+    x0 = euler_zyx_from_quat(r.quat[0])
+    clean = complementary_batch(g, a, m, DT, x0, alpha, kp, ki)
+    a[100] = 0.0
+    a[200] = np.nan
+    m[300] = 0.0
+    m[310, 2] = -np.inf
+    g[400] = np.nan
+    got = complementary_batch(g, a, m, DT, x0, alpha, kp, ki)
+    assert np.isfinite(got).all() and np.allclose(np.linalg.norm(got, axis=1), 1.0)
+    assert np.array_equal(got[:100], clean[:100])
+    assert broad_errors(got[-100:], clean[-100:]).total_rmse_deg < 0.5
+    # zero acc: a pure gyro step of all three angles
+    one = complementary_batch(g[:1], np.zeros((1, 3)), m[:1], DT, x0, alpha, kp, ki, detailed=True)[1]
+    gyro = complementary_batch(g[:1], np.zeros((1, 3)), None, DT, x0, 1.0, 0.0, 0.0, detailed=True)[1]
+    assert np.allclose(one, gyro, atol=1e-15)
+
+
+def test_registry_and_validation():
+    assert get_filter("lcf") is LCF and get_filter("ncf") is NCF and get_filter("ccf") is CCF
+    assert LCF.space().dim == 1 and NCF.space().dim == 2 and CCF.space().dim == 3
+    assert CCF().values["alpha"] == 0.7
+    with pytest.raises(ValueError, match="alpha"):
+        LCF(alpha=1.5)
+    with pytest.raises(ValueError, match="Kp"):
+        NCF(Kp=-1.0)
+    with pytest.raises(ValueError, match="euler0"):
+        complementary_batch(np.zeros((3, 3)), np.ones((3, 3)), None, DT, np.zeros(2))
