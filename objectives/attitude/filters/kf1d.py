@@ -246,12 +246,21 @@ def tilt_from_quat(q: np.ndarray, frame: str, q_frame: str = "ENU") -> float:
     return math.atan2(-s * ux, s * uz)
 
 
+@njit(cache=True)
+def _quat_from_tilt(theta, out):
+    for k in range(theta.shape[0]):
+        h = 0.5 * theta[k]
+        out[k, 0] = math.cos(h)
+        out[k, 1] = 0.0
+        out[k, 2] = math.sin(h)
+        out[k, 3] = 0.0
+
+
 def quat_from_tilt(theta: np.ndarray) -> np.ndarray:
     """(N, 4) rotations about y by ``theta`` (N,) rad: ``(cos(theta/2), 0, sin(theta/2), 0)``."""
-    theta = np.asarray(theta, dtype=float)
-    q = np.zeros(theta.shape + (4,))
-    q[..., 0] = np.cos(0.5 * theta)
-    q[..., 2] = np.sin(0.5 * theta)
+    theta = np.ascontiguousarray(np.asarray(theta, dtype=float).reshape(-1))
+    q = np.empty((theta.shape[0], 4))
+    _quat_from_tilt(theta, q)
     return q
 
 
@@ -443,9 +452,23 @@ class AKF1D(KF1D):
         ext = dis.external_acceleration(rec.acc, v["window"])
         return vib, ext
 
+    def scale(self, vib: np.ndarray, ext: np.ndarray) -> np.ndarray:
+        """Fuzzy scale ``K_k`` (N,) of R (eq. 3.24) for the measures ``f_hat`` (Hz) and ``alpha_hat`` (g).
+
+        The measures are piecewise constant (one value per packet), so the system is evaluated only
+        where an input changes and held in between (the same numbers as evaluating every sample).
+        """
+        X = np.stack([np.asarray(vib, dtype=float), np.asarray(ext, dtype=float)], axis=1)
+        n = X.shape[0]
+        if n == 0:
+            return np.empty(0)
+        starts = np.flatnonzero(np.concatenate([[True], np.any(X[1:] != X[:-1], axis=1)]))
+        vals = np.atleast_1d(self.fis()(X[starts]))
+        return np.ascontiguousarray(np.repeat(vals, np.diff(np.append(starts, n))))
+
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         vib, ext = self.disturbances(rec)
-        K = np.ascontiguousarray(self.fis()(np.stack([vib, ext], axis=1)))
+        K = self.scale(vib, ext)
         th, b = self._kf(rec, q0, K)
         return FilterResult(quat_from_tilt(th), rec.frame,
                             {"angle": th, "gyr_bias": b, "K": K, "vib_freq_hz": vib, "ext_acc": ext})
