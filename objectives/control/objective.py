@@ -1,0 +1,279 @@
+"""Closed-loop objective: simulate the WMP with a controller on a reference profile, score eq. 2.39.
+
+YAML section (``objective:``)::
+
+    kind: closed_loop
+    plant: wmp
+    controller: pid              # a name of objectives.control.controllers.CONTROLLERS
+    fixed: {yaw_gain_V: 0.15}    # controller parameters held fixed (override its defaults)
+    plant_params: {m_b_kg: 0.40} # WMPParams overrides (robustness studies)
+    sensors: {gyro_noise_dps: 0.3}   # SensorParams overrides
+    profile: thesis              # or {duration_s, steps: [{t, v, yaw_rate_deg_s}, ...]}
+    cost: {alpha1: 1.4, alpha2: 0.85, beta: 1.6, gamma: 0.4}
+    noise_seed: 0                # the same params always see the same sensor noise
+    duration_s: 10.0             # optional: truncate or override the profile's duration
+    n_sub: 10                    # plant substeps per Ts
+    fall_limit_deg: 90.0         # |theta3| beyond which the robot counts as fallen
+
+Calling the objective with a dict of controller parameters returns
+:class:`tuner.objective.Evaluation` with fitness F (eq. 2.39) and metrics: the error integrals of
+eqs. 2.34-2.36 for e_nu, e_xi, e_omega3 (see :mod:`objectives.control.metrics` for units), the four
+MAE terms of F, the peak IB angle (deg) and the peak average current (A), and ``status_code``
+(0 ok, 1 fell, 2 diverged). A fall or divergence is ``Evaluation.failed`` with the reason and time.
+"""
+
+from __future__ import annotations
+
+import math
+import pathlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from objectives.control.controllers import get_controller
+from objectives.control.metrics import DEFAULT_COST_WEIGHTS, error_integrals, mae_weighted_cost
+from objectives.control.profiles import profile_from_config
+from objectives.control.wmp import STATUS_OK, SensorParams, WMPParams, simulate_closed_loop
+from tuner.objective import Evaluation
+from tuner.space import Space
+
+__all__ = ["ClosedLoopObjective"]
+
+_KEYS = {
+    "kind",
+    "plant",
+    "controller",
+    "fixed",
+    "plant_params",
+    "sensors",
+    "profile",
+    "cost",
+    "noise_seed",
+    "duration_s",
+    "n_sub",
+    "fall_limit_deg",
+}
+
+
+@dataclass
+class ClosedLoopObjective:
+    """Picklable closed-loop objective (see the module docstring for the fields)."""
+
+    controller: str = "pid"
+    fixed: dict[str, Any] = field(default_factory=dict)
+    plant_params: dict[str, Any] = field(default_factory=dict)
+    sensors: dict[str, Any] = field(default_factory=dict)
+    profile: Any = "thesis"
+    cost: dict[str, float] = field(default_factory=lambda: dict(DEFAULT_COST_WEIGHTS))
+    noise_seed: int = 0
+    duration_s: float | None = None
+    n_sub: int = 10
+    fall_limit_deg: float = 90.0
+
+    def __post_init__(self) -> None:
+        # validate everything eagerly so config errors surface at load time
+        self._plant = WMPParams.from_dict(self.plant_params)
+        self._sensors = SensorParams.from_dict(self.sensors)
+        self._cls = get_controller(self.controller)
+        self._ctrl = self._cls(self._plant, self._sensors)
+        self._cls.resolve(self.fixed)
+        prof = profile_from_config(self.profile)
+        if isinstance(self.profile, Mapping) and "dt_s" in self.profile:
+            if not math.isclose(float(self.profile["dt_s"]), self._sensors.Ts_s):
+                raise ValueError(
+                    f"profile.dt_s={self.profile['dt_s']} differs from the controller period "
+                    f"Ts_s={self._sensors.Ts_s}"
+                )
+        if self.duration_s is not None:
+            if not (isinstance(self.duration_s, (int, float)) and self.duration_s > 0):
+                raise ValueError(f"duration_s must be > 0, got {self.duration_s!r}")
+            prof = (
+                replace(prof, duration_s=float(self.duration_s))
+                if self.duration_s > prof.times_s[-1]
+                else prof
+            )
+        self._ref = prof.sample(self._sensors.Ts_s)
+        if self.duration_s is not None:
+            self._ref = self._ref[: int(round(self.duration_s / self._sensors.Ts_s))]
+        if self._ref.shape[0] < 2:
+            raise ValueError("the profile is shorter than two controller periods")
+        unknown = sorted(set(self.cost) - set(DEFAULT_COST_WEIGHTS))
+        if unknown:
+            raise ValueError(f"cost: unknown weight(s) {unknown}; known: {sorted(DEFAULT_COST_WEIGHTS)}")
+        rng = np.random.default_rng(self.noise_seed)
+        self._noise = rng.standard_normal((self._ref.shape[0], 4))
+
+    # --- construction ---------------------------------------------------------------------------
+    @classmethod
+    def from_config(
+        cls, section: Mapping[str, Any], base_dir: pathlib.Path | None = None
+    ) -> ClosedLoopObjective:
+        """Build from the YAML ``objective:`` mapping; unknown keys and bad values are ``ValueError``."""
+        section = dict(section)
+        unknown = sorted(set(section) - _KEYS)
+        if unknown:
+            raise ValueError(f"objective: unknown key(s) {unknown}; allowed: {sorted(_KEYS)}")
+        if section.get("kind", "closed_loop") != "closed_loop":
+            raise ValueError(f"objective.kind must be 'closed_loop', got {section.get('kind')!r}")
+        if section.get("plant", "wmp") != "wmp":
+            raise ValueError(f"objective.plant: only 'wmp' is available, got {section.get('plant')!r}")
+        profile = section.get("profile", "thesis")
+        if isinstance(profile, str) and profile.endswith((".yaml", ".yml")):
+            import yaml
+
+            path = pathlib.Path(profile)
+            if not path.is_absolute() and base_dir is not None:
+                path = pathlib.Path(base_dir) / path
+            with open(path) as fh:
+                profile = yaml.safe_load(fh)
+        cost = dict(DEFAULT_COST_WEIGHTS)
+        cost.update(section.get("cost") or {})
+        return cls(
+            controller=section.get("controller", "pid"),
+            fixed=dict(section.get("fixed") or {}),
+            plant_params=dict(section.get("plant_params") or {}),
+            sensors=dict(section.get("sensors") or {}),
+            profile=profile,
+            cost=cost,
+            noise_seed=int(section.get("noise_seed", 0)),
+            duration_s=section.get("duration_s"),
+            n_sub=int(section.get("n_sub", 10)),
+            fall_limit_deg=float(section.get("fall_limit_deg", 90.0)),
+        )
+
+    def default_space(self) -> Space:
+        """The controller's default space with the ``fixed`` values pinned."""
+        from tuner.space import Real
+
+        return Space(
+            Real(p.name, fixed=self.fixed[p.name], unit=p.unit, doc=p.doc) if p.name in self.fixed else p
+            for p in self._cls.params
+        )
+
+    @property
+    def defaults(self) -> dict[str, Any]:
+        """Initial parameter values (Table 2.7 / section 2.2.1.2) with ``fixed`` applied."""
+        return self._cls.resolve(self.fixed)
+
+    # --- evaluation -----------------------------------------------------------------------------
+    def simulate(self, params: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Run the closed loop; dict with t, references (N, 2: m/s, rad/s), outputs (N, 5),
+        measurements (N, 5), voltages (N, 2), currents (N, 2), state (N, 8), status, n_done."""
+        values = dict(self.fixed)
+        values.update(params or {})
+        cp = self._ctrl.param_array(values)
+        r = simulate_closed_loop(
+            self._cls.kind,
+            cp,
+            self._cls.state_size,
+            self._ref,
+            self._noise,
+            self._plant,
+            self._sensors,
+            None,
+            self.n_sub,
+            self.fall_limit_deg,
+        )
+        return {
+            "t": r["t"],
+            "references": self._ref,
+            "outputs": r["y"],
+            "measurements": r["meas"],
+            "voltages": r["u"],
+            "currents": r["x"][:, 6:8],
+            "state": r["x"],
+            "status": r["status"],
+            "status_name": r["status_name"],
+            "n_done": r["n_done"],
+        }
+
+    def __call__(self, params: Mapping[str, Any]) -> Evaluation:
+        try:
+            sim = self.simulate(params)
+        except ValueError as exc:  # a design that cannot be built (e.g. Riccati without solution)
+            return Evaluation.failed(f"controller design failed: {exc}")
+        y, ref, n = sim["outputs"], sim["references"], sim["n_done"]
+        ts = self._sensors.Ts_s
+        peak = {
+            "peak_theta3_deg": float(np.degrees(np.nanmax(np.abs(y[:n, 1])))) if n else 0.0,
+            "peak_current_A": float(np.nanmax(np.abs(y[:n, 4]))) if n else 0.0,
+            "status_code": float(sim["status"]),
+        }
+        if sim["status"] != STATUS_OK:
+            return Evaluation.failed(f"robot {sim['status_name']} at t={n * ts:.2f} s", peak)
+        e_nu = ref[:, 0] - y[:, 0]
+        e_xi = ref[:, 1] - y[:, 3]
+        e_w3 = -np.degrees(y[:, 2])
+        metrics = error_integrals({"nu": e_nu, "xi": e_xi, "omega3": e_w3}, ts)
+        metrics.update(
+            {
+                "mae_nu": float(np.mean(np.abs(e_nu))),
+                "mae_xi": float(np.mean(np.abs(e_xi))),
+                "mae_omega3": float(np.mean(np.abs(e_w3))),
+                "ms_current": float(np.mean(y[:, 4] ** 2)),
+            }
+        )
+        metrics.update(peak)
+        f = mae_weighted_cost(e_nu, e_xi, e_w3, y[:, 4], self.cost)
+        if not math.isfinite(f):
+            return Evaluation.failed(f"non-finite cost {f}", metrics)
+        return Evaluation(f, metrics)
+
+    # --- pickling: rebuild derived state in the worker ------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        return {k: v for k, v in self.__dict__.items() if not k.startswith("_")}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.__post_init__()
+
+    # --- report ---------------------------------------------------------------------------------
+    def plot_response(
+        self,
+        params_before: Mapping[str, Any] | None,
+        params_after: Mapping[str, Any] | None,
+        path: str | pathlib.Path,
+    ) -> pathlib.Path:
+        """Figure like thesis Figs. 2.16-2.18: speed, yaw rate, theta3, current, voltages, before
+        (blue) and after (red) tuning. Either set may be ``None`` to plot one response."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(5, 1, figsize=(8, 11), sharex=True)
+        for label, params, color in (
+            ("before", params_before, "tab:blue"),
+            ("after", params_after, "tab:red"),
+        ):
+            if params is None:
+                continue
+            s = self.simulate(params)
+            t, y, u = s["t"], s["outputs"], s["voltages"]
+            f = self(params).fitness
+            lab = f"{label} (F={f:.4g})" if s["status"] == STATUS_OK else f"{label} ({s['status_name']})"
+            ax[0].plot(t, y[:, 0], color=color, label=lab)
+            ax[1].plot(t, np.degrees(y[:, 3]), color=color)
+            ax[2].plot(t, np.degrees(y[:, 1]), color=color)
+            ax[3].plot(t, y[:, 4], color=color)
+            ax[4].plot(t, u[:, 0], color=color, lw=0.8)
+            ax[4].plot(t, u[:, 1], color=color, lw=0.8, ls="--")
+        ax[0].plot(t, self._ref[:, 0], "k:", label="reference")
+        ax[1].plot(t, np.degrees(self._ref[:, 1]), "k:")
+        for a, lab in zip(
+            ax,
+            ["speed (m/s)", "yaw rate (deg/s)", "theta3 (deg)", "avg. current (A)", "voltages u1, u2-- (V)"],
+        ):
+            a.set_ylabel(lab)
+            a.grid(True, alpha=0.3)
+        ax[0].legend(loc="upper right")
+        ax[-1].set_xlabel("time (s)")
+        ax[0].set_title(f"WMP closed loop, controller {self.controller}")
+        fig.tight_layout()
+        path = pathlib.Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path
