@@ -95,7 +95,12 @@ def build_parser() -> argparse.ArgumentParser:
 def _cmd_run(a) -> int:
     from tuner.config import load_config
     from tuner.run import run
+    from tuner.sweep import is_sweep_file
 
+    if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
+        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir:
+            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir apply to job files")
+        return _cmd_sweep(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet))
     cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
     res = run(cfg, run_dir=a.run_dir, quiet=a.quiet)
     return _print_result(res)
@@ -241,9 +246,10 @@ def _cmd_evaluate(a) -> int:
 
 
 def _cmd_sweep(a) -> int:
-    from tuner.sweep import run_sweep
+    from tuner.sweep import collect, run_sweep, summary_text
 
     res = run_sweep(a.sweep, sweep_dir=a.dir, jobs=a.jobs, quiet=a.quiet)
+    print(summary_text(collect(res["dir"]), res["dir"]))
     print(f"sweep directory: {res['dir']}")
     print(f"report: {res['report']}")
     return 0 if res["ok"] else 1

@@ -1,0 +1,391 @@
+"""Sweeps: many ordinary runs (variants x grid x seeds) under one directory, and one report.
+
+A sweep file::
+
+    sweep:
+      name: filters-bench
+      base: ekf_bench6dof.yaml          # a job file (relative to this file) or an inline job mapping
+      variants:                         # named override sets (optional): the "methods" compared
+        ekf:   {objective.filter: ekf}
+        faekf: {objective.filter: faekf, base: faekf_bench6dof.yaml}   # a variant may change base
+      grid:                             # cartesian product of further overrides (optional)
+        optimizer.method: [pso, cmaes]
+      seeds: [1, 2, 3]                  # one run per seed (optional; default: the base's seed)
+      jobs: 1                           # runs at the same time; >1 runs each job serially
+      output: runs/sweeps               # parent of the sweep directory (default)
+
+Every job is a normal run directory ``<sweep dir>/jobs/<job id>``. Re-running the same command
+skips finished jobs and resumes interrupted ones, so a killed sweep loses at most the generation
+each running job was in. Results are a pure function of the inputs: the report's table is the
+same to the last digit however often the sweep was interrupted.
+"""
+
+from __future__ import annotations
+
+import copy
+import datetime as _dt
+import hashlib
+import itertools
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from tuner.config import ConfigError, apply_overrides, config_from_dict
+
+__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file"]
+
+_SWEEP_KEYS = ("name", "description", "base", "variants", "grid", "seeds", "jobs", "output")
+
+
+def is_sweep_file(path: str | Path) -> bool:
+    try:
+        raw = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError):
+        return False
+    return isinstance(raw, dict) and "sweep" in raw
+
+
+def _overrides(d: dict[str, Any]) -> list[str]:
+    return [f"{k}={json.dumps(v)}" for k, v in d.items()]
+
+
+def _slug(v: Any) -> str:
+    s = str(v)
+    return "".join(c if c.isalnum() or c in "-_." else "_" for c in s)[:40]
+
+
+def load_sweep(path: str | Path) -> dict[str, Any]:
+    """Read and expand a sweep file into ``{"name", "jobs": [{id, method, seed, overrides, raw}], ...}``."""
+    path = Path(path)
+    if not path.exists():
+        raise ConfigError(path, "", "file not found")
+    try:
+        doc = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+    if not isinstance(doc, dict) or "sweep" not in doc or not isinstance(doc["sweep"], dict):
+        raise ConfigError(path, "sweep", "expected a mapping under the top-level key 'sweep'")
+    extra = sorted(set(doc) - {"sweep"})
+    if extra:
+        raise ConfigError(path, extra[0], "unknown top-level key; a sweep file has only 'sweep'")
+    sw = doc["sweep"]
+    unknown = sorted(set(sw) - set(_SWEEP_KEYS))
+    if unknown:
+        raise ConfigError(path, f"sweep.{unknown[0]}", f"unknown key; allowed: {', '.join(_SWEEP_KEYS)}")
+    base_dir = path.resolve().parent
+
+    def load_base(base: Any, key: str) -> tuple[dict, Path]:
+        if isinstance(base, dict):
+            return copy.deepcopy(base), base_dir
+        if not isinstance(base, str):
+            raise ConfigError(path, key, f"expected a job file name or an inline job mapping, got {base!r}")
+        p = (base_dir / base).resolve()
+        if not p.exists():
+            raise ConfigError(path, key, f"file not found: {p}")
+        raw = yaml.safe_load(p.read_text())
+        if not isinstance(raw, dict):
+            raise ConfigError(p, "", "expected a job mapping")
+        return raw, p.parent
+
+    if "base" not in sw:
+        raise ConfigError(path, "sweep.base", "missing: a job file or an inline job mapping")
+    variants = sw.get("variants") or {"": {}}
+    if not isinstance(variants, dict):
+        raise ConfigError(path, "sweep.variants", "expected a mapping name -> overrides")
+    grid = sw.get("grid") or {}
+    if not isinstance(grid, dict) or not all(isinstance(v, list) and v for v in grid.values()):
+        raise ConfigError(path, "sweep.grid", "expected a mapping key.path -> non-empty list of values")
+    seeds = sw.get("seeds")
+    if seeds is not None and (not isinstance(seeds, list) or not all(isinstance(s, int) for s in seeds)):
+        raise ConfigError(path, "sweep.seeds", f"expected a list of integers, got {seeds!r}")
+    jobs_n = sw.get("jobs", 1)
+    if not isinstance(jobs_n, int) or jobs_n < 1:
+        raise ConfigError(path, "sweep.jobs", f"expected an integer >= 1, got {jobs_n!r}")
+    name = str(sw.get("name", path.stem))
+
+    jobs = []
+    keys = list(grid)
+    for vname, vover in variants.items():
+        vover = dict(vover or {})
+        base_raw, bdir = load_base(vover.pop("base", sw["base"]), f"sweep.variants.{vname}.base")
+        for combo in itertools.product(*[grid[k] for k in keys]) if keys else [()]:
+            for seed in seeds or [base_raw.get("seed", 0)]:
+                over = {**vover, **dict(zip(keys, combo)), "seed": seed}
+                raw = apply_overrides(base_raw, _overrides(over), path)
+                raw["output"] = "."  # unused: the sweep names each run directory
+                parts = ([_slug(vname)] if vname else []) + [f"{k.split('.')[-1]}-{_slug(v)}"
+                                                             for k, v in zip(keys, combo)]
+                method = "/".join(parts) or name
+                job_id = "__".join(parts + [f"seed-{seed}"])
+                try:
+                    config_from_dict(raw, source=f"{path} [{job_id}]", base_dir=bdir)
+                except ConfigError as exc:
+                    raise ConfigError(path, f"job {job_id}", str(exc)) from None
+                jobs.append({"id": job_id, "method": method, "variant": vname,
+                             "grid": dict(zip(keys, combo)), "seed": seed, "raw": raw, "base_dir": str(bdir)})
+    ids = [j["id"] for j in jobs]
+    if len(set(ids)) != len(ids):
+        raise ConfigError(path, "sweep", "two jobs have the same id (repeated seeds or grid values?)")
+    return {"name": name, "description": sw.get("description", ""), "jobs": jobs, "parallel_jobs": jobs_n,
+            "output": sw.get("output", "runs/sweeps"), "source": str(path), "doc": doc}
+
+
+def _job_status(run_dir: Path) -> str:
+    meta = run_dir / "meta.json"
+    if not meta.exists():
+        return "new"
+    return json.loads(meta.read_text()).get("status", "new")
+
+
+def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> dict[str, Any]:
+    """Run, resume or skip one job (module-level so a process pool can call it)."""
+    import shutil
+
+    from tuner.run import resume, run
+
+    run_dir = Path(run_dir)
+    raw = copy.deepcopy(job["raw"])
+    if serial:
+        raw["parallel"] = {"backend": "serial"}
+    status = _job_status(run_dir)
+    label = job["id"]
+    printer = None if quiet else (lambda m: print(f"[{label}] {m}", file=sys.stderr, flush=True))
+    if status == "finished":
+        return {"id": job["id"], "status": "finished", "action": "skipped"}
+    if status in ("running", "interrupted") and (run_dir / "checkpoint.pkl").exists():
+        res = resume(run_dir, progress=printer, quiet=quiet)
+        return {"id": job["id"], "status": res.status, "action": "resumed"}
+    if run_dir.exists():  # created but killed before its first checkpoint
+        shutil.rmtree(run_dir)
+    cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
+    res = run(cfg, run_dir=run_dir, progress=printer, quiet=quiet)
+    return {"id": job["id"], "status": res.status, "action": "ran"}
+
+
+def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int | None = None,
+              quiet: bool = False) -> dict[str, Any]:
+    """Run (or continue) every job of a sweep, then write its report."""
+    sw = load_sweep(path)
+    out = Path(sweep_dir) if sweep_dir else Path(sw["output"]) / sw["name"]
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "jobs").mkdir(exist_ok=True)
+    spec_text = yaml.safe_dump(sw["doc"], sort_keys=False)
+    old = out / "sweep.yaml"
+    if old.exists() and old.read_text() != spec_text:
+        raise ConfigError(path, "sweep", f"{out} holds a different sweep; choose another --dir or delete it")
+    old.write_text(spec_text)
+    (out / "command.txt").write_text(" ".join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
+                                                                             if sweep_dir else [])) + "\n")
+    n_par = jobs or sw["parallel_jobs"]
+    todo = [(j, str(out / "jobs" / j["id"])) for j in sw["jobs"]]
+    if not quiet:
+        done = sum(_job_status(Path(d)) == "finished" for _, d in todo)
+        print(f"sweep {sw['name']}: {len(todo)} jobs ({done} already finished), {n_par} at a time -> {out}",
+              file=sys.stderr, flush=True)
+    if n_par > 1:
+        from joblib import Parallel, delayed
+
+        results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
+    else:
+        results = [_run_job(j, d, False, quiet) for j, d in todo]
+    report = write_sweep_report(out)
+    return {"dir": out, "report": report, "ok": all(r["status"] == "finished" for r in results),
+            "results": results}
+
+
+# --- results ------------------------------------------------------------------------------------
+def _flat(prefix: str, d: dict[str, Any]) -> dict[str, Any]:
+    out = {}
+    for k, v in (d or {}).items():
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def collect(sweep_dir: Path) -> Any:
+    """One row per job: ids, seed, status, best fitness, train/test scores, parameters, metrics."""
+    import pandas as pd
+
+    sweep_dir = Path(sweep_dir)
+    sw = load_sweep_from_dir(sweep_dir)
+    rows = []
+    for job in sw["jobs"]:
+        d = sweep_dir / "jobs" / job["id"]
+        row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
+                               "status": _job_status(d)}
+        best_p = d / "best.yaml"
+        if best_p.exists():
+            best = yaml.safe_load(best_p.read_text()) or {}
+            meta = json.loads((d / "meta.json").read_text())
+            row["best_fitness"] = best.get("fitness")
+            ev = best.get("evaluation") or {}
+            if ev.get("train_fitness") is not None:
+                row["train_fitness"] = ev["train_fitness"]
+            if ev.get("test_fitness") is not None:
+                row["test_fitness"] = ev["test_fitness"]
+            for split in ("train", "test"):
+                recs = ev.get(split) or {}
+                if recs:
+                    keys = sorted({k for m in recs.values() for k in m})
+                    for k in keys:
+                        vals = [m[k] for m in recs.values() if isinstance(m.get(k), (int, float))]
+                        if vals:
+                            row[f"{split}.{k}"] = sum(vals) / len(vals)
+            row["n_evals"] = meta.get("n_evals")
+            row["wall_s"] = round(float(meta.get("timing", {}).get("wall_s", 0.0)), 1)
+            row.update(_flat("param.", best.get("params", {})))
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
+    """Re-expand the sweep stored in a sweep directory (its ``sweep.yaml`` copy)."""
+    sweep_dir = Path(sweep_dir)
+    cmd = (sweep_dir / "command.txt").read_text().split() if (sweep_dir / "command.txt").exists() else []
+    src = Path(cmd[2]) if len(cmd) > 2 else sweep_dir / "sweep.yaml"
+    if not src.exists():
+        src = sweep_dir / "sweep.yaml"
+    return load_sweep(src)
+
+
+def summarize(df: Any) -> Any:
+    """Mean, median, std, min over seeds for each method and numeric metric; ranked by median fitness."""
+    import pandas as pd
+
+    if df.empty or "best_fitness" not in df:
+        return pd.DataFrame()
+    metrics = [c for c in ("best_fitness", "train_fitness", "test_fitness") if c in df] + \
+              sorted(c for c in df.columns if c.startswith(("train.", "test.")))
+    g = df[df["status"] == "finished"].groupby("method")
+    parts = {}
+    for m in metrics:
+        agg = g[m].agg(["mean", "median", "std", "min"])
+        for stat in agg.columns:
+            parts[(m, stat)] = agg[stat]
+    out = pd.DataFrame(parts)
+    out.insert(0, ("runs", "n"), g.size())
+    key = ("test_fitness", "median") if ("test_fitness", "median") in out else ("best_fitness", "median")
+    out = out.sort_values(key)
+    out.insert(0, ("rank", ""), range(1, len(out) + 1))
+    return out
+
+
+def _hash(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+
+
+def write_sweep_report(sweep_dir: str | Path) -> Path:
+    """``report.md``, ``report.html`` (figures embedded), ``results.csv``, ``summary.csv`` and figures."""
+    from tuner.report import sweep_figures, write_html
+
+    sweep_dir = Path(sweep_dir)
+    sw = load_sweep_from_dir(sweep_dir)
+    df = collect(sweep_dir)
+    df.to_csv(sweep_dir / "results.csv", index=False, float_format="%.17g")
+    summ = summarize(df)
+    flat = summ.copy()
+    flat.columns = [f"{a}.{b}" if b else a for a, b in flat.columns]
+    flat.to_csv(sweep_dir / "summary.csv", float_format="%.17g")
+    figs = sweep_figures(sweep_dir, df)
+    jobs_dir = sweep_dir / "jobs"
+    versions = {}
+    hashes = []
+    for job in sw["jobs"]:
+        d = jobs_dir / job["id"]
+        if (d / "config.yaml").exists():
+            hashes.append((job["id"], _hash(d / "config.yaml"), job["seed"]))
+            if not versions and (d / "meta.json").exists():
+                meta = json.loads((d / "meta.json").read_text())
+                versions = {**meta.get("versions", {}), "git_commit": meta.get("git_commit", "")}
+    command = (sweep_dir / "command.txt").read_text().strip() if (sweep_dir / "command.txt").exists() else ""
+    show_cols = [c for c in ["rank", "runs"] if c in flat.columns] + \
+        [c for c in flat.columns if c.endswith((".median", ".mean", ".std")) and
+         c.split(".")[0] in ("best_fitness", "train_fitness", "test_fitness")]
+    ranking = flat[show_cols] if len(flat) else flat
+    main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
+                             "n_evals", "wall_s"] if c in df.columns]
+    md = [f"# Sweep {sw['name']}", "", sw.get("description") or "", "",
+          f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
+          f"Written {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}.", "",
+          "## Ranking (over seeds)", "", _md(ranking), "",
+          "## Every job", "", _md(df[main_cols]), "",
+          "Full tables: [results.csv](results.csv) (one row per job, all metrics and parameters), "
+          "[summary.csv](summary.csv) (mean, median, std, min over seeds).", ""]
+    test_cols = [c for c in df.columns if c.startswith("test.")]
+    if test_cols:
+        md += ["## Held-out recordings (mean over test recordings)", "",
+               _md(df[["job"] + [c for c in df.columns if c.startswith("train.")] + test_cols]), ""]
+    md += ["## Figures", ""]
+    for title, p in figs:
+        md += [f"### {title}", "", f"![{title}]({p.relative_to(sweep_dir).as_posix()})", ""]
+    per_run = [(j["id"], jobs_dir / j["id"] / "report.md") for j in sw["jobs"]]
+    md += ["## Runs", ""] + [f"- [{i}](jobs/{i}/report.md)" for i, p in per_run if p.exists()] + [""]
+    md += ["## Reproduce", "", "```", command or f"tuner sweep {sw['source']}", "```", "",
+           "Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()), "",
+           "| job | config sha256 (16) | seed |", "|---|---|---|"] + \
+          [f"| {i} | `{h}` | {s} |" for i, h, s in hashes] + [""]
+    text = "\n".join(md)
+    (sweep_dir / "report.md").write_text(text)
+    write_html(sweep_dir / "report.html", text, sweep_dir)
+    return sweep_dir / "report.md"
+
+
+def _md(df: Any) -> str:
+    from tuner.report import md_table
+
+    return md_table(df)
+
+
+def show_sweep(sweep_dir: Path, as_json: bool = False) -> str:
+    df = collect(Path(sweep_dir))
+    if as_json:
+        return df.to_json(orient="records", indent=1)
+    cols = [c for c in ["job", "status", "best_fitness", "train_fitness", "test_fitness", "n_evals", "wall_s"]
+            if c in df.columns]
+    return df[cols].to_string(index=False)
+
+
+def list_runs(runs_dir: Path) -> str:
+    """A table of the run directories under ``runs_dir`` (recursively): status, best fitness, age."""
+    import pandas as pd
+
+    rows = []
+    now = _dt.datetime.now(_dt.UTC)
+    for meta_p in sorted(Path(runs_dir).rglob("meta.json")):
+        d = meta_p.parent
+        meta = json.loads(meta_p.read_text())
+        best = yaml.safe_load((d / "best.yaml").read_text()) if (d / "best.yaml").exists() else {}
+        created = meta.get("created")
+        age = ""
+        if created:
+            dt = now - _dt.datetime.strptime(created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
+            age = str(dt).split(".")[0]
+        rows.append({"run": str(d.relative_to(runs_dir)), "status": meta.get("status"),
+                     "optimizer": meta.get("optimizer"), "evals": meta.get("n_evals"),
+                     "best_fitness": (best or {}).get("fitness"), "age": age})
+    if not rows:
+        return f"no runs under {runs_dir}"
+    return pd.DataFrame(rows).to_string(index=False)
+
+
+def summary_text(df: Any, sweep_dir: Path) -> str:
+    """The terminal table of a sweep: one row per job with train/test fitness and per-axis RMSE."""
+    if df is None or len(df) == 0:
+        return "(no jobs)"
+    cols = [c for c in ["method", "seed", "status", "train_fitness", "test_fitness"] if c in df.columns]
+    split = "test" if any(c.startswith("test.") for c in df.columns) else "train"
+    for ax in ("roll", "pitch", "yaw"):
+        c = f"{split}.{ax}_rmse_deg"
+        if c in df.columns:
+            cols.append(c)
+    if "train_fitness" not in df.columns:
+        cols.insert(3, "best_fitness")
+    out = df[cols].copy()
+    out.columns = [c.replace(f"{split}.", f"{split} ").replace("_rmse_deg", " RMSE (deg)") for c in cols]
+    lines = [out.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
+    for _, r in df.iterrows():
+        lines.append(f"  {r['job']}: {Path(sweep_dir) / 'jobs' / r['job']}")
+    return "\n".join(lines)
