@@ -85,16 +85,19 @@ def reduced_model(params: WMPParams | None = None) -> tuple[np.ndarray, np.ndarr
     return Ac, Bc, Cc
 
 
-def lq_design(q: np.ndarray, rw: np.ndarray, Ts: float, params: WMPParams | None = None) -> dict:
+def lq_design(
+    q: np.ndarray, rw: np.ndarray, Ts: float, params: WMPParams | None = None, model: tuple | None = None
+) -> dict:
     """Discrete LQR gain K (2, 4) and tracking matrices of eq. 2.15 for diagonal weights q (4,), rw (2,).
 
+    ``model`` is a precomputed :func:`reduced_model` of ``params`` (it does not depend on the weights).
     Returns dict with K, Nx (4, 2), Nu (2, 2), Fr = Nu + K Nx, Ad, Bd, Cc.
     """
     q = np.asarray(q, float)
     rw = np.asarray(rw, float)
     if q.shape != (4,) or rw.shape != (2,) or np.any(q < 0) or np.any(rw <= 0):
         raise ValueError(f"need q (4,) >= 0 and r (2,) > 0, got q={q}, r={rw}")
-    Ac, Bc, Cc = reduced_model(params)
+    Ac, Bc, Cc = reduced_model(params) if model is None else model
     # ZOH discretisation via the augmented matrix exponential
     M = np.zeros((6, 6))
     M[:4, :4] = Ac * Ts
@@ -134,7 +137,9 @@ class LQR(Controller):
     def design(self, values=None) -> dict:
         v = self.resolve(values)
         q = [v["q_theta3"], v["q_nu"], v["q_omega3"], v["q_xi"]]
-        return lq_design(q, [v["r_u1"], v["r_u2"]], self.sensors.Ts_s, self.plant)
+        if getattr(self, "_model", None) is None:
+            self._model = reduced_model(self.plant)  # the linearisation does not depend on Q, R
+        return lq_design(q, [v["r_u1"], v["r_u2"]], self.sensors.Ts_s, self.plant, self._model)
 
     def _build(self, values):
         des = self.design(values)
