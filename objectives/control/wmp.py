@@ -30,12 +30,11 @@ part (it runs even with h = Ts, ~900 L/R), fourth order for the mechanics, and d
 lag ``(L/R) dI_ss/dt``, a relative error ~ (L/R) / tau_mech ~ 5e-4 independent of h. It is checked
 against scipy's Radau on the full eq. 2.12 (tests/control/test_wmp.py).
 
-Caching: the plant and controller kernels are compiled without numba's on-disk cache
-(``cache=False``), a deliberate exception to the house rule. The closed-loop driver calls controller
-steps from other modules (``controllers/kernels.py`` and, later, ``controllers/fuzzy.py``); numba's
-cache neither notices edits in such callees (a cached driver silently ran stale controller code)
-nor, in our tests, linked cached callees into a fresh driver correctly (NaN states when a second
-controller kind ran in the same process). Compilation costs ~3-5 s once per worker process.
+Caching: the plant kernels use numba's on-disk cache, but the closed-loop driver
+:func:`_simulate` and ``controllers.kernels.controller_step`` do not: they call kernels in other
+modules (``controllers/kernels.py``, later ``controllers/fuzzy.py``) and numba's cache does not notice
+edits in such callees (a cached driver silently ran stale controller code). They compile once per
+worker process (~2-3 s).
 
 Sensors (thesis Table 1.1, sampled at Ts = 0.01 s, section 2.2.3.1): see :class:`SensorParams`.
 """
@@ -275,7 +274,7 @@ class SensorParams:
 # --------------------------------------------------------------------------------------------------
 # model kernels
 # --------------------------------------------------------------------------------------------------
-@njit(cache=False)
+@njit(cache=True)
 def _accelerations(th3, w1, w2, w3, i1, i2, c, acc):
     """Solve M(q) qdd = tau_a - tau_f - V(q, qdot) (eqs. 2.9-2.11, appendix eq. 2) into acc (3,).
 
@@ -311,7 +310,7 @@ def _accelerations(th3, w1, w2, w3, i1, i2, c, acc):
     acc[1] = 0.5 * (sig - dlt)
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _derivatives(x, u, c, out):
     """Full state equation 2.12: out (8,) = h(x, u) (rad/s, rad/s^2, A/s)."""
     acc = np.empty(3)
@@ -327,7 +326,7 @@ def _derivatives(x, u, c, out):
     out[7] = (u[1] - ke * (x[4] - x[5]) - c[_RES] * x[7]) / c[_IND]
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _stage(x, kq, kw, a, u0, u1, dI1, dI2, decay, c, outq, outw, acc):
     """One RK4 stage at x + a*(kq, kw); currents = quasi-static + ``decay`` times the transient."""
     th3 = x[2] + a * kq[2]
@@ -346,7 +345,7 @@ def _stage(x, kq, kw, a, u0, u1, dI1, dI2, decay, c, outq, outw, acc):
     outw[2] = acc[2]
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _step(x, u0, u1, h, c, s):
     """Advance x (8,) in place by h with constant voltages (exponential/singular-perturbation RK4).
 
@@ -359,6 +358,8 @@ def _step(x, u0, u1, h, c, s):
     dI2 = x[7] - (u1 - ke * (x[4] - x[5])) / res
     e_full = math.exp(-h / tau)
     k1q, k1w = s[0:3], s[3:6]
+    for j in range(6):  # stage 1 reads x + 0 * k1: k1 must hold finite numbers
+        s[j] = 0.0
     k2q, k2w = s[6:9], s[9:12]
     k3q, k3w = s[12:15], s[15:18]
     k4q, k4w = s[18:21], s[21:24]
@@ -391,14 +392,14 @@ def _step(x, u0, u1, h, c, s):
     x[7] = (u1 - ke * (x[4] - x[5])) / res + dI2 * e_full
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _quant(v, lsb):
     if lsb > 0.0:
         return lsb * math.floor(v / lsb + 0.5)
     return v
 
 
-@njit(cache=False)
+@njit(cache=False)  # not cached: it calls kernels from other modules (module docstring)
 def _simulate(x0, c, sc, ref, noise, kind, cp, cs, n_sub, fall_limit, x_out, y_out, m_out, u_out):
     """Closed loop over the whole profile in one call.
 
@@ -422,7 +423,7 @@ def _simulate(x0, c, sc, ref, noise, kind, cp, cs, n_sub, fall_limit, x_out, y_o
     r, d, g = c[_R], c[_D], c[_G]
     umax = c[_UMAX]
     x = x0.copy()
-    scratch = np.empty(27)
+    scratch = np.zeros(27)
     acc = np.empty(3)
     meas = np.empty(5)
     u = np.zeros(2)

@@ -91,3 +91,14 @@ def test_plot_response_writes_a_png(tmp_path):
     after = dict(obj.defaults, kp1=8.80, ki1=19.07, kp2=0.054, kd2=5.12e-7)
     path = obj.plot_response(obj.defaults, after, tmp_path / "fig" / "pid.png")
     assert path.exists() and path.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_repeated_runs_are_identical_whatever_ran_before():
+    # guards against kernel scratch memory leaking between simulations
+    lqr, pid = ClosedLoopObjective(controller="lqr"), ClosedLoopObjective(controller="pid")
+    f1 = lqr(lqr.defaults).fitness
+    pid(pid.defaults)
+    s1 = lqr.simulate(lqr.defaults)["outputs"]
+    s2 = lqr.simulate(lqr.defaults)["outputs"]
+    assert lqr(lqr.defaults).fitness == f1
+    np.testing.assert_array_equal(s1, s2)

@@ -12,7 +12,7 @@ numbers the kernel understands:
 
 Adding a controller (for example the fuzzy controllers in ``controllers/fuzzy.py``) means:
 
-1. write an ``@njit(cache=False)`` step function ``_my_step(p, s, ref, meas, x, u_out)`` (in its own
+1. write an ``@njit(cache=True)`` step function ``_my_step(p, s, ref, meas, x, u_out)`` (in its own
    module, e.g. ``fuzzy.py``);
 2. give it a new ``KIND_*`` constant here and one ``elif kind == KIND_...`` branch in
    :func:`controller_step` that calls it;
@@ -56,7 +56,7 @@ PID_PARAM_SIZE = 10
 PID_STATE_SIZE = 7
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _lq_step(p, z0, z1, z2, z3, ref, u_out):
     """u = -K z + Fr r with z = (theta3, nu, omega3, xi) and r = (nu_d, xi_d) (eqs. 2.15, 2.19)."""
     for i in range(2):
@@ -67,7 +67,7 @@ def _lq_step(p, z0, z1, z2, z3, ref, u_out):
         )
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _tustin_pid(kp, ki, kd, ts, e, st, o):
     """One Tustin PID step (eq. 2.38); state st[o:o+3] = (e_prev, integral, derivative).
 
@@ -83,7 +83,7 @@ def _tustin_pid(kp, ki, kd, ts, e, st, o):
     return kp * e + integ + der
 
 
-@njit(cache=False)
+@njit(cache=True)
 def _pid_step(p, s, ref, meas, u_out):
     """PID equivalents of thesis 2.3.2 combined by eq. 2.31.
 
@@ -109,7 +109,7 @@ def _pid_step(p, s, ref, meas, u_out):
     u_out[1] = u_nu + u_th + s[6]
 
 
-@njit(cache=False)
+@njit(cache=False)  # calls step functions of other modules: see objectives/control/wmp.py
 def controller_step(kind, p, s, ref, meas, x, r_wheel, d_wheels, u_out):
     """Dispatch one controller step by ``kind`` (see the module docstring for the signals).
 
