@@ -61,8 +61,8 @@ def test_missing_config_file(tmp_path):
 
 
 def test_missing_data_file_in_objective(tmp_path):
-    cfg = merged(objective={"kind": "filter", "filter": "madgwick",
-                            "data": [{"csv": {"path": "missing.csv"}}]})
+    cfg = merged()
+    cfg["objective"] = {"kind": "filter", "filter": "madgwick", "data": [{"csv": {"path": "missing.csv"}}]}
     out = tuner("run", str(write(tmp_path, cfg)))
     assert out.returncode == 2, out.stderr
     assert "missing.csv" in out.stderr and "Traceback" not in out.stderr
