@@ -589,6 +589,7 @@ def bench6dof(
     ext_acc_max_g: float = 2.0,
     mag_pert_range: tuple[float, float] = (0.5, 5.0),
     phase_s: tuple[float, float] = (4.0, 10.0),
+    start_static_s: float = 3.0,
     **sensor_overrides,
 ) -> Recording:
     """Synthetic recording of the FAEKF paper's 6-DOF test bench (section 5.1).
@@ -602,7 +603,9 @@ def bench6dof(
     - The recording is a sequence of phases of random length in ``phase_s`` (s), cycling through
       random permutations of :data:`PHASES`: ``static`` (attitude frozen), ``calm`` (slow rotation
       only), ``vibrating``, ``accelerating``, ``magnetic``, ``vibrating+accelerating``, ``disturbed``
-      (all three). Transitions ramp over 0.5 s.
+      (all three). Transitions ramp over 0.5 s. The first ``start_static_s`` seconds are a
+      ``static`` phase (the bench starts from rest, as a measurement run does: the filters
+      initialise from the first accelerometer and magnetometer sample, which must not be disturbed).
     - Slow rotation everywhere except static phases: roll and pitch within +-0.8 rad, yaw within
       +-2.5 rad, frequencies 0.02-0.4 Hz.
     - Vibration: oscillation on all three axes with one common frequency ``f(t)`` varying in
@@ -636,6 +639,8 @@ def bench6dof(
         Sensor noise and bias on (defaults above) or off (exact data).
     vib_freq_range_hz, ext_acc_max_g, mag_pert_range, phase_s
         Ranges described above.
+    start_static_s : float
+        Length of the static phase the recording starts with, s (0: start in a random phase).
     **sensor_overrides
         Keywords of :func:`simulate_imu` overriding the sensor model (``gyr_noise``, ``acc_noise``,
         ``mag_noise``, ``gyr_bias``, ``gyr_bias_walk``, ``g``, ``acc_bias``, ``mag_bias``,
@@ -658,7 +663,13 @@ def bench6dof(
     r_sched, r_slow, r_vib, r_acc, r_mag, r_sens = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(6))
 
+    if not (np.isfinite(start_static_s) and start_static_s >= 0):
+        raise ValueError(f"start_static_s must be a finite number >= 0, got {start_static_s!r}")
     codes, spans = _schedule(n, dt, r_sched, phase_s, tuple(range(len(PHASES))))
+    n0 = min(n, int(round(start_static_s / dt)))
+    if n0 > 0:  # the bench starts at rest: the first n0 samples become a static phase
+        codes[:n0] = 0
+        spans = [(0, n0, 0)] + [(max(a, n0), b, c) for a, b, c in spans if b > n0]
     table = np.array([p[1:] for p in PHASES], dtype=float)
     ramp = max(2, int(round(0.5 / dt)))
     env_vib = _smooth(table[codes, 0], ramp) * vibration
@@ -832,7 +843,7 @@ def tilt1d(
 #: Generators known to :func:`synthetic`.
 GENERATORS = {"bench6dof": bench6dof, "tilt1d": tilt1d}
 #: Bumped whenever a generator's output changes, so stale disk-cache files are not reused.
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 
 
 def _freeze(name: str, value):
