@@ -199,3 +199,15 @@ def test_filter_from_run_in_three_lines(run_dir):
     q = flt.run(synthetic("bench6dof", duration_s=4, seed=1))
     assert flt.values["beta"] == tuner.load_best(run_dir)["beta"]
     assert q.shape[1] == 4 and np.allclose(np.linalg.norm(q, axis=1), 1.0)
+
+
+def test_parallel_sweep_equals_sequential(sweep_dir, tmp_path):
+    p = write_sweep(tmp_path)
+    out = tuner_cli("sweep", str(p), "--dir", str(tmp_path / "par"), "--jobs", "2", "-q")
+    assert out.returncode == 0, out.stderr
+    a = pd.read_csv(sweep_dir / "results.csv")
+    b = pd.read_csv(tmp_path / "par" / "results.csv")
+    cols = ["job", "best_fitness"] + [c for c in a if c.startswith("param.")]
+    pd.testing.assert_frame_equal(a[cols], b[cols])
+    cmp = tuner_cli("compare", str(sweep_dir / "jobs" / a["job"][0]), str(sweep_dir / "jobs" / a["job"][1]))
+    assert cmp.returncode == 0 and "best_fitness" in cmp.stdout and "param.x0" in cmp.stdout
