@@ -19,6 +19,9 @@ CONTROLLERS: dict[str, str] = {
     "lqr": "objectives.control.controllers.lqr:LQR",
     "lqg": "objectives.control.controllers.lqr:LQG",
     "pid": "objectives.control.controllers.pid:PID",
+    "flc": "objectives.control.controllers.fuzzy:FLC",
+    "protective_fuzzy": "objectives.control.controllers.fuzzy:ProtectiveFuzzy",
+    "lut": "objectives.control.controllers.fuzzy:LUTFuzzy",
 }
 
 

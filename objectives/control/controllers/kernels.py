@@ -41,13 +41,27 @@ import math
 
 from numba import njit
 
-__all__ = ["KIND_OPEN_LOOP", "KIND_LQR", "KIND_LQG", "KIND_PID", "controller_step"]
+from objectives.control.controllers.fuzzy_steps import _flc_step, _lut_step, _protective_step
+
+__all__ = [
+    "KIND_OPEN_LOOP",
+    "KIND_LQR",
+    "KIND_LQG",
+    "KIND_PID",
+    "KIND_FLC",
+    "KIND_PROTECTIVE_FUZZY",
+    "KIND_LUT_FUZZY",
+    "controller_step",
+]
 
 KIND_OPEN_LOOP = 0  #: constant voltages p = (u1, u2)
 KIND_LQR = 1  #: full-state feedback on the true controllable state (thesis 2.2.1)
 KIND_LQG = 2  #: the same gains on measured signals with the KF estimate of theta3
 KIND_PID = 3  #: PID1 (speed) + PID2 (theta3) + incremental yaw loop, Tustin (eq. 2.38)
 # KIND 10..19 are reserved for the fuzzy controllers (FLC1-3, protective FLC, LUT versions).
+KIND_FLC = 10  #: cascade FLC1-3 (thesis 2.2.2), controllers/fuzzy.py
+KIND_PROTECTIVE_FUZZY = 11  #: protective PI fuzzy FLC1 + FLC2 + FLC3 (thesis 2.3.1)
+KIND_LUT_FUZZY = 12  #: the protective scheme through look-up tables (eq. 2.32)
 
 #: layout of the LQ parameter array: K (2x4 row-major), then Fr (2x2 row-major): u = -K z + Fr r
 LQ_PARAM_SIZE = 12
@@ -124,6 +138,12 @@ def controller_step(kind, p, s, ref, meas, x, r_wheel, d_wheels, u_out):
         _lq_step(p, x[2], nu, x[5], xi, ref, u_out)
     elif kind == KIND_LQG:
         _lq_step(p, meas[1], meas[0], meas[2], meas[3], ref, u_out)
+    elif kind == KIND_PROTECTIVE_FUZZY:
+        _protective_step(p, s, ref, meas, u_out)
+    elif kind == KIND_LUT_FUZZY:
+        _lut_step(p, s, ref, meas, u_out)
+    elif kind == KIND_FLC:
+        _flc_step(p, s, ref, meas, u_out)
     elif kind == KIND_OPEN_LOOP:
         u_out[0] = p[0]
         u_out[1] = p[1]
