@@ -293,7 +293,12 @@ FUZZY_DEFAULTS: dict[str, tuple[float, float]] = {
 K_DEFAULTS = (1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0)
 #: search bounds of the set parameters: (mean low, mean high, std low, std high) per input
 FUZZY_BOUNDS = {"vib": (0.0, 10.0, 0.1, 10.0), "acc": (0.0, 2.0, 0.01, 2.0), "mag": (0.0, 2.0, 0.01, 2.0)}
-K_BOUNDS = (0.1, 1000.0)
+#: search bounds of the singletons. The lower bound is 1: Table 1's rules only ever *raise* R with
+#: the intensity of the disturbances (section 4.3: "R should be increased according to the intensity
+#: of the measures"), and K1 = 1 is the undisturbed state. With K < 1 allowed, PSO on a few short
+#: recordings picked K3 ~ 0.3 (the rule of a big magnetic perturbation alone), i.e. trusted the
+#: perturbed magnetometer *more*, which fits the training recordings and costs heading on held-out ones.
+K_BOUNDS = (1.0, 1000.0)
 
 
 def rule_consequent_index(i_f: int, i_a: int, i_h: int) -> int:
@@ -366,7 +371,10 @@ _EKF_PARAMS: tuple[Real, ...] = (
              "(eq. 36 Q_q; paper 1.45e-6 at 1 kHz)"),
     Real("q_w", 1e-13, 1e-6, scale="log", unit="(rad/s)^2 per sample",
          doc="gyro-bias random-walk variance per sample (eq. 36 Q_omega; paper 9.71e-10 at 1 kHz)"),
-    Real("rho", 1e-3, 1e2, scale="log", unit="1",
+    # rho up to 1e3 (was 1e2, where the tuned EKF of the 6-DOF bench sat at the bound): the filter
+    # depends on q_q / rho (time constant of the TRIAD correction) and on p0_q / rho (trust in the
+    # initial state), so a large rho with the fixed P0 is a legitimate optimum, not a wrong one.
+    Real("rho", 1e-3, 1e3, scale="log", unit="1",
          doc="variance of each TRIAD quaternion component (eq. 36 R = rho I4; paper 3.53)"),
     Real("use_mag", fixed=True, doc="9-D TRIAD with the magnetometer; false: heading from the gyro"),
     Real("integration", fixed="exact",
@@ -478,7 +486,8 @@ class FAEKF(EKF):
     q_q, q_w, rho, use_mag, p0_q, p0_b
         As :class:`EKF`.
     K1 ... K7 : float
-        Singleton consequents of Table 1 (searched in the default space, log scale 0.1-1000).
+        Singleton consequents of Table 1 (searched in the default space, log scale 1-1000, see
+        :data:`K_BOUNDS`).
     {vib,acc,mag}_{Z,S,B}_{mean,std}_{Hz,g,nu} : float
         Centre and standard deviation of each Gaussian set (eq. 28); fixed at :data:`FUZZY_DEFAULTS`
         in the default space, searched by ``FAEKF.space(tune_fuzzy=True)`` within
