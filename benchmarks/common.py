@@ -1,0 +1,149 @@
+"""Shared pieces of the benchmarks: machine facts, timing, peer imports, result files."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["RESULTS_DIR", "PEERS", "machine_facts", "peer", "median_rate", "write_result", "fmt", "md_table"]
+
+RESULTS_DIR = Path(__file__).resolve().parent / "results"
+
+#: peer libraries measured side by side (import name -> pip name); none is a dependency of tuner
+PEERS = {"ahrs": "ahrs", "imufusion": "imufusion", "vqf": "vqf", "pyswarms": "pyswarms", "optuna": "optuna"}
+
+
+def peer(name: str) -> Any | None:
+    """Import a peer library, or None when it is not installed (the benchmark then reports it missing)."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:
+        return None
+
+
+def _version(mod: str) -> str | None:
+    try:
+        from importlib.metadata import version
+
+        return version(mod)
+    except Exception:
+        return None
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def _git_commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True, timeout=5,
+                              cwd=Path(__file__).resolve().parent).stdout.strip()
+    except Exception:
+        return ""
+
+
+def machine_facts() -> dict[str, Any]:
+    """CPU, cores, load, Python and package versions: what a reader needs to compare two result files."""
+    pkgs = ["numpy", "scipy", "numba", "joblib", "cma", "AHRS", "imufusion", "vqf", "pyswarms", "optuna", "psutil"]
+    return {
+        "cpu": _cpu_model(),
+        "cores": os.cpu_count(),
+        "load_avg_1_5_15": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
+        "platform": platform.platform(),
+        "python": sys.version.split()[0],
+        "versions": {p: _version(p) for p in pkgs},
+        "git_commit": _git_commit(),
+        "utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+    }
+
+
+def median_rate(fn: Callable[[], Any], n: int, repeats: int, min_time: float = 0.0) -> dict[str, float]:
+    """Samples per second of ``fn`` (which processes ``n`` samples): first call timed apart (compile or
+    cache load), then the median of ``repeats`` timed calls. ``min_time`` repeats until that many
+    seconds have been spent (for very short calls)."""
+    t = time.perf_counter()
+    fn()
+    first = time.perf_counter() - t
+    times: list[float] = []
+    spent = 0.0
+    while len(times) < repeats or spent < min_time:
+        t = time.perf_counter()
+        fn()
+        dt = time.perf_counter() - t
+        times.append(dt)
+        spent += dt
+        if len(times) > 1000:
+            break
+    med = float(np.median(times))
+    return {"rate": n / med, "seconds": med, "first_call_s": first, "runs": len(times), "samples": n}
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _plain(v.tolist())
+    if isinstance(v, (np.floating, float)):
+        f = float(v)
+        return f if math.isfinite(f) else None  # JSON has no inf/NaN: None means "not reached/failed"
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.bool_):
+        return bool(v)
+    return v
+
+
+def write_result(name: str, payload: dict[str, Any], out_dir: Path = RESULTS_DIR) -> Path:
+    """``<out_dir>/<name>.json`` with the machine facts added (non-finite numbers become null)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    data = {"benchmark": name, "machine": machine_facts(), **payload}
+    path = out_dir / f"{name}.json"
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(_plain(data), indent=1, allow_nan=False))
+    tmp.replace(path)
+    return path
+
+
+def fmt(v: Any, digits: int = 3) -> str:
+    """Compact number for tables (None/inf/NaN as a dash)."""
+    if v is None:
+        return "-"
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (bool, np.bool_)):
+        return "yes" if v else "no"
+    v = float(v)
+    if not math.isfinite(v):
+        return "-"
+    if v != 0 and (abs(v) >= 1e6 or abs(v) < 1e-3):
+        return f"{v:.{digits - 1}e}"
+    if abs(v) >= 100:
+        return f"{v:,.0f}"
+    return f"{v:.{digits}g}"
+
+
+def md_table(header: list[str], rows: list[list[Any]]) -> str:
+    """A Markdown table (cells formatted with :func:`fmt`)."""
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for r in rows:
+        lines.append("| " + " | ".join(fmt(c) for c in r) + " |")
+    return "\n".join(lines)
