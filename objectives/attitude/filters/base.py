@@ -160,7 +160,25 @@ class AttitudeFilter:
         """Estimate orientation over the whole recording: (N, 4) sensor-to-earth in ``rec.frame``."""
         return self.run_detailed(rec, q0).quat
 
-    def run_detailed(self, rec: Recording, q0: Any = None) -> FilterResult:
+    def run_detailed(self, rec: Recording, q0: Any = None, disturbances: Any = None) -> FilterResult:
+        """As :meth:`run`, with the filter's diagnostics.
+
+        ``disturbances`` passes precomputed fuzzy inputs of adaptive filters (the value their
+        ``disturbances(rec)`` method returns); they depend only on fixed window options, so an
+        objective computes them once per recording instead of once per evaluation.
+        """
+        self._given_disturbances = disturbances
+        try:
+            return self._run_detailed(rec, q0)
+        finally:
+            self._given_disturbances = None
+
+    def _disturbances(self, rec: Recording) -> Any:
+        """The disturbances given to :meth:`run_detailed`, else ``self.disturbances(rec)``."""
+        given = getattr(self, "_given_disturbances", None)
+        return given if given is not None else self.disturbances(rec)
+
+    def _run_detailed(self, rec: Recording, q0: Any = None) -> FilterResult:
         from objectives.attitude.quaternion import to_frame
 
         if self.needs_mag and self.values.get("use_mag", True) and rec.mag is None:

@@ -467,7 +467,7 @@ class AKF1D(KF1D):
         return np.ascontiguousarray(np.repeat(vals, np.diff(np.append(starts, n))))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
-        vib, ext = self.disturbances(rec)
+        vib, ext = self._disturbances(rec)
         K = self.scale(vib, ext)
         th, b = self._kf(rec, q0, K)
         return FilterResult(quat_from_tilt(th), rec.frame,
