@@ -14,6 +14,11 @@ YAML section (``objective:``)::
     duration_s: 10.0             # optional: truncate or override the profile's duration
     n_sub: 10                    # plant substeps per Ts
     fall_limit_deg: 90.0         # |theta3| beyond which the robot counts as fallen
+    max_mae_nu: 0.09             # optional tracking requirement (m/s): a run whose speed MAE exceeds
+                                 # it is a failure (eq. 2.39 is a product, so a controller that
+                                 # barely moves drives the oscillation and current terms, and F,
+                                 # towards 0; the requirement keeps the optimiser off that corner)
+    max_mae_xi_deg_s: 5.0        # the same for the yaw-rate MAE (deg/s)
 
 Calling the objective with a dict of controller parameters returns
 :class:`tuner.objective.Evaluation` with fitness F (eq. 2.39) and metrics: the error integrals of
@@ -54,6 +59,8 @@ _KEYS = {
     "duration_s",
     "n_sub",
     "fall_limit_deg",
+    "max_mae_nu",
+    "max_mae_xi_deg_s",
 }
 
 
@@ -71,8 +78,14 @@ class ClosedLoopObjective:
     duration_s: float | None = None
     n_sub: int = 10
     fall_limit_deg: float = 90.0
+    max_mae_nu: float | None = None
+    max_mae_xi_deg_s: float | None = None
 
     def __post_init__(self) -> None:
+        for key in ("max_mae_nu", "max_mae_xi_deg_s"):
+            lim = getattr(self, key)
+            if lim is not None and not (isinstance(lim, (int, float)) and lim > 0):
+                raise ValueError(f"{key} must be a positive number or absent, got {lim!r}")
         # validate everything eagerly so config errors surface at load time
         self._plant = WMPParams.from_dict(self.plant_params)
         self._sensors = SensorParams.from_dict(self.sensors)
@@ -141,6 +154,8 @@ class ClosedLoopObjective:
             duration_s=section.get("duration_s"),
             n_sub=int(section.get("n_sub", 10)),
             fall_limit_deg=float(section.get("fall_limit_deg", 90.0)),
+            max_mae_nu=section.get("max_mae_nu"),
+            max_mae_xi_deg_s=section.get("max_mae_xi_deg_s"),
         )
 
     def default_space(self) -> Space:
@@ -217,6 +232,16 @@ class ClosedLoopObjective:
         )
         metrics.update(peak)
         f = mae_weighted_cost(e_nu, e_xi, e_w3, y[:, 4], self.cost)
+        if self.max_mae_nu is not None and metrics["mae_nu"] > self.max_mae_nu:
+            return Evaluation.failed(
+                f"speed tracking: MAE {metrics['mae_nu']:.4g} m/s > max_mae_nu {self.max_mae_nu}", metrics
+            )
+        if self.max_mae_xi_deg_s is not None and math.degrees(metrics["mae_xi"]) > self.max_mae_xi_deg_s:
+            return Evaluation.failed(
+                f"yaw tracking: MAE {math.degrees(metrics['mae_xi']):.4g} deg/s > max_mae_xi_deg_s "
+                f"{self.max_mae_xi_deg_s}",
+                metrics,
+            )
         if not math.isfinite(f):
             return Evaluation.failed(f"non-finite cost {f}", metrics)
         return Evaluation(f, metrics)
@@ -228,6 +253,53 @@ class ClosedLoopObjective:
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self.__post_init__()
+
+    # --- export and run report (fuzzy look-up tables, action surfaces) --------------------------
+    def export_tables(self, params: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
+        """Look-up tables of the controller for the C header (``tuner export --format c``).
+
+        Delegates to the controller's ``export_tables(values)`` (the fuzzy controllers: LUT1-3, 40 x 40,
+        thesis eq. 2.32); ``None`` for controllers without tables.
+        """
+        fn = getattr(self._ctrl, "export_tables", None)
+        if not callable(fn):
+            return None
+        values = dict(self.fixed)
+        values.update(params or {})
+        return fn(values)
+
+    def finalize(self, run_dir: str | pathlib.Path, best: Mapping[str, Any]) -> dict[str, Any]:
+        """After a run: the initial parameters' score next to the best one, and report figures.
+
+        Writes ``figures/response.png`` (initial vs tuned closed loop, Figs. 2.16-2.17) and, for
+        controllers with ``surfaces`` (the fuzzy ones), ``figures/surface_<flc>.png`` (initial vs
+        tuned action surfaces, Figs. 2.19-2.20). Returns ``initial_fitness``, the initial peak IB
+        angle and current, and ``improvement_pct`` = 100 (F_init - F_opt) / F_init.
+        """
+        run_dir = pathlib.Path(run_dir)
+        fig_dir = run_dir / "figures"
+        best = dict(best or {})
+        init = self.defaults
+        ev0, ev1 = self(init), self(best)
+        out: dict[str, Any] = {
+            "initial_fitness": ev0.fitness,
+            "initial_status": ev0.status,
+            "initial_peak_theta3_deg": ev0.metrics.get("peak_theta3_deg", math.nan),
+            "initial_peak_current_A": ev0.metrics.get("peak_current_A", math.nan),
+            "best_fitness": ev1.fitness,
+            "best_peak_theta3_deg": ev1.metrics.get("peak_theta3_deg", math.nan),
+            "best_peak_current_A": ev1.metrics.get("peak_current_A", math.nan),
+        }
+        if ev0.status == "ok" and ev1.status == "ok" and ev0.fitness > 0:
+            out["improvement_pct"] = 100.0 * (ev0.fitness - ev1.fitness) / ev0.fitness
+        self.plot_response(init, best, fig_dir / "response.png")
+        if callable(getattr(self._ctrl, "surfaces", None)):
+            from objectives.control.report import plot_surfaces
+
+            values = dict(self.fixed)
+            values.update(best)
+            plot_surfaces(self._ctrl, init, values, fig_dir)
+        return out
 
     # --- report ---------------------------------------------------------------------------------
     def plot_response(

@@ -133,7 +133,6 @@ THESIS_OPTIMISED = {
 }  # fmt: skip
 
 
-
 # --------------------------------------------------------------------------------------------------
 # set construction (Python, once per controller build)
 # --------------------------------------------------------------------------------------------------
@@ -302,9 +301,9 @@ class ProtectiveFuzzy(_FuzzyBase):
         p[_TS] = self.sensors.Ts_s
         p[_F1_MF : _F1_MF + 12] = nzp_sets(v["p11"], v["p12"], v["p13"]).ravel()
         p[_F1_MF + 12 : _F1_MF + 24] = current_sets(v["d11"], v["d12"], v["d13"]).ravel()
-        p[_F1_C : _F1_C + 6] = np.array([0.0, 1.0, -1.0, 0.0, 0.0, 0.0]) * v["u11"] + np.array(
-            [0.0, 0.0, 0.0, 0.0, 1.0, -1.0]
-        ) * v["u12"]
+        p[_F1_C : _F1_C + 6] = (
+            np.array([0.0, 1.0, -1.0, 0.0, 0.0, 0.0]) * v["u11"] + np.array([0.0, 0.0, 0.0, 0.0, 1.0, -1.0]) * v["u12"]
+        )
         p[_F1_CI : _F1_CI + 3] = np.array([0.0, 1.0, -1.0]) * v["u13"]
         _flc2_flc3(v, p)
         return p
@@ -351,6 +350,15 @@ class ProtectiveFuzzy(_FuzzyBase):
             "lut3": {"table": one_input(f["flc3"], xr3, 180.0 / math.pi), "x_range": xr3, "y_range": one},
         }  # fmt: skip
 
+    def export_tables(self, values: dict[str, Any] | None = None) -> dict[str, dict[str, Any]]:
+        """LUT1-3 for :func:`tuner.export.to_c`: rows follow y (the transpose of :meth:`tables`).
+
+        One-input tables (``lut1_i``, ``lut3``) are a single row (ny = 1, y_range (0, 0)). The size is
+        the ``lut_size`` option of :class:`LUTFuzzy`, else 40 (section 2.2.3.1).
+        """
+        v = self.resolve(values)
+        return _export(self.tables(v, v.get("lut_size", LUT_SIZE)))
+
 
 class LUTFuzzy(ProtectiveFuzzy):
     """The protective scheme run through 40 x 40 look-up tables, as on the robot's MCU (eqs. 2.32-2.33).
@@ -385,11 +393,6 @@ class LUTFuzzy(ProtectiveFuzzy):
             off += block.size
         return np.concatenate([np.asarray(head)] + body)
 
-    def export_tables(self, values: dict[str, Any] | None = None) -> dict[str, dict[str, Any]]:
-        """Tables for :func:`tuner.export.to_c`: rows follow y (transposed), names LUT1_P ... LUT3."""
-        v = self.resolve(values)
-        return _export(self.tables(v, v["lut_size"]))
-
 
 def _export(tabs: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
     out = {}
@@ -400,12 +403,3 @@ def _export(tabs: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
         else:
             out[name] = {"table": arr.T.copy(), "x_range": tuple(t["x_range"]), "y_range": tuple(t["y_range"])}
     return out
-
-
-def export_tables_for(ctrl: Controller, values: dict[str, Any] | None = None) -> dict[str, dict[str, Any]]:
-    """C-header tables of any protective/LUT controller (the direct one exports the tables it would use)."""
-    if isinstance(ctrl, LUTFuzzy):
-        return ctrl.export_tables(values)
-    if isinstance(ctrl, ProtectiveFuzzy):
-        return _export(ctrl.tables(values, LUT_SIZE))
-    raise ValueError(f"controller {ctrl.name!r} has no look-up tables")
