@@ -150,6 +150,11 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> di
     raw = copy.deepcopy(job["raw"])
     if serial:
         raw["parallel"] = {"backend": "serial"}
+    stamp = run_dir.parent / f".{run_dir.name}.json"  # the job's resolved config, beside its run directory
+    resolved = json.dumps({"raw": job["raw"], "base_dir": job["base_dir"]}, sort_keys=True, default=str)
+    if stamp.exists() and stamp.read_text() != resolved:
+        raise ConfigError(job["id"], "sweep", f"{run_dir} was run with another configuration (a base config "
+                          "or an override changed); delete the sweep directory or choose another --dir")
     status = _job_status(run_dir)
     label = job["id"]
     printer = None if quiet else (lambda m: print(f"[{label}] {m}", file=sys.stderr, flush=True))
@@ -161,6 +166,7 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> di
     if run_dir.exists():  # created but killed before its first checkpoint
         shutil.rmtree(run_dir)
     cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
+    stamp.write_text(resolved)
     res = run(cfg, run_dir=run_dir, progress=printer, quiet=quiet)
     return {"id": job["id"], "status": res.status, "action": "ran"}
 
@@ -301,10 +307,12 @@ def write_sweep_report(sweep_dir: str | Path) -> Path:
                 meta = json.loads((d / "meta.json").read_text())
                 versions = {**meta.get("versions", {}), "git_commit": meta.get("git_commit", "")}
     command = (sweep_dir / "command.txt").read_text().strip() if (sweep_dir / "command.txt").exists() else ""
+    fit_cols = ("train_fitness", "test_fitness") if "train_fitness.median" in flat.columns else ("best_fitness",)
     show_cols = [c for c in ["rank", "runs"] if c in flat.columns] + \
-        [c for c in flat.columns if c.endswith((".median", ".mean", ".std")) and
-         c.split(".")[0] in ("best_fitness", "train_fitness", "test_fitness")]
-    ranking = flat[show_cols] if len(flat) else flat
+        [c for c in flat.columns if c.endswith((".median", ".mean", ".std")) and c.split(".")[0] in fit_cols]
+    ranking = flat[show_cols].reset_index().rename(columns={"index": "method"}) if len(flat) else flat
+    if len(ranking):
+        ranking = ranking[["rank", "method"] + [c for c in ranking.columns if c not in ("rank", "method")]]
     main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
                              "n_evals", "wall_s"] if c in df.columns]
     md = [f"# Sweep {sw['name']}", "", sw.get("description") or "", "",
