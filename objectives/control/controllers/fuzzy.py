@@ -38,6 +38,10 @@ Rule bases:
   (Z, S) -> Z, (P, L) -> Px, (N, L) -> Nx with P = +u11, Px = +u12 (the "positive protective
   voltage", smaller than u11, so the weighted average pulls the action down as the current grows,
   the surface of Fig. 2.14), Nx = -u12; integral tag U_I: rules 1-3 with singletons -u13, 0, +u13.
+  At full speed error U_P = (u11 + u12 L) / (1 + L) falls monotonically with the current; at small
+  errors rule 4 (Z and S -> Z) also fades as the current grows, which raises U_P (with Table 2.7's
+  initial values U_P(0.2 m/s) goes 1.20 V -> 1.45 V from 0 to 0.5 A), so the surface is not monotone
+  everywhere; the rules are implemented as printed.
 
 Integrators. The PI-type outputs are integrated (eqs. 2.28, 2.30, Figs. 2.6, 2.13). Eqs. 2.28/2.30 add
 the raw output per sample, but with Table 2.7's gains that would be 3 V / 0.01 s = 300 V/s at full
