@@ -51,7 +51,8 @@ def summary_table(filter_name: str, train: dict[str, Any], test: dict[str, Any] 
         vals = [m.get(key) for m in scores["recordings"].values() if m.get(key) is not None]
         return float(np.mean(vals)) if vals else math.nan
 
-    head = f"{'filter':10s} {'split':6s} {metric:>18s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s} {'total':>7s}  (RMSE, deg)"
+    head = (f"{'filter':10s} {'split':6s} {metric:>18s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s} {'total':>7s}"
+            "  (RMSE, deg)")
     lines = [head, "-" * len(head)]
     for split, s in (("train", train), ("test", test)):
         if not s or not s["recordings"]:
@@ -64,6 +65,8 @@ def summary_table(filter_name: str, train: dict[str, Any], test: dict[str, Any] 
 def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, Any]:
     """Score ``best`` on train and test recordings, write figures, return the numbers for best.yaml."""
     import pandas as pd
+
+    from tuner.report import md_table
 
     figs = run_dir / "figures"
     figs.mkdir(parents=True, exist_ok=True)
@@ -82,8 +85,7 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
     df = pd.DataFrame(rows)
     df.to_csv(run_dir / "scores.csv", index=False)
     md = ["Train and test scores of the best parameters (RMSE in degrees; test recordings were not used "
-          "for tuning).", "", "```", table, "```", "", df.to_markdown(index=False, floatfmt=".4g")
-          if _has_tabulate() else df.to_string(index=False)]
+          "for tuning).", "", "```", table, "```", "", md_table(df, ".4g")]
     if obj.report.get("per_trial_optimum"):
         po = per_trial_optimum(obj, best, which="test" if test else "train",
                                budget=int(obj.report.get("per_trial_budget", 120)))
@@ -107,14 +109,6 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
         except (ValueError, AttributeError, TypeError):
             pass
     return out
-
-
-def _has_tabulate() -> bool:
-    try:
-        import tabulate  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def _euler_deg(q: np.ndarray) -> np.ndarray:
