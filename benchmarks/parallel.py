@@ -151,7 +151,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
         t = time.perf_counter()
         p.objective(p.space.decode(np.full(p.space.dim, 0.4)))
         t_eval = time.perf_counter() - t
-        n = 4 if smoke else int(np.clip(1.5 / max(t_eval, 1e-4), 24, 200)) // 2 * 2
+        n = 4 if smoke else int(np.clip(1.0 / max(t_eval, 1e-4), 24, 200)) // 2 * 2
         params = p.space.decode_batch(rng.random((n, p.space.dim)))
         problems[name] = {**speedup(p.objective, params, repeats, n_jobs), "t_eval_s": t_eval}
     busy = FunctionObjective("sphere", 5, busy_s=0.01)
