@@ -191,7 +191,7 @@ def test_c_header_with_tables_compiles_and_holds_the_python_values(short_run, tm
         "  (void)TUNER_LUT1_I;\n  return 0;\n}\n"
     )
     res = subprocess.run(
-        [cc, "-std=c99", "-Wall", "-Werror", "-Wno-unused-const-variable", "-o", str(tmp_path / "m"),
+        [cc, "-std=c99", "-Wall", "-Werror", "-o", str(tmp_path / "m"),
          str(tmp_path / "main.c")], capture_output=True, text=True,
     )  # fmt: skip
     assert res.returncode == 0, res.stderr
