@@ -204,4 +204,5 @@ def load_recordings(spec: Mapping[str, Any], base_dir: str | Path = ".") -> list
         raise RecordingError(
             f"data spec 'broad': 'trials' must be a non-empty list, 'all' or a group, got {trials!r}"
         )
+    directory = directory.resolve()  # already resolved against base_dir: do not resolve twice
     return [load_recording({"broad": {**opts, "dir": str(directory), "trial": t}}, base_dir) for t in names]
