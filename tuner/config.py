@@ -28,7 +28,7 @@ import yaml
 from tuner.space import Space, SpaceError
 
 __all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig",
-           "load_config", "config_from_dict", "apply_overrides"]
+           "load_config", "read_yaml", "config_from_dict", "apply_overrides"]
 
 TOP_KEYS = {
     "name": "job name (used in the run directory name)",
@@ -144,16 +144,22 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], file: Any = None)
     return raw
 
 
+def read_yaml(path: str | Path, what: str = "") -> Any:
+    """Parse a YAML file; a missing file or bad YAML is a :class:`ConfigError` naming the file."""
+    path = Path(path)
+    if not path.exists():
+        raise ConfigError(path, "", f"{what + ': ' if what else ''}file not found")
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+
+
 def load_config(path: str | Path, overrides: list[str] | None = None, seed: int | None = None,
                 n_jobs: int | None = None) -> RunConfig:
     """Read and validate a job file; ``overrides`` are ``key.path=value`` strings (``--set``)."""
     path = Path(path)
-    if not path.exists():
-        raise ConfigError(path, "", "file not found")
-    try:
-        raw = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+    raw = read_yaml(path)
     if not isinstance(raw, dict):
         raise ConfigError(path, "", f"expected a mapping at the top level, got {type(raw).__name__}")
     raw = apply_overrides(raw, overrides or [], path)

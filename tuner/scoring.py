@@ -13,19 +13,9 @@ from typing import Any
 
 import yaml
 
-from tuner.config import ConfigError, config_from_dict, load_config
+from tuner.config import ConfigError, config_from_dict, load_config, read_yaml
 
 __all__ = ["evaluate_target"]
-
-
-def _load_yaml(path: str | Path, what: str) -> Any:
-    p = Path(path)
-    if not p.exists():
-        raise ConfigError(p, "", f"{what}: file not found")
-    try:
-        return yaml.safe_load(p.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(p, "", f"not valid YAML: {exc}") from None
 
 
 def evaluate_target(target: str | Path, params_file: str | Path | None = None,
@@ -51,7 +41,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
         raise ConfigError(cfg.source, "objective", str(exc)) from None
     space = cfg.space(objective)
     if params_file:
-        doc = _load_yaml(params_file, "--params")
+        doc = read_yaml(params_file, "--params")
         params = dict(doc.get("params", doc)) if isinstance(doc, dict) else None
         if params is None:
             raise ConfigError(params_file, "", "expected a mapping of parameters (or a best.yaml)")
@@ -67,7 +57,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     if missing:
         raise ConfigError(params_file or target, "params", f"missing value(s) for {missing}")
     if data_file:
-        doc = _load_yaml(data_file, "--data")
+        doc = read_yaml(data_file, "--data")
         data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
         if not hasattr(objective, "with_data"):
             raise ConfigError(data_file, "data", "this objective does not take other data")

@@ -33,7 +33,7 @@ from typing import Any
 
 import yaml
 
-from tuner.config import ConfigError, apply_overrides, config_from_dict
+from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
 
 __all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file"]
 
@@ -60,12 +60,7 @@ def _slug(v: Any) -> str:
 def load_sweep(path: str | Path) -> dict[str, Any]:
     """Read and expand a sweep file into ``{"name", "jobs": [{id, method, seed, overrides, raw}], ...}``."""
     path = Path(path)
-    if not path.exists():
-        raise ConfigError(path, "", "file not found")
-    try:
-        doc = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+    doc = read_yaml(path)
     if not isinstance(doc, dict) or "sweep" not in doc or not isinstance(doc["sweep"], dict):
         raise ConfigError(path, "sweep", "expected a mapping under the top-level key 'sweep'")
     extra = sorted(set(doc) - {"sweep"})
