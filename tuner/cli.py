@@ -15,14 +15,14 @@ from typing import Any
 __all__ = ["main"]
 
 EPILOG = """examples:
-  tuner run configs/demo.yaml                      tune with the config's settings
-  tuner run configs/demo.yaml --seed 3 --n-jobs 1  override seed and workers
+  tuner run configs/demo.yaml                      the demo (a sweep file runs as a sweep)
+  tuner run configs/ekf_bench6dof.yaml --seed 3 --n-jobs 1   override seed and workers
   tuner run job.yaml --set optimizer.population=40 --set objective.metric=broad_total_rmse
   tuner resume runs/20261122T101500Z-demo-a1b2c3   continue an interrupted run
   tuner show runs/20261122T101500Z-demo-a1b2c3     summary of a run (or a sweep directory)
   tuner export RUN_DIR --format c > tuned.h        best parameters as a C header
   tuner evaluate RUN_DIR --data other.yaml --json  score the best parameters on other data
-  tuner sweep configs/sweep_demo.yaml              many runs and one report
+  tuner sweep configs/thesis_tilt_sweep.yaml       many runs and one report
   tuner list                                       optimizers, objectives, filters, controllers
 """
 
