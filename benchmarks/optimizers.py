@@ -252,19 +252,33 @@ def _plot(name: str, a: dict[str, Any], out_dir) -> str | None:
         import matplotlib.pyplot as plt
     except ImportError:
         return None
+    def xy(c):  # full curves (a fresh run) or the subsampled {"evals", "values"} of a result file
+        if isinstance(c, dict):
+            return np.asarray(c["evals"], float), np.asarray(c["values"], float)
+        c = np.asarray(c, float)
+        return np.arange(1, len(c) + 1, dtype=float), c
+
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    positive = all(np.all(np.asarray(v["curve_q1"]) > 0) for v in a["methods"].values())
+    positive = all(np.all(xy(v["curve_q1"])[1] > 0) for v in a["methods"].values())
+    top = []
     for m in METHODS:
         if m not in a["methods"]:
             continue
         v = a["methods"][m]
-        x = np.arange(1, len(v["curve_median"]) + 1)
+        x, med = xy(v["curve_median"])
+        q1, q3 = xy(v["curve_q1"])[1], xy(v["curve_q3"])[1]
         style = "-" if m in OURS else ("--" if m in PEERS_Q else ":")
-        (line,) = ax.plot(x, v["curve_median"], style, label=m, lw=1.4)
-        ax.fill_between(x, v["curve_q1"], v["curve_q3"], color=line.get_color(), alpha=0.12)
+        (line,) = ax.plot(x, med, style, label=m, lw=1.4)
+        ax.fill_between(x, q1, q3, color=line.get_color(), alpha=0.12)
+        top.append(float(np.interp(0.1 * x[-1], x, q3)))  # first evaluations (penalties) would flatten the rest
     ax.axhline(a["threshold"], color="k", lw=0.6, alpha=0.5)
+    lo, hi = a["f_star"], max(top)
     if positive:
         ax.set_yscale("log")
+        if hi > lo > 0:
+            ax.set_ylim(lo / 1.15, hi * 1.15)
+    elif hi > lo:
+        ax.set_ylim(lo - 0.05 * (hi - lo), hi + 0.05 * (hi - lo))
     ax.set_xlabel("objective evaluations")
     ax.set_ylabel("best fitness (median, quartile band)")
     ax.set_title(name)
@@ -274,6 +288,15 @@ def _plot(name: str, a: dict[str, Any], out_dir) -> str | None:
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return path.name
+
+
+def replot(result_json=RESULTS_DIR / "optimizers.json", out_dir=RESULTS_DIR) -> list[str]:
+    """Redraw the quality curves from a result file (its curves are subsampled to 25 points)."""
+    import json
+    from pathlib import Path
+
+    data = json.loads(Path(result_json).read_text())
+    return [_plot(name, a, Path(out_dir)) for name, a in data["results"]["problems"].items()]
 
 
 def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR) -> dict[str, Any]:
