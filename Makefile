@@ -22,6 +22,7 @@ test: setup
 	$(BIN)/python -m pytest
 
 bench: setup
+	$(BIN)/python -m pip install --quiet -e ".[$(EXTRAS),bench]"   # the peers measured side by side
 	$(BIN)/python -m benchmarks.run --full
 
 bench-smoke: setup
