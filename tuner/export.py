@@ -130,7 +130,7 @@ def _objective_tables(run_dir: Path, params: dict[str, Any]) -> dict[str, Any] |
     cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
     try:
         obj = build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
-    except Exception:  # exporting parameters must not depend on the objective still building
+    except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds
         return None
     fn = getattr(obj, "export_tables", None)
     return fn(params) if callable(fn) else None
