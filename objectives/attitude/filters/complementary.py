@@ -67,6 +67,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._scalar import read_rate, read_vec, sq_norm_ok
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.madgwick import _FM, _as_c, _check_gain
 from tuner.space import Real
@@ -119,13 +120,7 @@ def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
     i1 = 0.0
     i2 = 0.0
     for i in range(gyr.shape[0]):
-        p = gyr[i, 0]
-        q = gyr[i, 1]
-        r = gyr[i, 2]
-        if not (math.isfinite(p) and math.isfinite(q) and math.isfinite(r)):
-            p = 0.0
-            q = 0.0
-            r = 0.0
+        p, q, r = read_rate(gyr, i)
         sp = math.sin(phi)
         cp = math.cos(phi)
         ct = math.cos(th)
@@ -140,10 +135,16 @@ def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
         dx = -acc[i, 0]
         dy = -acc[i, 1]
         dz = -acc[i, 2]
-        an = dx * dx + dy * dy + dz * dz
-        acc_ok = an > 0.0 and an < math.inf
+        an, acc_ok = sq_norm_ok(dx, dy, dz)
         if acc_ok and gate < math.inf:
             acc_ok = abs(math.sqrt(an) - g_ref) <= gate * g_ref
+        mx = 0.0
+        my = 0.0
+        mz = 0.0
+        mag_ok = False
+        if use_mag:
+            mx, my, mz, _ = read_vec(mag, i)
+            _, mag_ok = sq_norm_ok(mx, my, mz)
         yaw_ok = False
         phi_a = 0.0
         th_a = 0.0
@@ -158,28 +159,18 @@ def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
             th_a = math.atan2(-dx, dy * spa + dz * cpa)
             e0 = _wrap(phi_a - phi)
             e1 = _wrap(th_a - th)
-            if use_mag:
-                mx = mag[i, 0]
-                my = mag[i, 1]
-                mz = mag[i, 2]
-                mn = mx * mx + my * my + mz * mz
-                if mn > 0.0 and mn < math.inf:
-                    sta = math.sin(th_a)
-                    cta = math.cos(th_a)
-                    psi_m = math.atan2(mz * spa - my * cpa, mx * cta + my * sta * spa + mz * sta * cpa)
-                    e2 = _wrap(psi_m - psi)
-                    yaw_ok = True
-        elif use_mag:
-            mx = mag[i, 0]
-            my = mag[i, 1]
-            mz = mag[i, 2]
-            mn = mx * mx + my * my + mz * mz
-            if mn > 0.0 and mn < math.inf:
-                st = math.sin(th)
-                ct2 = math.cos(th)
-                psi_m = math.atan2(mz * sp - my * cp, mx * ct2 + my * st * sp + mz * st * cp)
+            if mag_ok:
+                sta = math.sin(th_a)
+                cta = math.cos(th_a)
+                psi_m = math.atan2(mz * spa - my * cpa, mx * cta + my * sta * spa + mz * sta * cpa)
                 e2 = _wrap(psi_m - psi)
                 yaw_ok = True
+        elif mag_ok:
+            st = math.sin(th)
+            ct2 = math.cos(th)
+            psi_m = math.atan2(mz * sp - my * cp, mx * ct2 + my * st * sp + mz * st * cp)
+            e2 = _wrap(psi_m - psi)
+            yaw_ok = True
         if acc_ok:
             # eqs. (10), (12): PI on the angle error (roll, pitch; yaw when observed)
             i0 += ki * e0 * dt

@@ -35,6 +35,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from tuner.space import Real
 
@@ -76,13 +77,7 @@ def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
     by_ = 0.0
     bz_ = 0.0
     for i in range(gyr.shape[0]):
-        gx = gyr[i, 0]
-        gy = gyr[i, 1]
-        gz = gyr[i, 2]
-        if not (math.isfinite(gx) and math.isfinite(gy) and math.isfinite(gz)):
-            gx = 0.0
-            gy = 0.0
-            gz = 0.0
+        gx, gy, gz = read_rate(gyr, i)
         if write_bias:
             bias_out[i, 0] = bx_
             bias_out[i, 1] = by_
@@ -97,15 +92,8 @@ def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
         qd2 = 0.5 * (q0_ * gy - q1 * gz + q3 * gx)
         qd3 = 0.5 * (q0_ * gz + q1 * gy - q2 * gx)
 
-        ax = acc[i, 0]
-        ay = acc[i, 1]
-        az = acc[i, 2]
-        an = ax * ax + ay * ay + az * az
-        if an > 0.0 and an < math.inf:
-            r = 1.0 / math.sqrt(an)
-            ax *= r
-            ay *= r
-            az *= r
+        ax, ay, az, acc_ok = read_unit(acc, i)
+        if acc_ok:
             # eq. 25: f_g = R(q)^T (0, 0, 1) - a
             f1 = 2.0 * (q1 * q3 - q0_ * q2) - ax
             f2 = 2.0 * (q0_ * q1 + q2 * q3) - ay
@@ -115,27 +103,15 @@ def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
             s1 = 2.0 * q3 * f1 + 2.0 * q0_ * f2 - 4.0 * q1 * f3
             s2 = -2.0 * q0_ * f1 + 2.0 * q3 * f2 - 4.0 * q2 * f3
             s3 = 2.0 * q1 * f1 + 2.0 * q2 * f2
-            mn = 0.0
             mx = 0.0
             my = 0.0
             mz = 0.0
+            mag_ok = False
             if use_mag:
-                mx = mag[i, 0]
-                my = mag[i, 1]
-                mz = mag[i, 2]
-                mn = mx * mx + my * my + mz * mz
-            if mn > 0.0 and mn < math.inf:
-                r = 1.0 / math.sqrt(mn)
-                mx *= r
-                my *= r
-                mz *= r
+                mx, my, mz, mag_ok = read_unit(mag, i)
+            if mag_ok:
                 # eq. 45: h = q (x) m (x) q*
-                hx = (mx * (1.0 - 2.0 * (q2 * q2 + q3 * q3)) + 2.0 * my * (q1 * q2 - q0_ * q3)
-                      + 2.0 * mz * (q1 * q3 + q0_ * q2))
-                hy = (2.0 * mx * (q1 * q2 + q0_ * q3) + my * (1.0 - 2.0 * (q1 * q1 + q3 * q3))
-                      + 2.0 * mz * (q2 * q3 - q0_ * q1))
-                hz = (2.0 * mx * (q1 * q3 - q0_ * q2) + 2.0 * my * (q2 * q3 + q0_ * q1)
-                      + mz * (1.0 - 2.0 * (q1 * q1 + q2 * q2)))
+                hx, hy, hz = rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
                 # eq. 46 (paper: k = 2) or the C code's half-length field (k = 1)
                 tbx = k * math.sqrt(hx * hx + hy * hy)  # 2 b_x
                 tbz = k * hz  # 2 b_z

@@ -35,6 +35,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.madgwick import _FM, _as_c, _check_gain
 from tuner.space import Real
@@ -69,22 +70,9 @@ def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
     iy = 0.0
     iz = 0.0
     for i in range(gyr.shape[0]):
-        gx = gyr[i, 0]
-        gy = gyr[i, 1]
-        gz = gyr[i, 2]
-        if not (math.isfinite(gx) and math.isfinite(gy) and math.isfinite(gz)):
-            gx = 0.0
-            gy = 0.0
-            gz = 0.0
-        ax = acc[i, 0]
-        ay = acc[i, 1]
-        az = acc[i, 2]
-        an = ax * ax + ay * ay + az * az
-        if an > 0.0 and an < math.inf:
-            r = 1.0 / math.sqrt(an)
-            ax *= r
-            ay *= r
-            az *= r
+        gx, gy, gz = read_rate(gyr, i)
+        ax, ay, az, acc_ok = read_unit(acc, i)
+        if acc_ok:
             # predicted gravity direction v_hat = R(q)^T (0, 0, 1)
             vx = 2.0 * (q1 * q3 - q0_ * q2)
             vy = 2.0 * (q0_ * q1 + q2 * q3)
@@ -93,27 +81,16 @@ def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
             ex = ay * vz - az * vy
             ey = az * vx - ax * vz
             ez = ax * vy - ay * vx
-            mn = 0.0
             mx = 0.0
             my = 0.0
             mz = 0.0
+            mag_ok = False
             if use_mag:
-                mx = mag[i, 0]
-                my = mag[i, 1]
-                mz = mag[i, 2]
-                mn = mx * mx + my * my + mz * mz
-            if mn > 0.0 and mn < math.inf:
-                r = 1.0 / math.sqrt(mn)
-                mx *= r
-                my *= r
-                mz *= r
-                hx = (mx * (1.0 - 2.0 * (q2 * q2 + q3 * q3)) + 2.0 * my * (q1 * q2 - q0_ * q3)
-                      + 2.0 * mz * (q1 * q3 + q0_ * q2))
-                hy = (2.0 * mx * (q1 * q2 + q0_ * q3) + my * (1.0 - 2.0 * (q1 * q1 + q3 * q3))
-                      + 2.0 * mz * (q2 * q3 - q0_ * q1))
+                mx, my, mz, mag_ok = read_unit(mag, i)
+            if mag_ok:
+                # earth-field reference b = (|h_xy|, 0, h_z), h = q (x) m (x) q*
+                hx, hy, bz = rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
                 bx = math.sqrt(hx * hx + hy * hy)
-                bz = (2.0 * mx * (q1 * q3 - q0_ * q2) + 2.0 * my * (q2 * q3 + q0_ * q1)
-                      + mz * (1.0 - 2.0 * (q1 * q1 + q2 * q2)))
                 # predicted field direction w_hat = R(q)^T (bx, 0, bz)
                 wx = 2.0 * (bx * (0.5 - q2 * q2 - q3 * q3) + bz * (q1 * q3 - q0_ * q2))
                 wy = 2.0 * (bx * (q1 * q2 - q0_ * q3) + bz * (q0_ * q1 + q2 * q3))
