@@ -69,7 +69,7 @@ from numba import njit
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._scalar import read_rate, read_vec, sq_norm_ok
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.madgwick import _FM, _as_c, _check_gain
+from objectives.attitude.filters.madgwick import _FM, _check_gain, _imu_arrays
 from tuner.space import Real
 
 __all__ = ["LCF", "NCF", "CCF", "complementary_batch", "quat_from_euler_zyx", "euler_zyx_from_quat"]
@@ -278,17 +278,8 @@ def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp
     -------
     quat : (N, 4) sensor-to-earth NED, or (quat, euler, bias) when ``detailed``.
     """
-    gyr = _as_c("gyr", gyr, 3)
-    acc = _as_c("acc", acc, 3)
+    gyr, acc, mag = _imu_arrays(gyr, acc, mag)
     n = gyr.shape[0]
-    if acc.shape[0] != n:
-        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
-    if mag is None:
-        mag = np.empty((0, 3))
-    else:
-        mag = _as_c("mag", mag, 3)
-        if mag.shape[0] != n:
-            raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
     if not (np.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
     if not (np.isfinite(alpha) and 0.0 <= alpha <= 1.0):

@@ -172,6 +172,29 @@ def _as_c(name: str, a, ncols: int) -> np.ndarray:
         raise ValueError(f"{name} must have shape (N, {ncols}), got {a.shape}")
     return a
 
+def _imu_arrays(gyr, acc, mag) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Contiguous float64 (N, 3) gyr and acc, and mag (N, 3) or an empty (0, 3) when ``None``."""
+    gyr = _as_c("gyr", gyr, 3)
+    acc = _as_c("acc", acc, 3)
+    n = gyr.shape[0]
+    if acc.shape[0] != n:
+        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
+    if mag is None:
+        return gyr, acc, np.empty((0, 3))
+    mag = _as_c("mag", mag, 3)
+    if mag.shape[0] != n:
+        raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
+    return gyr, acc, mag
+
+
+def _unit_q0(q0) -> np.ndarray:
+    """The initial quaternion as a unit (4,) float64 array; ValueError when not finite and non-zero."""
+    q = np.asarray(q0, dtype=np.float64).reshape(-1)
+    if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
+        raise ValueError(f"q0 must be a finite non-zero (4,) quaternion, got {q0!r}")
+    return q / np.linalg.norm(q)
+
+
 
 def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float = 0.0,
                    variant: str = "paper", with_bias: bool = False):
@@ -202,24 +225,12 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
     """
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {sorted(VARIANTS)}, got {variant!r}")
-    gyr = _as_c("gyr", gyr, 3)
-    acc = _as_c("acc", acc, 3)
+    gyr, acc, mag = _imu_arrays(gyr, acc, mag)
     n = gyr.shape[0]
-    if acc.shape[0] != n:
-        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
-    if mag is None:
-        mag = np.empty((0, 3))
-    else:
-        mag = _as_c("mag", mag, 3)
-        if mag.shape[0] != n:
-            raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
     for name, v in (("dt", dt), ("beta", beta), ("zeta", zeta)):
         if not np.isfinite(v) or v < 0 or (name == "dt" and v == 0):
             raise ValueError(f"{name} must be finite and {'> 0' if name == 'dt' else '>= 0'}, got {v!r}")
-    q0 = np.asarray(q0, dtype=np.float64).reshape(-1)
-    if q0.shape != (4,) or not np.all(np.isfinite(q0)) or np.linalg.norm(q0) == 0:
-        raise ValueError(f"q0 must be a finite non-zero (4,) quaternion, got {q0!r}")
-    q0 = q0 / np.linalg.norm(q0)
+    q0 = _unit_q0(q0)
     coef = np.array([dt, beta, zeta, VARIANTS[variant], 1.0 if mag.shape[0] else 0.0])
     out = np.empty((n, 4))
     bias = np.empty((n if with_bias else 0, 3))

@@ -37,7 +37,7 @@ from numba import njit
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.madgwick import _FM, _as_c, _check_gain
+from objectives.attitude.filters.madgwick import _FM, _check_gain, _imu_arrays, _unit_q0
 from tuner.space import Real
 
 __all__ = ["Mahony", "mahony_batch"]
@@ -154,24 +154,12 @@ def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
     with_bias : bool
         Also return the (N, 3) gyro bias estimate, rad/s.
     """
-    gyr = _as_c("gyr", gyr, 3)
-    acc = _as_c("acc", acc, 3)
+    gyr, acc, mag = _imu_arrays(gyr, acc, mag)
     n = gyr.shape[0]
-    if acc.shape[0] != n:
-        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
-    if mag is None:
-        mag = np.empty((0, 3))
-    else:
-        mag = _as_c("mag", mag, 3)
-        if mag.shape[0] != n:
-            raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
     for name, v in (("dt", dt), ("kp", kp), ("ki", ki)):
         if not np.isfinite(v) or v < 0 or (name == "dt" and v == 0):
             raise ValueError(f"{name} must be finite and {'> 0' if name == 'dt' else '>= 0'}, got {v!r}")
-    q0 = np.asarray(q0, dtype=np.float64).reshape(-1)
-    if q0.shape != (4,) or not np.all(np.isfinite(q0)) or np.linalg.norm(q0) == 0:
-        raise ValueError(f"q0 must be a finite non-zero (4,) quaternion, got {q0!r}")
-    q0 = q0 / np.linalg.norm(q0)
+    q0 = _unit_q0(q0)
     coef = np.array([dt, kp, ki, 1.0 if mag.shape[0] else 0.0])
     out = np.empty((n, 4))
     bias = np.empty((n if with_bias else 0, 3))
