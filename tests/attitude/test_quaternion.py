@@ -241,3 +241,73 @@ def test_triad_frames_agree_with_to_frame_and_degenerate_input_is_nan():
     bad = Q.triad_batch(np.array([[0, 0, 0.0], [0, 0, 9.8], [np.nan, 0, 1]]),
                         np.array([[1, 0, 0.0], [0, 0, 40.0], [1, 0, 0]]), "ENU")
     assert np.isnan(bad).all()
+
+
+# ------------------------------------------------------------------------------------------------
+# batch helpers the synthetic benches build on (one library for the whole project)
+# ------------------------------------------------------------------------------------------------
+def _rand_unit(rng, n):
+    q = rng.standard_normal((n, 4))
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def test_qrot_batch_is_the_sandwich_product_and_its_inverse():
+    rng = np.random.default_rng(11)
+    q, v = _rand_unit(rng, 50), rng.standard_normal((50, 3))
+    fwd = Q.qrot_batch(q, v)
+    np.testing.assert_allclose(fwd, Rotation.from_quat(q[:, [1, 2, 3, 0]]).apply(v), atol=1e-14)
+    np.testing.assert_allclose(Q.qrot_batch(q, fwd, inverse=True), v, atol=1e-13)
+    for i in range(5):  # the batch is the scalar kernel row by row, bit for bit
+        np.testing.assert_array_equal(fwd[i], Q.qrot(q[i], v[i]))
+        np.testing.assert_array_equal(Q.qrot_batch(q, v, inverse=True)[i], Q.qrot(Q.qconj(q[i]), v[i]))
+    np.testing.assert_array_equal(Q.qrot_batch(q, v[0]), np.stack([Q.qrot(a, v[0]) for a in q]))
+    assert Q.qrot_batch(q[0], v[0]).shape == (3,)
+    with pytest.raises(ValueError, match="qrot_batch: q has 50 rows, v has 2"):
+        Q.qrot_batch(q, v[:2])
+
+
+def test_qmul_batch_broadcasts_one_row_and_rejects_mismatched_rows():
+    rng = np.random.default_rng(12)
+    p, q = _rand_unit(rng, 20), _rand_unit(rng, 20)
+    np.testing.assert_array_equal(Q.qmul_batch(p, q), np.stack([Q.qmul(a, b) for a, b in zip(p, q)]))
+    np.testing.assert_array_equal(Q.qmul_batch(p[3], q), np.stack([Q.qmul(p[3], b) for b in q]))
+    np.testing.assert_array_equal(Q.qmul_batch(p[:, ::1][::2], q[::2]), Q.qmul_batch(p, q)[::2])  # strided input
+    with pytest.raises(ValueError, match="qmul_batch: p has 20 rows, q has 3"):
+        Q.qmul_batch(p, q[:3])
+
+
+def test_qlog_batch_agrees_with_the_scalar_kernel_to_one_ulp_of_the_angle():
+    rng = np.random.default_rng(13)
+    axes = rng.standard_normal((2000, 3))
+    v = axes / np.linalg.norm(axes, axis=1, keepdims=True) * 10.0 ** rng.uniform(-12, math.log10(3.1), (2000, 1))
+    q = Q.qexp_batch(v)
+    q[::3] *= -1.0  # -q is the same rotation
+    batch = Q.qlog_batch(q)
+    scalar = np.stack([Q.qlog(r) for r in q])
+    np.testing.assert_allclose(batch, scalar, rtol=4e-16, atol=0)
+    np.testing.assert_allclose(batch, v, rtol=1e-12, atol=1e-20)
+    assert np.isnan(Q.qlog_batch(np.array([1.0, np.nan, 0.0, 0.0]))).all()
+
+
+def test_make_continuous_flips_sign_jumps_only():
+    rng = np.random.default_rng(14)
+    smooth = Q.qexp_batch(np.cumsum(rng.standard_normal((200, 3)) * 0.05, axis=0))
+    flipped = smooth * np.where(rng.random(200) < 0.3, -1.0, 1.0)[:, None]
+    flipped[0] = smooth[0]
+    np.testing.assert_array_equal(Q.make_continuous(flipped), smooth)
+    assert np.all(np.einsum("ij,ij->i", Q.make_continuous(flipped)[1:], smooth[:-1]) > 0)
+    with pytest.raises(ValueError, match="make_continuous"):
+        Q.make_continuous(np.zeros((3, 3)))
+
+
+def test_quat_from_euler_zyx_is_the_product_of_elementary_rotations():
+    rng = np.random.default_rng(15)
+    e = rng.uniform(-4, 4, (300, 3))
+
+    def axis(k, a):
+        out = np.zeros((len(a), 4))
+        out[:, 0], out[:, 1 + k] = np.cos(a / 2), np.sin(a / 2)
+        return out
+
+    composed = Q.qmul_batch(Q.qmul_batch(axis(2, e[:, 2]), axis(1, e[:, 1])), axis(0, e[:, 0]))
+    np.testing.assert_allclose(Q.quat_from_euler_zyx(e), composed, atol=1e-15)
