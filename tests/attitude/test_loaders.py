@@ -258,7 +258,7 @@ def test_load_recording_broad_and_bad_specs(tmp_path):
 
 
 def test_load_recording_synthetic_is_dispatched_lazily(monkeypatch):
-    import objectives.attitude.data.synthetic as syn
+    import objectives.attitude.data.cache as syn
 
     seen = {}
 

@@ -156,7 +156,7 @@ def load_recording(spec: Mapping[str, Any], base_dir: str | Path = ".") -> Recor
     if kind == "csv":
         return _load_csv(opts, base_dir)
     # synthetic: generators live in their own module, imported only when used
-    from objectives.attitude.data.synthetic import synthetic
+    from objectives.attitude.data.cache import synthetic
 
     if "generator" not in opts:
         raise RecordingError("data spec 'synthetic': needs 'generator'")
