@@ -50,7 +50,7 @@ def test_controllable_subsystem_and_riccati_gain():
     q = np.array([14.5, 156.2, 1.3, 1.3])
     rw = np.array([0.1, 0.1])
     des = lq_design(q, rw, 0.01, P)
-    Ad, Bd, K = des["Ad"], des["Bd"], des["K"]
+    Ad, Bd, K = des.Ad, des.Bd, des.K
     # reference: plain Riccati value iteration
     Q, R = np.diag(q), np.diag(rw)
     Pm = Q.copy()
@@ -63,8 +63,23 @@ def test_controllable_subsystem_and_riccati_gain():
     np.testing.assert_allclose(K, Kr, rtol=1e-6)
     assert np.max(np.abs(np.linalg.eigvals(Ad - Bd @ K))) < 1.0
     # eq. 2.15: the linear closed loop tracks (nu_d, xi_d) without steady-state error
-    dc = Cc @ np.linalg.solve(np.eye(4) - (Ad - Bd @ K), Bd @ des["Fr"])
+    dc = Cc @ np.linalg.solve(np.eye(4) - (Ad - Bd @ K), Bd @ des.Fr)
     np.testing.assert_allclose(dc, np.eye(2), atol=1e-9)
+
+
+def test_lq_design_result_carries_riccati_solution_and_closed_loop_poles():
+    des = lq_design(np.array([14.5, 156.2, 1.3, 1.3]), np.array([0.1, 0.1]), 0.01, P)
+    Q, R = np.diag([14.5, 156.2, 1.3, 1.3]), np.diag([0.1, 0.1])
+    # P solves the DARE: P = Q + Ad' P Ad - Ad' P Bd (R + Bd' P Bd)^-1 Bd' P Ad, and K follows from it
+    Ad, Bd, Pr = des.Ad, des.Bd, des.P
+    dare = Q + Ad.T @ Pr @ Ad - Ad.T @ Pr @ Bd @ np.linalg.solve(R + Bd.T @ Pr @ Bd, Bd.T @ Pr @ Ad)
+    np.testing.assert_allclose(dare, Pr, rtol=1e-9, atol=1e-9 * np.abs(Pr).max())
+    np.testing.assert_allclose(np.linalg.eigvalsh(0.5 * (Pr + Pr.T)) > 0, True)
+    np.testing.assert_allclose(np.sort_complex(des.poles), np.sort_complex(np.linalg.eigvals(Ad - Bd @ des.K)))
+    assert np.all(np.abs(des.poles) < 1.0)
+    np.testing.assert_allclose(des.Fr, des.Nu + des.K @ des.Nx)
+    with pytest.raises(AttributeError):
+        des.K = np.zeros((2, 4))
 
 
 def test_tustin_pid_matches_transfer_function():

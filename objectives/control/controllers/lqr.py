@@ -23,6 +23,8 @@ closed-loop kernel computes from the simulated accelerometer and gyroscope.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.linalg
 
@@ -31,7 +33,7 @@ from objectives.control.controllers.kernels import KIND_LQG, KIND_LQR
 from objectives.control.wmp import WMPParams, derivatives
 from tuner.space import Real
 
-__all__ = ["LQR", "LQG", "linearize", "reduced_model", "lq_design"]
+__all__ = ["LQR", "LQG", "LQDesign", "linearize", "reduced_model", "lq_design"]
 
 
 def linearize(params: WMPParams | None = None, eps: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
@@ -85,13 +87,51 @@ def reduced_model(params: WMPParams | None = None) -> tuple[np.ndarray, np.ndarr
     return Ac, Bc, Cc
 
 
+@dataclass(frozen=True)
+class LQDesign:
+    """Result of :func:`lq_design`: the discrete LQR of eq. 2.13 with the tracking matrices of eq. 2.15.
+
+    The control law is ``u = -K z + Fr r`` on the design state ``z = (theta3, nu, omega3, xi)``
+    (rad, m/s, rad/s, rad/s) and the reference ``r = (nu, xi)`` (m/s, rad/s); ``u`` in V.
+
+    Attributes
+    ----------
+    K : ndarray (2, 4)
+        Feedback gain, ``K = (R + Bd' P Bd)^-1 Bd' P Ad``.
+    Nx : ndarray (4, 2)
+        Steady state per unit reference (eq. 2.15): ``z_ss = Nx r``.
+    Nu : ndarray (2, 2)
+        Steady input per unit reference (eq. 2.15): ``u_ss = Nu r``.
+    Fr : ndarray (2, 2)
+        Reference feed-forward ``Nu + K Nx``.
+    P : ndarray (4, 4)
+        Solution of the discrete algebraic Riccati equation (cost-to-go ``z' P z``).
+    Ad, Bd : ndarray (4, 4), (4, 2)
+        Zero-order-hold discretisation of the controllable subsystem at ``Ts``.
+    Cc : ndarray (2, 4)
+        Output matrix of ``(nu, xi)``.
+    poles : ndarray (4,) complex
+        Closed-loop eigenvalues of ``Ad - Bd K`` (inside the unit circle for a stabilising design).
+    """
+
+    K: np.ndarray
+    Nx: np.ndarray
+    Nu: np.ndarray
+    Fr: np.ndarray
+    P: np.ndarray
+    Ad: np.ndarray
+    Bd: np.ndarray
+    Cc: np.ndarray
+    poles: np.ndarray
+
+
 def lq_design(
     q: np.ndarray, rw: np.ndarray, Ts: float, params: WMPParams | None = None, model: tuple | None = None
-) -> dict:
+) -> LQDesign:
     """Discrete LQR gain K (2, 4) and tracking matrices of eq. 2.15 for diagonal weights q (4,), rw (2,).
 
     ``model`` is a precomputed :func:`reduced_model` of ``params`` (it does not depend on the weights).
-    Returns dict with K, Nx (4, 2), Nu (2, 2), Fr = Nu + K Nx, Ad, Bd, Cc.
+    Returns an :class:`LQDesign` (K, Nx, Nu, Fr = Nu + K Nx, P, Ad, Bd, Cc, closed-loop poles).
     """
     q = np.asarray(q, float)
     rw = np.asarray(rw, float)
@@ -111,7 +151,7 @@ def lq_design(
     rhs = np.vstack([np.zeros((4, 2)), np.eye(2)])
     N = np.linalg.solve(big, rhs)
     Nx, Nu = N[:4], N[4:]
-    return {"K": K, "Nx": Nx, "Nu": Nu, "Fr": Nu + K @ Nx, "Ad": Ad, "Bd": Bd, "Cc": Cc}
+    return LQDesign(K=K, Nx=Nx, Nu=Nu, Fr=Nu + K @ Nx, P=P, Ad=Ad, Bd=Bd, Cc=Cc, poles=np.linalg.eigvals(Ad - Bd @ K))
 
 
 class LQR(Controller):
@@ -134,7 +174,7 @@ class LQR(Controller):
     )
     defaults = {"q_theta3": 14.5, "q_nu": 156.2, "q_omega3": 1.3, "q_xi": 1.3, "r_u1": 0.1, "r_u2": 0.1}
 
-    def design(self, values=None) -> dict:
+    def design(self, values=None) -> LQDesign:
         v = self.resolve(values)
         q = [v["q_theta3"], v["q_nu"], v["q_omega3"], v["q_xi"]]
         if getattr(self, "_model", None) is None:
@@ -143,7 +183,7 @@ class LQR(Controller):
 
     def _build(self, values):
         des = self.design(values)
-        return np.concatenate([des["K"].ravel(), des["Fr"].ravel()])
+        return np.concatenate([des.K.ravel(), des.Fr.ravel()])
 
 
 class LQG(LQR):
