@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude.data.recording import Recording, RecordingError
-from objectives.attitude.scoring import error_sums
+from objectives.attitude.fused_errors import error_sums
 from tuner.objective import Evaluation
 from tuner.space import Real, Space
 

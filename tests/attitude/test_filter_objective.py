@@ -12,8 +12,8 @@ import yaml
 from objectives.attitude import metrics as M
 from objectives.attitude.data.synthetic import synthetic
 from objectives.attitude.filters import get_filter
+from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective import FilterObjective
-from objectives.attitude.scoring import error_sums
 from tuner.config import config_from_dict
 from tuner.run import run
 
