@@ -13,11 +13,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
+from objectives.attitude.quaternion import qconj_batch, qmul_batch
+
 __all__ = [
-    "BroadErrors", "broad_errors", "broad_error_angles", "wrap_angle", "euler_errors", "EulerStats",
+    "BroadErrors", "broad_errors", "BroadErrorAngles", "broad_error_angles", "wrap_angle", "euler_errors", "EulerStats",
     "euler_stats", "euler_mse_geomean", "mse_1d",
 ]
 
@@ -39,26 +42,29 @@ class BroadErrors:
         }
 
 
-def broad_error_angles(q_est: np.ndarray, q_true: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+class BroadErrorAngles(NamedTuple):
+    """Per-sample BROAD error angles, rad, each (N,); unpacks as ``total, heading, inclination``."""
+
+    total_rad: np.ndarray
+    heading_rad: np.ndarray
+    inclination_rad: np.ndarray
+
+
+def broad_error_angles(q_est: np.ndarray, q_true: np.ndarray) -> BroadErrorAngles:
     """Per-sample total, heading and inclination error (rad) of BROAD's example code.
 
     ``q_err = q_est * conj(q_true)`` (earth frame, z up); total ``2 acos(|w|)``, heading
     ``2 atan(|z / w|)``, inclination ``2 acos(sqrt(w^2 + z^2))``. Rows with NaN stay NaN.
     """
-    e, t = np.asarray(q_est, float), np.asarray(q_true, float)
-    w1, x1, y1, z1 = e[:, 0], e[:, 1], e[:, 2], e[:, 3]
-    w2, x2, y2, z2 = t[:, 0], -t[:, 1], -t[:, 2], -t[:, 3]
-    w = w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2
-    z = w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2
-    x = w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2
-    y = w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2
-    norm = np.sqrt(w * w + x * x + y * y + z * z)
+    q_err = qmul_batch(q_est, qconj_batch(np.asarray(q_true, float)))
+    w, z = q_err[:, 0], q_err[:, 3]
+    norm = np.linalg.norm(q_err, axis=1)
     w, z = w / norm, z / norm
     with np.errstate(invalid="ignore", divide="ignore"):
         total = 2.0 * np.arccos(np.clip(np.abs(w), 0.0, 1.0))
         heading = 2.0 * np.arctan(np.abs(z / w))
         incl = 2.0 * np.arccos(np.clip(np.sqrt(w * w + z * z), 0.0, 1.0))
-    return total, heading, incl
+    return BroadErrorAngles(total, heading, incl)
 
 
 def broad_errors(q_est: np.ndarray, q_true: np.ndarray, motion: np.ndarray | None = None) -> BroadErrors:
