@@ -92,19 +92,6 @@ def gaussmf(x, c, sigma):
 
 
 @njit(cache=True, inline="always")
-def trimf(x, a, b, c):
-    """Triangle with feet ``a``, ``c`` and peak ``b`` (``a <= b <= c``); ``a == b`` or ``b == c`` give
-    a right-angled triangle (value 1 at the peak)."""
-    if x < a or x > c:
-        return 0.0
-    if x < b:
-        return (x - a) / (b - a)
-    if x > b:
-        return (c - x) / (c - b)
-    return 1.0
-
-
-@njit(cache=True, inline="always")
 def trapmf(x, a, b, c, d):
     """Trapezoid with feet ``a``, ``d`` and plateau ``[b, c]`` (``a <= b <= c <= d``).
 
@@ -118,6 +105,13 @@ def trapmf(x, a, b, c, d):
     if x > c:
         return (d - x) / (d - c)
     return 1.0
+
+
+@njit(cache=True, inline="always")
+def trimf(x, a, b, c):
+    """Triangle with feet ``a``, ``c`` and peak ``b`` (``a <= b <= c``); ``a == b`` or ``b == c`` give
+    a right-angled triangle (value 1 at the peak)."""
+    return trapmf(x, a, b, b, c)  # a trapezoid with a one-point plateau
 
 
 @njit(cache=True, inline="always")

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.data.recording import Recording, RecordingError, _check_finite_rows
 
 __all__ = ["load_broad", "broad_trials", "default_broad_dir"]
 
@@ -101,12 +101,7 @@ def load_broad(path: str | Path, name: str | None = None) -> Recording:
         elif a.shape[0] != n:
             raise RecordingError(f"{path}: key {key!r} has {a.shape[0]} samples, 'imu_gyr' has {n}")
         if key != "opt_quat":  # truth may be NaN (markers lost); the IMU signals may not
-            bad = ~np.isfinite(a).all(axis=1)
-            if bad.any():
-                raise RecordingError(
-                    f"{path}: key {key!r} has {int(bad.sum())} non-finite sample(s), first at index "
-                    f"{int(np.argmax(bad))}"
-                )
+            _check_finite_rows(str(path), f"key {key!r}", a)
         arrays[key] = a
     movement = np.asarray(d["movement"]).ravel()
     if movement.shape[0] != n:

@@ -46,6 +46,16 @@ def _as_array(source: str, key: str, value: Any, ncols: int | None, n: int | Non
     return a
 
 
+def _check_finite_rows(source: str, what: str, a: np.ndarray, hint: str = "") -> None:
+    """``RecordingError`` naming ``source``, ``what`` (a quoted key) and the first row of ``a`` (N, k)
+    that is not all finite."""
+    bad = ~np.isfinite(a).all(axis=1)
+    if bad.any():
+        raise RecordingError(
+            f"{source}: {what} has {int(bad.sum())} non-finite sample(s), first at index {int(np.argmax(bad))}{hint}"
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class Recording:
     """IMU data of one trial plus ground truth.
@@ -96,22 +106,11 @@ class Recording:
             raise RecordingError(f"{src}: needs at least 2 samples, got {n}")
         acc = _as_array(src, "acc", self.acc, 3, n)
         for key, a in (("gyr", gyr), ("acc", acc)):
-            bad = ~np.isfinite(a).all(axis=1)
-            if bad.any():
-                i = int(np.argmax(bad))
-                raise RecordingError(
-                    f"{src}: {key!r} has {int(bad.sum())} non-finite sample(s), first at index {i}; "
-                    "filters need finite gyr and acc (clean or cut the recording)"
-                )
+            _check_finite_rows(src, repr(key), a, "; filters need finite gyr and acc (clean or cut the recording)")
         mag = None
         if self.mag is not None:
             mag = _as_array(src, "mag", self.mag, 3, n)
-            bad = ~np.isfinite(mag).all(axis=1)
-            if bad.any():
-                raise RecordingError(
-                    f"{src}: 'mag' has {int(bad.sum())} non-finite sample(s), first at index "
-                    f"{int(np.argmax(bad))}"
-                )
+            _check_finite_rows(src, "'mag'", mag)
         quat = None if self.quat is None else _as_array(src, "quat", self.quat, 4, n)
         if self.motion is None:
             motion = np.ones(n, dtype=bool)
