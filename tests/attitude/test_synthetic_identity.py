@@ -3,9 +3,10 @@
 The digests below were computed from the generators before ``synthetic.py`` was split into the
 IMU model, bench and cache modules (commit 4db42a0). Every array of the recording (gyr, acc, mag,
 quat, motion, extra signals, with dtype and shape), ``dt`` and the metadata go into one SHA-256, so
-any change in a random draw, an operation order or a rounding shows. The generators use only
-elementwise NumPy arithmetic and ``numpy.random.Generator`` streams, so the digests are fixed for a
-given NumPy (bit generator streams are stable across NumPy versions by NEP 19 for ``PCG64``).
+any change in a random draw, an operation order or a rounding shows. The digests hold for the
+pinned NumPy on x86-64: NumPy keeps the raw ``PCG64`` stream fixed (NEP 19) but may change a
+``Generator`` distribution or its vectorised ``sin``/``arctan2`` between versions or CPUs; after such
+an upgrade, recompute them from the commit that last passed, never from the code under test.
 """
 
 from __future__ import annotations

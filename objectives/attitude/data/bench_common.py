@@ -88,19 +88,6 @@ def _slow_angles(n: int, dt: float, rng: np.random.Generator, amp: np.ndarray,
     return sum(a[j] * np.sin(2 * np.pi * f[j] * tau[:, None] + p[j]) for j in range(3))
 
 
-def _euler_zyx_to_quat(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
-    """Sensor-to-earth quaternion ``q = qz(yaw) qy(pitch) qx(roll)`` (ZYX, FAEKF paper eqs. 4-6)."""
-    cr, sr = np.cos(roll / 2), np.sin(roll / 2)
-    cp, sp = np.cos(pitch / 2), np.sin(pitch / 2)
-    cy, sy = np.cos(yaw / 2), np.sin(yaw / 2)
-    return np.stack([
-        cy * cp * cr + sy * sp * sr,
-        cy * cp * sr - sy * sp * cr,
-        cy * sp * cr + sy * cp * sr,
-        sy * cp * cr - cy * sp * sr,
-    ], axis=1)
-
-
 def _oscillation(n: int, dt: float, rng: np.random.Generator, f_range: tuple[float, float],
                  amp_range: tuple[float, float], rate_max: float, axes: int) -> tuple[np.ndarray, np.ndarray]:
     """Sinusoidal oscillation with randomly varying frequency and amplitude (the revolute joints'
