@@ -719,9 +719,6 @@ class FAEKF(EKF):
         finally:
             self._given = None
 
-    def run(self, rec: Recording, q0: Any = None, disturbances: Disturbances | None = None) -> np.ndarray:
-        return self.run_detailed(rec, q0, disturbances).quat
-
     def _run(self, rec: Recording, q0: np.ndarray, disturbances: Disturbances | None = None) -> FilterResult:
         dist = disturbances if disturbances is not None else getattr(self, "_given", None)
         if dist is None:
