@@ -320,9 +320,11 @@ def _run_arrays(gyr, acc, mag, coef: np.ndarray, euler0: np.ndarray, detailed: b
 
 ALPHA_RANGE = UNIT_CLOSED
 GATE_RANGE = Interval(0.0, math.inf, low_open=True, allow_inf=True)
-_ALPHA = dict(unit="1", doc="gyro weight per sample", eq="eq. (8)", allowed=ALPHA_RANGE)
-_KP = dict(bounds=(0.01, 100.0), scale="log", unit="1/s", doc="proportional gain", eq="eq. (10)", allowed=NONNEG)
-_KI = dict(bounds=(1e-3, 10.0), scale="log", unit="1/s^2", doc="integral gain", eq="eq. (10)", allowed=NONNEG)
+_ALPHA = dict(unit="1", doc="gyro weight per sample, eq. (8)", eq="eq. (8)", allowed=ALPHA_RANGE)
+_KP = dict(bounds=(0.01, 100.0), scale="log", unit="1/s", doc="proportional gain of eq. (10)", eq="eq. (10)",
+           allowed=NONNEG)
+_KI = dict(bounds=(1e-3, 10.0), scale="log", unit="1/s^2", doc="integral gain of eq. (10)", eq="eq. (10)",
+           allowed=NONNEG)
 _USE_MAG = Param("use_mag", True, doc="yaw from the magnetometer (true) or gyro only (false)")
 _GATE = Param("acc_gate", math.inf, unit="1", allowed=GATE_RANGE,
               doc="no correction when | |acc| - g | > acc_gate g (inf: never, as the paper)")

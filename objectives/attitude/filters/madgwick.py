@@ -170,8 +170,8 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
 
 #: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)
 DECL = ParamSet("madgwick", (
-    Param("beta", 0.1, (1e-3, 1.0), "log", "rad/s", "gradient step gain", "report eq. 33", NONNEG),
-    Param("zeta", 0.0, None, unit="1/s", doc="gyro bias drift gain, 0 = off", eq="report eq. 48",
+    Param("beta", 0.1, (1e-3, 1.0), "log", "rad/s", "gradient step gain (eq. 33)", "report eq. 33", NONNEG),
+    Param("zeta", 0.0, None, unit="1/s", doc="gyro bias drift gain (eq. 48), 0 = off", eq="report eq. 48",
           allowed=NONNEG),
     Param("variant", "paper", choices=tuple(VARIANTS), doc="'paper' or 'original_c' (2010 C code field scale)",
           eq="report eqs. 45-46"),
