@@ -81,7 +81,7 @@ from numba import njit
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
-from tuner.space import Real
+from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["KF1D", "AKF1D", "Mahony1D", "Madgwick1D", "kf1d_kernel", "mahony1d_kernel",
            "madgwick1d_kernel", "tilt_from_quat", "quat_from_tilt", "akf1d_fis"]
@@ -271,27 +271,24 @@ def _inputs(rec: Recording) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return gy, ax, az
 
 
-def _positive(flt: str, name: str, value: Any, allow_zero: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{flt}: {name} must be a number, got {value!r}") from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ValueError(f"{flt}: {name} must be finite and {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-    return v
-
-
-def _check_bool(flt: str, name: str, value: Any) -> bool:
-    if not isinstance(value, (bool, np.bool_)) and value not in (0, 1):
-        raise ValueError(f"{flt}: {name} must be true or false, got {value!r}")
-    return bool(value)
-
-
 # --- KF1D ----------------------------------------------------------------------------------------
 _P0_OPTIONS = (
-    Real("p0_theta", fixed=0.0, unit="rad^2", doc="initial angle variance (thesis 3.1.3.1: P0 = 0)"),
-    Real("p0_bias", fixed=0.0, unit="(rad/s)^2", doc="initial bias variance (thesis 3.1.3.1: P0 = 0)"),
+    Param("p0_theta", 0.0, unit="rad^2", doc="initial angle variance (thesis 3.1.3.1: P0 = 0)", eq="eq. 3.13",
+          allowed=NONNEG),
+    Param("p0_bias", 0.0, unit="(rad/s)^2", doc="initial bias variance (thesis 3.1.3.1: P0 = 0)", eq="eq. 3.13",
+          allowed=NONNEG),
 )
+
+
+def _kf_noise(rho, q00, q11, defaults, rho_doc) -> tuple[Param, ...]:
+    """rho, q00, q11 with search bounds ``(rho, q00, q11)`` and defaults ``defaults``."""
+    return (
+        Param("rho", defaults[0], rho, "log", "angle^2 per sample", rho_doc, "eq. 3.17", POSITIVE),
+        Param("q00", defaults[1], q00, "log", "angle^2 per sample", "angle process noise (eq. 3.17)", "eq. 3.17",
+              POSITIVE),
+        Param("q11", defaults[2], q11, "log", "(angle/s)^2 per sample", "gyro-bias random-walk variance (eq. 3.17)",
+              "eq. 3.17", POSITIVE),
+    )
 
 
 class KF1D(AttitudeFilter):
@@ -317,23 +314,9 @@ class KF1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "kf1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("rho", 0.008, 0.45, scale="log", unit="angle^2 per sample",
-             doc="accelerometer-angle noise variance R (eq. 3.17)"),
-        Real("q00", 7e-9, 2e-6, scale="log", unit="angle^2 per sample", doc="angle process noise (eq. 3.17)"),
-        Real("q11", 1e-13, 2e-8, scale="log", unit="(angle/s)^2 per sample",
-             doc="gyro-bias random-walk variance (eq. 3.17)"),
-    ) + _P0_OPTIONS
-    defaults: ClassVar[dict[str, Any]] = {
-        "rho": 0.05, "q00": 5e-7, "q11": 5e-9, "p0_theta": 0.0, "p0_bias": 0.0,
-    }
-
-    def _check(self) -> None:
-        v = self.values
-        for key in ("rho", "q00", "q11"):
-            v[key] = _positive(self.name, key, v[key])
-        for key in ("p0_theta", "p0_bias"):
-            v[key] = _positive(self.name, key, v[key], allow_zero=True)
+    decl: ClassVar[ParamSet] = ParamSet("kf1d", _kf_noise(
+        (0.008, 0.45), (7e-9, 2e-6), (1e-13, 2e-8), (0.05, 5e-7, 5e-9),
+        "accelerometer-angle noise variance R (eq. 3.17)") + _P0_OPTIONS)
 
     def _coef(self, rec: Recording, theta0: float) -> np.ndarray:
         v = self.values
@@ -400,42 +383,28 @@ class AKF1D(KF1D):
     """
 
     name: ClassVar[str] = "akf1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("rho", 0.005, 0.43, scale="log", unit="angle^2 per sample",
-             doc="accelerometer-angle noise variance before fuzzy scaling (eq. 3.24)"),
-        Real("q00", 1e-8, 8e-7, scale="log", unit="angle^2 per sample", doc="angle process noise (eq. 3.17)"),
-        Real("q11", 1e-12, 5e-11, scale="log", unit="(angle/s)^2 per sample",
-             doc="gyro-bias random-walk variance (eq. 3.17)"),
-    ) + _P0_OPTIONS + (
-        Real("window", fixed=400, unit="samples", doc="packet length L (eqs. 3.19-3.22)"),
-        Real("fft_length", fixed=512, unit="samples", doc="FFT length L_FFT (eq. 3.19)"),
-        Real("f_thr", fixed=8.0, unit="Hz", doc="highest vibration frequency considered (eq. 3.21)"),
-        Real("omega_thr", fixed=math.radians(10.0), unit="rad/s", doc="amplitude threshold (eq. 3.21)"),
-        Real("f_range_hz", fixed=6.5, unit="Hz", doc="range of the vibration input (sets Z, S, B)"),
-        Real("acc_range_g", fixed=0.35, unit="g", doc="range of the external-acceleration input"),
-    ) + tuple(Real(f"K{i + 1}", fixed=k, unit="1", doc=f"singleton K{i + 1} of Table 3.2")
-              for i, k in enumerate(AKF1D_K_DEFAULTS))
-    defaults: ClassVar[dict[str, Any]] = {
-        "rho": 0.05, "q00": 7e-8, "q11": 5e-12, "p0_theta": 0.0, "p0_bias": 0.0,
-        "window": 400, "fft_length": 512, "f_thr": 8.0, "omega_thr": math.radians(10.0),
-        "f_range_hz": 6.5, "acc_range_g": 0.35,
-        **{f"K{i + 1}": k for i, k in enumerate(AKF1D_K_DEFAULTS)},
-    }
+    decl: ClassVar[ParamSet] = ParamSet("akf1d", _kf_noise(
+        (0.005, 0.43), (1e-8, 8e-7), (1e-12, 5e-11), (0.05, 7e-8, 5e-12),
+        "accelerometer-angle noise variance before fuzzy scaling (eq. 3.24)") + _P0_OPTIONS + (
+        Param("window", 400, unit="samples", doc="packet length L (eqs. 3.19-3.22)", eq="eqs. 3.19-3.22",
+              allowed=Interval(2.0), integer=True),
+        Param("fft_length", 512, unit="samples", doc="FFT length L_FFT (eq. 3.19)", eq="eq. 3.19",
+              allowed=Interval(2.0), integer=True),
+        Param("f_thr", 8.0, unit="Hz", doc="highest vibration frequency considered (eq. 3.21)", eq="eq. 3.21",
+              allowed=POSITIVE),
+        Param("omega_thr", math.radians(10.0), unit="rad/s", doc="amplitude threshold (eq. 3.21)", eq="eq. 3.21",
+              allowed=NONNEG),
+        Param("f_range_hz", 6.5, unit="Hz", doc="range of the vibration input (sets Z, S, B)", eq="Table 3.2",
+              allowed=POSITIVE),
+        Param("acc_range_g", 0.35, unit="g", doc="range of the external-acceleration input", eq="Table 3.2",
+              allowed=POSITIVE),
+    ) + tuple(Param(f"K{i + 1}", k, unit="1", doc=f"singleton K{i + 1} of Table 3.2", eq="eq. 3.24, Table 3.2",
+                    allowed=POSITIVE) for i, k in enumerate(AKF1D_K_DEFAULTS)))
 
     def _check(self) -> None:
-        super()._check()
         v = self.values
-        for key in ("window", "fft_length"):
-            if isinstance(v[key], bool) or int(v[key]) != v[key] or int(v[key]) < 2:
-                raise ValueError(f"{self.name}: {key} must be an integer >= 2, got {v[key]!r}")
-            v[key] = int(v[key])
         if v["fft_length"] < v["window"]:
             raise ValueError(f"{self.name}: fft_length ({v['fft_length']}) must be >= window ({v['window']})")
-        for key in ("f_thr", "f_range_hz", "acc_range_g"):
-            v[key] = _positive(self.name, key, v[key])
-        v["omega_thr"] = _positive(self.name, "omega_thr", v["omega_thr"], allow_zero=True)
-        for i in range(5):
-            v[f"K{i + 1}"] = _positive(self.name, f"K{i + 1}", v[f"K{i + 1}"])
 
     def fis(self) -> SugenoFIS:
         """The fuzzy system of eq. 3.24 with this filter's options."""
@@ -475,8 +444,8 @@ class AKF1D(KF1D):
 
 
 # --- Mahony1D / Madgwick1D -----------------------------------------------------------------------
-_EXACT = Real("exact_step", fixed=True,
-              doc="exact rotation per sample (true) or the sample code's first-order step (false)")
+_EXACT = Param("exact_step", True, choices=(True, False),
+               doc="exact rotation per sample (true) or the sample code's first-order step (false)")
 
 
 class Mahony1D(AttitudeFilter):
@@ -499,18 +468,13 @@ class Mahony1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "mahony1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("Kp", 0.125, 0.7, unit="rad/s", doc="proportional gain (Table 3.4)"),
-        Real("Ki", 0.0, 0.005, unit="rad/s^2", doc="integral gain (Table 3.4)"),
+    decl: ClassVar[ParamSet] = ParamSet("mahony1d", (
+        Param("Kp", 0.5, (0.125, 0.7), unit="rad/s", doc="proportional gain (Table 3.4)", eq="Table 3.4",
+              allowed=NONNEG),
+        Param("Ki", 0.0, (0.0, 0.005), unit="rad/s^2", doc="integral gain (Table 3.4)", eq="Table 3.4",
+              allowed=NONNEG),
         _EXACT,
-    )
-    defaults: ClassVar[dict[str, Any]] = {"Kp": 0.5, "Ki": 0.0, "exact_step": True}
-
-    def _check(self) -> None:
-        v = self.values
-        v["Kp"] = _positive(self.name, "Kp", v["Kp"], allow_zero=True)
-        v["Ki"] = _positive(self.name, "Ki", v["Ki"], allow_zero=True)
-        v["exact_step"] = _check_bool(self.name, "exact_step", v["exact_step"])
+    ))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         gy, ax, az = _inputs(rec)
@@ -518,7 +482,7 @@ class Mahony1D(AttitudeFilter):
         b = np.empty(rec.n)
         v = self.values
         mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt,
-                        tilt_from_quat(q0, rec.frame, self.working_frame), v["exact_step"], th, b)
+                        tilt_from_quat(q0, rec.frame, self.working_frame), bool(v["exact_step"]), th, b)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
 
 
@@ -537,20 +501,15 @@ class Madgwick1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "madgwick1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("beta", 0.01, 0.15, scale="log", unit="rad/s", doc="gradient step gain (Table 3.5)"),
+    decl: ClassVar[ParamSet] = ParamSet("madgwick1d", (
+        Param("beta", 0.1, (0.01, 0.15), "log", "rad/s", "gradient step gain (Table 3.5)", "Table 3.5", NONNEG),
         _EXACT,
-    )
-    defaults: ClassVar[dict[str, Any]] = {"beta": 0.1, "exact_step": True}
-
-    def _check(self) -> None:
-        self.values["beta"] = _positive(self.name, "beta", self.values["beta"], allow_zero=True)
-        self.values["exact_step"] = _check_bool(self.name, "exact_step", self.values["exact_step"])
+    ))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         v = self.values
         madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt,
-                          tilt_from_quat(q0, rec.frame, self.working_frame), v["exact_step"], th)
+                          tilt_from_quat(q0, rec.frame, self.working_frame), bool(v["exact_step"]), th)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th})
