@@ -13,7 +13,7 @@ from numba import njit
 
 from objectives.attitude.quaternion import _triad_into
 
-__all__ = ["ekf_kernel", "N_COEF"]
+__all__ = ["ekf_kernel", "ekf_steps", "N_COEF"]
 
 
 # indices into the coefficient array of the kernel
@@ -46,6 +46,39 @@ def ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b):
     out_b : (N, 3) float64, out
         Gyro bias estimates, rad/s.
     """
+    P = np.zeros((7, 7))
+    for i in range(4):
+        P[i, i] = coef[_C_P0Q]
+    for i in range(4, 7):
+        P[i, i] = coef[_C_P0B]
+    x = np.empty(7)
+    for i in range(7):
+        x[i] = x0[i]
+    nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
+    for i in range(4):
+        x[i] /= nq
+        out_q[0, i] = x[i]
+    for i in range(3):
+        out_b[0, i] = x[4 + i]
+    ekf_steps(gyr, acc, mag, coef, kscale, x, P, 1, out_q, out_b)
+
+
+@njit(cache=True)
+def ekf_steps(gyr, acc, mag, coef, kscale, x, P, k_start, out_q, out_b):
+    """The time and measurement updates of samples ``k_start .. N-1`` from the state ``(x, P)``.
+
+    :func:`ekf_kernel` calls it from sample 1 after writing the initial state as sample 0; a stream
+    calls it with ``k_start = 1`` on two-sample arrays (previous, current sample) per update.
+
+    Parameters
+    ----------
+    gyr, acc, mag, coef, kscale, out_q, out_b
+        As :func:`ekf_kernel` (rows ``k_start..N-1`` of the outputs are written).
+    x : (7,) float64, in/out
+        State after sample ``k_start - 1``: unit NED quaternion and gyro bias, rad/s.
+    P : (7, 7) float64, in/out
+        Its covariance.
+    """
     n = gyr.shape[0]
     h = 0.5 * coef[_C_DT]
     qq = coef[_C_QQ]
@@ -59,29 +92,14 @@ def ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b):
     cur = 1 if (coef.shape[0] > _C_CUR and coef[_C_CUR] != 0.0) else 0
     nk = kscale.shape[0]
 
-    P = np.zeros((7, 7))
-    for i in range(4):
-        P[i, i] = coef[_C_P0Q]
-    for i in range(4, 7):
-        P[i, i] = coef[_C_P0B]
     A = np.empty((4, 4))
     B = np.empty((4, 3))
     T = np.empty((4, 7))
     W = np.empty((4, 7))
     L = np.zeros((4, 4))
-    x = np.empty(7)
     z = np.empty((1, 4))
     v = np.empty(4)
-    for i in range(7):
-        x[i] = x0[i]
-    nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
-    for i in range(4):
-        x[i] /= nq
-        out_q[0, i] = x[i]
-    for i in range(3):
-        out_b[0, i] = x[4 + i]
-
-    for k in range(1, n):
+    for k in range(k_start, n):
         # ---- time update (eqs. 16, 20, 21) with gyro sample k-1 --------------------------------
         q0, q1, q2, q3 = x[0], x[1], x[2], x[3]
         kg = k - 1 + cur

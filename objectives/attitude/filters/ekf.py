@@ -88,8 +88,9 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._ekf_kernel import ekf_kernel
+from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_steps
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import fuzzify, grid_rules, sugeno_mu
 from objectives.params import ANY_REAL, POSITIVE, Interval, Param, ParamSet
 from tuner.space import Real, Space
@@ -311,6 +312,44 @@ class EKF(AttitudeFilter):
         q, b = self._kernel(rec, q0, np.ones(1))
         return FilterResult(q, self.working_frame, {"gyr_bias": b})
 
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample EKF (state and covariance carried between :func:`ekf_steps` calls); the
+        accelerometer is in m/s^2 as for :meth:`run` on arrays."""
+        return _EKFStream(self, rate_hz, dt, q0, frame)
+
+
+class _EKFStream(StateStream):
+    """Per-sample EKF: sample 0 is the initial state, every later sample one :func:`ekf_steps` call on
+    the (previous, current) pair, which is what the batch kernel does at that sample."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        self._coef = self.filter.coefficients(self.dt, bool(self.use_mag), 9.80665)
+        self._P = np.zeros((7, 7))
+        for i in range(4):
+            self._P[i, i] = self._coef[4]
+        for i in range(4, 7):
+            self._P[i, i] = self._coef[5]
+        x = np.zeros(7)
+        x[:4] = q0
+        nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
+        x[:4] = [x[0] / nq, x[1] / nq, x[2] / nq, x[3] / nq]
+        self._pair = (np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3)))
+        self._out_q = np.empty((2, 4))
+        self._out_b = np.empty((2, 3))
+        self._one = np.ones(1)
+        return x
+
+    def _step(self, state, gyr, acc, mag):
+        g2, a2, m2 = self._pair
+        g2[0], a2[0], m2[0] = g2[1], a2[1], m2[1]
+        g2[1], a2[1] = gyr[0], acc[0]
+        if mag.shape[0]:
+            m2[1] = mag[0]
+        if self.n == 0:  # sample 0: the initial state, as ekf_kernel writes it
+            return state[:4].copy()
+        ekf_steps(g2, a2, m2, self._coef, self._one, state, self._P, 1, self._out_q, self._out_b)
+        return self._out_q[1].copy()
+
 
 @dataclass(frozen=True)
 class Disturbances:
@@ -443,6 +482,13 @@ class FAEKF(EKF):
         return Disturbances(*arrs)
 
     # --- running ----------------------------------------------------------------------------
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """Per-sample FAEKF through the buffered fallback of :class:`AttitudeFilter` (the fuzzy inputs
+        need the packets so far). The batch normalises eq. 27 by the median ``|m|`` of the whole
+        recording, the stream by that of the samples so far: with the magnetometer they agree over
+        the first packet (``window`` samples) only; without it (``use_mag=False``) at every sample."""
+        return AttitudeFilter.stream(self, rate_hz, dt, q0, frame)
+
     def run_detailed(
         self, rec: Recording, q0: Any = None, disturbances: Disturbances | None = None
     ) -> FilterResult:

@@ -107,9 +107,9 @@ class VQF(AttitudeFilter):
     working_frame = "ENU"
     needs_mag = True
     decl = ParamSet("vqf", (
-        *(_SEARCHED[k] if k in _SEARCHED else
-          Param(k, v, unit=_UNITS.get(k, ""), doc="VQF parameter (see vqf.VQF's documentation)")
-          for k, v in VQF_PARAMS.items()),
+        *_SEARCHED.values(),  # first, in this order: the unit-cube encoding of recorded runs
+        *(Param(k, v, unit=_UNITS.get(k, ""), doc="VQF parameter (see vqf.VQF's documentation)")
+          for k, v in VQF_PARAMS.items() if k not in _SEARCHED),
         Param("use_mag", True, doc="9-D (true) or 6-D (false) fusion"),
         Param("offline", False, doc="acausal offlineVQF instead of the causal VQF"),
     ))
