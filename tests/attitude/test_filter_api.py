@@ -235,3 +235,16 @@ def test_stream_errors(rec):
         s.update(rec.gyr[1], rec.acc[1])
     with pytest.raises(ValueError, match=r"gyr as a \(3,\) sample"):
         s.update(rec.gyr[:2], rec.acc[1], rec.mag[1])
+
+
+def test_readme_arrays_example(rec, capsys):
+    """The README's plain-array example, run as written."""
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    blocks = [b.split("```", 1)[0] for b in readme.split("```python\n")[1:]]
+    code = next(b for b in blocks if "flt.stream(" in b)
+    assert len(code.strip().splitlines()) <= 10
+    ns = {"gyr": rec.gyr, "acc": rec.acc, "mag": rec.mag}
+    exec(compile(code, "README.md", "exec"), ns)
+    assert ns["q"].shape == (rec.n, 4)
+    np.testing.assert_array_equal(ns["q_now"], ns["q"][-1])
+    assert "beta 0.1 (0.001, 1.0) rad/s report eq. 33" in capsys.readouterr().out
