@@ -61,10 +61,10 @@ class Interval:
         return not (x > self.high or (self.high_open and x == self.high))
 
     def __str__(self) -> str:
-        lo = "(" if self.low_open else "["
-        hi = ")" if self.high_open else "]"
-        txt = f"{lo}{self.low:g}, {self.high:g}{hi}"
-        return txt if self.allow_inf else f"finite in {txt}"
+        """``in [0, inf)``: brackets say which ends are allowed (inf only with ``allow_inf``)."""
+        lo = "(" if self.low_open or (math.isinf(self.low) and not self.allow_inf) else "["
+        hi = ")" if self.high_open or (math.isinf(self.high) and not self.allow_inf) else "]"
+        return f"in {lo}{self.low:g}, {self.high:g}{hi}"
 
 
 ANY_REAL = Interval()
