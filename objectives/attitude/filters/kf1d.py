@@ -80,6 +80,7 @@ from numba import njit
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
@@ -91,7 +92,7 @@ _TWO_PI = 2.0 * math.pi
 
 # --- kernels -------------------------------------------------------------------------------------
 @njit(cache=True)
-def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, out_theta, out_bias):
+def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, state, k_start, out_theta, out_bias):
     """2-state tilt KF (thesis eqs. 3.9-3.13) over whole arrays.
 
     Parameters
@@ -99,26 +100,29 @@ def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, out_theta, out_bias)
     gyr_y : (N,) rate about y, rad/s.
     acc_x, acc_z : (N,) specific force x and z, any unit.
     up_sign : +1.0 (z-up earth frame) or -1.0 (NED).
-    coef : (7,) ``dt, q00, q11, rho, p0_theta, p0_bias, theta0``.
+    coef : (4,) ``dt, q00, q11, rho``.
     kscale : (N,) scale of R per sample (AKF1D), or (1,) constant scale (KF1D: ones(1)).
-    out_theta, out_bias : (N,) outputs, rad and rad/s.
+    state : (5,) in/out: ``theta, bias, P00, P01, P11`` after sample ``k_start - 1``; the batch starts
+        from ``(theta0, 0, p0_theta, 0, p0_bias)`` at sample 0, a stream carries it between calls.
+    k_start : first sample to update (1 in the batch and for a stream's (previous, current) pair).
+    out_theta, out_bias : (N,) outputs, rad and rad/s (rows ``k_start - 1 ..``).
     """
     n = gyr_y.shape[0]
     dt = coef[0]
     q00 = coef[1]
     q11 = coef[2]
     rho = coef[3]
-    p00 = coef[4]
-    p01 = 0.0
-    p11 = coef[5]
-    th = coef[6]
-    b = 0.0
+    th = state[0]
+    b = state[1]
+    p00 = state[2]
+    p01 = state[3]
+    p11 = state[4]
     per_sample = kscale.shape[0] > 1
     r = rho * kscale[0]
-    out_theta[0] = th
-    out_bias[0] = b
+    out_theta[k_start - 1] = th
+    out_bias[k_start - 1] = b
     dt2 = dt * dt
-    for k in range(1, n):
+    for k in range(k_start, n):
         # time update (3.11)
         th += dt * (gyr_y[k - 1] - b)
         m00 = p00 - 2.0 * dt * p01 + dt2 * p11 + q00
@@ -141,6 +145,11 @@ def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, out_theta, out_bias)
         p11 = m11 - g1 * m01
         out_theta[k] = th
         out_bias[k] = b
+    state[0] = th
+    state[1] = b
+    state[2] = p00
+    state[3] = p01
+    state[4] = p11
 
 
 @njit(cache=True, inline="always")
@@ -155,17 +164,17 @@ def _step(q0, q2, w, dt, exact):
 
 
 @njit(cache=True)
-def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, theta0, exact, out_theta, out_bias):
+def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, state, exact, out_theta, out_bias):
     """Mahony's IMU update (sample code) restricted to rotations about y; see the module docstring.
 
-    ``out_bias`` receives ``-I`` (the integral term estimates minus the gyro bias), rad/s.
+    ``out_bias`` receives ``-I`` (the integral term estimates minus the gyro bias), rad/s. Rows
+    ``1..N-1`` are written (row 0 is the state before the first sample); ``state`` (3,) in/out holds
+    ``(q0, q2, I)`` before the first and after the last sample (:func:`_tilt_state` starts it).
     """
     n = gyr_y.shape[0]
-    q0 = math.cos(0.5 * theta0)
-    q2 = math.sin(0.5 * theta0)
-    integ = 0.0
-    out_theta[0] = theta0
-    out_bias[0] = 0.0
+    q0 = state[0]
+    q2 = state[1]
+    integ = state[2]
     for k in range(n - 1):
         w = gyr_y[k]
         ax = up_sign * acc_x[k]
@@ -189,15 +198,20 @@ def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, theta0, exact, out
         q2 *= inv
         out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
         out_bias[k + 1] = -integ
+    state[0] = q0
+    state[1] = q2
+    state[2] = integ
 
 
 @njit(cache=True)
-def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, theta0, exact, out_theta):
-    """Madgwick's IMU update (sample code) restricted to rotations about y; see the module docstring."""
+def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, state, exact, out_theta):
+    """Madgwick's IMU update (sample code) restricted to rotations about y; see the module docstring.
+
+    Rows ``1..N-1`` of ``out_theta`` are written; ``state`` (at least 2,) in/out holds ``(q0, q2)``.
+    """
     n = gyr_y.shape[0]
-    q0 = math.cos(0.5 * theta0)
-    q2 = math.sin(0.5 * theta0)
-    out_theta[0] = theta0
+    q0 = state[0]
+    q2 = state[1]
     for k in range(n - 1):
         w = gyr_y[k]
         ax = up_sign * acc_x[k]
@@ -225,6 +239,16 @@ def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, theta0, exact, out
         q0 *= inv
         q2 *= inv
         out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
+    state[0] = q0
+    state[1] = q2
+
+
+@njit(cache=True)
+def _tilt_state(theta0, state):
+    """``state[:3] = (cos(theta0/2), sin(theta0/2), 0)``: the start of the Mahony/Madgwick 1-D kernels."""
+    state[0] = math.cos(0.5 * theta0)
+    state[1] = math.sin(0.5 * theta0)
+    state[2] = 0.0
 
 
 # --- helpers ------------------------------------------------------------------------------------
@@ -318,21 +342,29 @@ class KF1D(AttitudeFilter):
         (0.008, 0.45), (7e-9, 2e-6), (1e-13, 2e-8), (0.05, 5e-7, 5e-9),
         "accelerometer-angle noise variance R (eq. 3.17)") + _P0_OPTIONS)
 
-    def _coef(self, rec: Recording, theta0: float) -> np.ndarray:
+    def _coef(self, dt: float) -> np.ndarray:
         v = self.values
-        return np.array([rec.dt, v["q00"], v["q11"], v["rho"], v["p0_theta"], v["p0_bias"], theta0])
+        return np.array([dt, v["q00"], v["q11"], v["rho"]])
+
+    def _state0(self, theta0: float) -> np.ndarray:
+        v = self.values
+        return np.array([theta0, 0.0, v["p0_theta"], 0.0, v["p0_bias"]])
 
     def _kf(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         b = np.empty(rec.n)
-        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
-        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), self._coef(rec, theta0), kscale, th, b)
+        state = self._state0(tilt_from_quat(q0, rec.frame, self.working_frame))
+        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), self._coef(rec.dt), kscale, state, 1, th, b)
         return th, b
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         th, b = self._kf(rec, q0, np.ones(1))
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample tilt KF (the kernel carries angle, bias and covariance in ``state``)."""
+        return _TiltStream(self, rate_hz, dt, q0, frame)
 
 
 # --- AKF1D ---------------------------------------------------------------------------------------
@@ -405,6 +437,11 @@ class AKF1D(KF1D):
         v = self.values
         if v["fft_length"] < v["window"]:
             raise ValueError(f"{self.name}: fft_length ({v['fft_length']}) must be >= window ({v['window']})")
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """Per-sample AKF1D through the buffered fallback of :class:`AttitudeFilter`: the fuzzy scale of
+        R needs the packets so far (eqs. 3.19-3.22); equal to the batch, O(n) per sample."""
+        return AttitudeFilter.stream(self, rate_hz, dt, q0, frame)
 
     def fis(self) -> SugenoFIS:
         """The fuzzy system of eq. 3.24 with this filter's options."""
@@ -481,9 +518,24 @@ class Mahony1D(AttitudeFilter):
         th = np.empty(rec.n)
         b = np.empty(rec.n)
         v = self.values
-        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt,
-                        tilt_from_quat(q0, rec.frame, self.working_frame), bool(v["exact_step"]), th, b)
+        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
+        th[0], b[0] = theta0, 0.0
+        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt, self._state0(theta0),
+                        bool(v["exact_step"]), th, b)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
+
+    def _state0(self, theta0: float) -> np.ndarray:
+        state = np.empty(3)
+        _tilt_state(theta0, state)
+        return state
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample filter (the kernel carries the quaternion and integral in ``state``)."""
+        return _TiltStream(self, rate_hz, dt, q0, frame)
+
+    def _pair_step(self, state, gy, ax, az, up_sign, dt, th, b) -> None:
+        v = self.values
+        mahony1d_kernel(gy, ax, az, up_sign, v["Kp"], v["Ki"], dt, state, bool(v["exact_step"]), th, b)
 
 
 class Madgwick1D(AttitudeFilter):
@@ -510,6 +562,47 @@ class Madgwick1D(AttitudeFilter):
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         v = self.values
-        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt,
-                          tilt_from_quat(q0, rec.frame, self.working_frame), bool(v["exact_step"]), th)
+        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
+        th[0] = theta0
+        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt, self._state0(theta0),
+                          bool(v["exact_step"]), th)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th})
+
+    _state0 = Mahony1D._state0
+    stream = Mahony1D.stream
+
+    def _pair_step(self, state, gy, ax, az, up_sign, dt, th, b) -> None:
+        v = self.values
+        madgwick1d_kernel(gy, ax, az, up_sign, v["beta"], dt, state, bool(v["exact_step"]), th)
+
+
+class _TiltStream(StateStream):
+    """Per-sample 1-D filter: sample 0 is the initial angle, every later sample one kernel call on the
+    (previous, current) pair, as the batch kernels do at that sample. Output in the stream's frame."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        f = self.filter
+        self.output_frame = self.frame  # the 1-D filters work in the recording's own frame
+        self._up = _up_sign(self.frame)
+        self._pair = (np.zeros(2), np.zeros(2), np.zeros(2))
+        self._th = np.empty(2)
+        self._b = np.empty(2)
+        self._one = np.ones(1)
+        self._theta = tilt_from_quat(q0, self.frame, f.working_frame)
+        if isinstance(f, KF1D):
+            self._coef = f._coef(self.dt)
+        return f._state0(self._theta)
+
+    def _step(self, state, gyr, acc, mag):
+        f = self.filter
+        gy, ax, az = self._pair
+        gy[0], ax[0], az[0] = gy[1], ax[1], az[1]
+        gy[1], ax[1], az[1] = gyr[0, 1], acc[0, 0], acc[0, 2]
+        if self.n > 0:
+            if isinstance(f, KF1D):
+                kf1d_kernel(gy, ax, az, self._up, self._coef, self._one, state, 1, self._th, self._b)
+            else:
+                f._pair_step(state, gy, ax, az, self._up, self.dt, self._th, self._b)
+            self._theta = self._th[1]
+        return quat_from_tilt(np.array([self._theta]))[0]
+

@@ -32,7 +32,7 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording
 
-__all__ = ["as_recording", "resolve_dt", "StateStream", "BufferedStream"]
+__all__ = ["as_recording", "resolve_dt", "StreamBase", "StateStream", "BufferedStream"]
 
 
 def resolve_dt(owner: str, rate_hz: float | None, dt: float | None) -> float:
@@ -77,7 +77,7 @@ def _sample(owner: str, key: str, v: Any) -> np.ndarray:
     return a
 
 
-class _StreamBase:
+class StreamBase:
     """What both stream kinds share: rate, frame, first-sample initialisation, input checks."""
 
     def __init__(self, flt: Any, rate_hz: float | None, dt: float | None, q0: Any, frame: str):
@@ -119,12 +119,15 @@ class _StreamBase:
         return q / np.linalg.norm(q)
 
 
-class StateStream(_StreamBase):
+class StateStream(StreamBase):
     """O(1) stream over a kernel with state in/out (see module docstring).
 
     Subclasses implement ``_init_state(q0) -> state`` and ``_step(state, gyr, acc, mag) -> q (4,)``
-    with ``q`` in the working frame; ``mag`` is (1, 3) or an empty (0, 3) array.
+    with ``q`` in the working frame (or in ``output_frame`` when a subclass sets it); ``mag`` is (1, 3)
+    or an empty (0, 3) array.
     """
+
+    output_frame: str | None = None
 
     def __init__(self, flt: Any, rate_hz: float | None, dt: float | None, q0: Any, frame: str):
         super().__init__(flt, rate_hz, dt, q0, frame)
@@ -147,7 +150,7 @@ class StateStream(_StreamBase):
             self._m[0] = m
         q = self._step(self.state, self._g, self._a, self._m if m is not None else self._no_mag)
         self.n += 1
-        return to_frame(q[None, :], self.filter.working_frame, self.frame)[0]
+        return to_frame(q[None, :], self.output_frame or self.filter.working_frame, self.frame)[0]
 
     def _init_state(self, q0: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -156,7 +159,7 @@ class StateStream(_StreamBase):
         raise NotImplementedError  # pragma: no cover - abstract
 
 
-class BufferedStream(_StreamBase):
+class BufferedStream(StreamBase):
     """Fallback stream: reruns the batch filter on every sample so far (O(n) per update)."""
 
     def __init__(self, flt: Any, rate_hz: float | None, dt: float | None, q0: Any, frame: str):

@@ -27,6 +27,7 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.stream import StreamBase
 from objectives.params import POSITIVE, Param, ParamSet
 
 __all__ = ["VQF", "VQF_PARAMS", "INSTALL_HINT"]
@@ -150,3 +151,26 @@ class VQF(AttitudeFilter):
             diag["mag_dist"] = np.asarray(out["magDistDetected"])
             diag["delta"] = np.asarray(out["delta"])
         return FilterResult(quat, "ENU", diag)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """Per-sample VQF through the package's own ``VQF.update`` (O(1)); ``q0`` is ignored as in
+        :meth:`run`. Not available with ``offline: true`` (the offline filter is acausal)."""
+        if self.values["offline"]:
+            raise ValueError("vqf: offline=True is acausal and has no per-sample stream; use offline=False")
+        return _VQFStream(self, rate_hz, dt, q0, frame)
+
+
+class _VQFStream(StreamBase):
+    def update(self, gyr: Any, acc: Any, mag: Any = None) -> np.ndarray:
+        """Feed one sample (rad/s, m/s^2, any unit); the estimate after it, (4,) in ``frame``."""
+        from objectives.attitude.quaternion import to_frame
+
+        g, a, m = self._read(gyr, acc, mag)
+        if self.n == 0:
+            self._vqf = _import_vqf().VQF(self.dt, **self.filter.vqf_params())
+        self._vqf.update(np.ascontiguousarray(g), np.ascontiguousarray(a),
+                         None if m is None else np.ascontiguousarray(m))
+        self.n += 1
+        q = np.asarray(self._vqf.getQuat9D() if self.use_mag else self._vqf.getQuat6D(), dtype=np.float64)
+        return to_frame(q[None, :], "ENU", self.frame)[0]
+
