@@ -67,9 +67,8 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._scalar import read_rate, read_vec, sq_norm_ok
+from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_vec, sq_norm_ok
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.madgwick import _FM
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, UNIT_CLOSED, Interval, Param, ParamSet, check_number, imu_arrays
 
@@ -85,7 +84,7 @@ def _wrap(a):
     return a - _TWO_PI * math.floor((a + _PI) / _TWO_PI)
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=FASTMATH)
 def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
     """LCF / NCF / CCF over whole arrays (see module docstring for the equations).
 

@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
+from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
@@ -45,11 +45,9 @@ __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
 #: name -> factor k with ``2 b_x = k |h_xy|``, ``2 b_z = k h_z`` (paper: 2; the 2010 C code: 1)
 VARIANTS = {"paper": 2.0, "original_c": 1.0}
 
-# no 'nnan'/'ninf': the kernel tests for non-finite input
-_FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=FASTMATH)
 def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
 

@@ -35,16 +35,15 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
+from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.madgwick import _FM
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["Mahony", "mahony_batch", "DECL"]
 
 
-@njit(cache=True, fastmath=_FM)
+@njit(cache=True, fastmath=FASTMATH)
 def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Mahony filter over whole arrays (see module docstring).
 

@@ -611,6 +611,10 @@ class QUKF(AttitudeFilter):
     bias_rw : float, rad/s/sqrt(s), bias random walk density (Q2).
     att_rw : float, rad/sqrt(s), additive attitude random walk density (Q2).
     p0_att, p0_bias : fixed options, initial std of attitude (rad) and bias (rad/s).
+
+    :meth:`stream` uses the buffered fallback of :mod:`objectives.attitude.filters.stream` (equal to
+    the batch, O(n) per sample): the kernel does not yet take and return its state (quaternion, bias,
+    covariance and, for the QRAUKF, the innovation window).
     """
 
     name = "qukf"
