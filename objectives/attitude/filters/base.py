@@ -7,8 +7,8 @@ that declares its parameters and calls the kernel. Subclasses set
 - ``decl``: the one :class:`objectives.params.ParamSet` declaring every parameter and option (default,
   search bounds, scale, unit, allowed values, doc, equation). ``params`` (the default search space as
   :class:`tuner.space.Real` entries) and ``defaults`` derive from it, and the values are validated once
-  against it at construction. Filters not yet converted still set ``params`` and ``defaults`` by hand
-  and validate in ``_check``;
+  against it at construction (``_check`` is left for checks across parameters). A filter defined
+  outside this package may instead set ``params`` and ``defaults`` by hand and validate in ``_check``;
 - ``needs_mag``: whether the 9-D mode uses the magnetometer (a ``use_mag`` option switches 6-D);
 
 and implement ``_run(rec, q0) -> FilterResult`` with ``q0`` already in the filter's working frame.
