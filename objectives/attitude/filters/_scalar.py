@@ -15,7 +15,11 @@ import math
 
 from numba import njit
 
-__all__ = ["read_vec", "read_rate", "sq_norm_ok", "unit", "read_unit", "rotate_sensor_to_earth"]
+__all__ = ["FASTMATH", "read_vec", "read_rate", "sq_norm_ok", "unit", "read_unit", "rotate_sensor_to_earth"]
+
+#: fastmath flags of the Madgwick, Mahony and complementary kernels; no 'nnan'/'ninf': they test for
+#: non-finite input
+FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
 @njit(cache=True, inline="always")

@@ -4,13 +4,18 @@ A filter is a numba batch kernel over whole arrays plus a thin subclass of :clas
 that declares its parameters and calls the kernel. Subclasses set
 
 - ``name``: the YAML name (``filter: madgwick``);
-- ``params``: a tuple of :class:`tuner.space.Real` with default search bounds, and ``fixed`` options
-  declared as ``Real(name, fixed=default)``;
-- ``defaults``: a dict of default values of every parameter;
+- ``decl``: the one :class:`objectives.params.ParamSet` declaring every parameter and option (default,
+  search bounds, scale, unit, allowed values, doc, equation). ``params`` (the default search space as
+  :class:`tuner.space.Real` entries) and ``defaults`` derive from it, and the values are validated once
+  against it at construction (``_check`` is left for checks across parameters). A filter defined
+  outside this package may instead set ``params`` and ``defaults`` by hand and validate in ``_check``;
 - ``needs_mag``: whether the 9-D mode uses the magnetometer (a ``use_mag`` option switches 6-D);
 
 and implement ``_run(rec, q0) -> FilterResult`` with ``q0`` already in the filter's working frame.
 Output quaternions are sensor-to-earth ``(w, x, y, z)`` in the recording's frame (``rec.frame``).
+
+Every filter runs on a :class:`Recording` or on plain arrays (``run(gyr, acc, mag, rate_hz=...)``) and
+offers a per-sample :meth:`AttitudeFilter.stream`; see :mod:`objectives.attitude.filters.stream`.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from objectives.attitude.data.recording import Recording
+from objectives.params import ParamSet
 from tuner.space import Real, Space
 
 __all__ = ["AttitudeFilter", "FilterResult", "quat_from_rotmat", "quat_from_acc_mag", "initial_quaternion"]
@@ -121,23 +127,51 @@ class AttitudeFilter:
     """Base class of all attitude filters (see module docstring)."""
 
     name: ClassVar[str] = ""
+    #: the one declaration of the parameters (``params`` and ``defaults`` derive from it)
+    decl: ClassVar[ParamSet | None] = None
     params: ClassVar[tuple[Real, ...]] = ()
     defaults: ClassVar[dict[str, Any]] = {}
     #: earth frame the kernel works in; the output is converted to the recording's frame
     working_frame: ClassVar[str] = "ENU"
     needs_mag: ClassVar[bool] = False
 
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("decl") is not None:
+            cls.params = cls.decl.reals()
+            cls.defaults = cls.decl.defaults()
+
     def __init__(self, **values: Any):
-        unknown = sorted(set(values) - set(self.defaults))
-        if unknown:
-            raise ValueError(
-                f"{self.name}: unknown parameter(s) {unknown}; known: {sorted(self.defaults)}"
-            )
-        self.values: dict[str, Any] = {**self.defaults, **values}
+        if self.decl is not None:
+            self.values: dict[str, Any] = self.decl.validate(values)
+        else:
+            unknown = sorted(set(values) - set(self.defaults))
+            if unknown:
+                raise ValueError(
+                    f"{self.name}: unknown parameter(s) {unknown}; known: {sorted(self.defaults)}"
+                )
+            self.values = {**self.defaults, **values}
         self._check()
 
     def _check(self) -> None:
-        """Subclasses validate values here (raise ValueError naming the parameter)."""
+        """Checks across parameters (each value alone is checked against ``decl``); ValueError."""
+
+    # --- declaration ------------------------------------------------------------------------
+    @classmethod
+    def declaration(cls) -> ParamSet:
+        """The parameter declaration (built from ``params``/``defaults`` for unconverted filters)."""
+        if cls.decl is not None:
+            return cls.decl
+        return ParamSet.from_space(cls.name, cls.params, cls.defaults)
+
+    @classmethod
+    def describe(cls) -> dict[str, Any]:
+        """Structured description: name, class, summary, working frame and every parameter with
+        default, bounds, scale, unit, allowed values, doc and the seed paper's equation."""
+        doc = (cls.__doc__ or "").strip().splitlines()
+        return {"name": cls.name, "class": f"{cls.__module__}.{cls.__qualname__}",
+                "summary": doc[0] if doc else "", "working_frame": cls.working_frame,
+                "needs_mag": cls.needs_mag, "params": cls.declaration().describe()}
 
     # --- search space -----------------------------------------------------------------------
     @classmethod
@@ -156,9 +190,44 @@ class AttitudeFilter:
         return cls(**{**params, **overrides})
 
     # --- running ----------------------------------------------------------------------------
-    def run(self, rec: Recording, q0: Any = None) -> np.ndarray:
-        """Estimate orientation over the whole recording: (N, 4) sensor-to-earth in ``rec.frame``."""
-        return self.run_detailed(rec, q0).quat
+    def run(self, data: Recording | Any, acc: Any = None, mag: Any = None, *, rate_hz: float | None = None,
+            dt: float | None = None, q0: Any = None, frame: str = "ENU", disturbances: Any = None) -> np.ndarray:
+        """Estimate orientation over a whole recording or over plain arrays.
+
+        Parameters
+        ----------
+        data : Recording or (N, 3) array
+            A :class:`Recording`, or the gyroscope samples in rad/s.
+        acc, mag : (N, 3) arrays
+            With arrays: accelerometer (m/s^2) and optional magnetometer (any unit) samples.
+        rate_hz, dt : float
+            With arrays: the sampling rate in Hz or the sample time in s (exactly one).
+        q0 : None, "accmag", "truth" or (4,)
+            Initialisation (see :func:`initial_quaternion`).
+        frame : {"ENU", "NED"}
+            With arrays: earth frame of the output.
+        disturbances : optional
+            Precomputed inputs of adaptive filters (see :meth:`run_detailed`).
+
+        Returns
+        -------
+        (N, 4) sensor-to-earth quaternions ``(w, x, y, z)`` in ``rec.frame`` (``frame`` for arrays).
+        """
+        from objectives.attitude.filters.stream import as_recording
+
+        rec = as_recording(self.name, data, acc, mag, rate_hz, dt, frame)
+        return self.run_detailed(rec, q0, disturbances).quat
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None,
+               frame: str = "ENU") -> Any:
+        """A per-sample filter: ``s.update(gyr, acc, mag=None) -> q (4,)``, equal to :meth:`run`.
+
+        Filters whose kernel takes and returns its state update in O(1) per sample; the others use a
+        documented fallback (see :mod:`objectives.attitude.filters.stream`).
+        """
+        from objectives.attitude.filters.stream import BufferedStream
+
+        return BufferedStream(self, rate_hz, dt, q0, frame)
 
     def run_detailed(self, rec: Recording, q0: Any = None, disturbances: Any = None) -> FilterResult:
         """As :meth:`run`, with the filter's diagnostics.

@@ -67,10 +67,10 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._scalar import read_rate, read_vec, sq_norm_ok
+from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_vec, sq_norm_ok
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.madgwick import _FM, _check_gain, _imu_arrays
-from tuner.space import Real
+from objectives.attitude.filters.stream import StateStream
+from objectives.params import NONNEG, POSITIVE, UNIT_CLOSED, Interval, Param, ParamSet, check_number, imu_arrays
 
 __all__ = ["LCF", "NCF", "CCF", "complementary_batch", "quat_from_euler_zyx", "euler_zyx_from_quat"]
 
@@ -84,8 +84,8 @@ def _wrap(a):
     return a - _TWO_PI * math.floor((a + _PI) / _TWO_PI)
 
 
-@njit(cache=True, fastmath=_FM)
-def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
+@njit(cache=True, fastmath=FASTMATH)
+def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
     """LCF / NCF / CCF over whole arrays (see module docstring for the equations).
 
     Parameters
@@ -96,8 +96,9 @@ def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
         ``dt`` s, ``alpha`` (1 = no LCF blend), ``Kp`` 1/s, ``Ki`` 1/s^2, ``use_mag`` (0/1); optional
         ``acc_gate`` (inf: off) and ``g`` (gravity in acc units): samples with
         ``| |acc| - g | > acc_gate g`` are treated as unusable accelerometer samples.
-    x0 : (3,) float64
-        Initial roll, pitch, yaw, rad (ZYX, NED).
+    state : (6,) float64
+        Read and written: roll, pitch, yaw, rad (ZYX, NED), and the integrals ``I``, rad/s; in: before
+        the first sample, out: after the last (for streaming).
     out : (N, 4) float64
         Written: sensor-to-earth quaternion (NED) of the estimate after each sample.
     euler_out, bias_out : (N, 3) or (0, 3) float64
@@ -113,12 +114,12 @@ def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
     w_euler = euler_out.shape[0] == gyr.shape[0]
     w_bias = bias_out.shape[0] == gyr.shape[0]
     blend = 1.0 - alpha
-    phi = x0[0]
-    th = x0[1]
-    psi = x0[2]
-    i0 = 0.0
-    i1 = 0.0
-    i2 = 0.0
+    phi = state[0]
+    th = state[1]
+    psi = state[2]
+    i0 = state[3]
+    i1 = state[4]
+    i2 = state[5]
     for i in range(gyr.shape[0]):
         p, q, r = read_rate(gyr, i)
         sp = math.sin(phi)
@@ -223,6 +224,12 @@ def _cf_kernel(gyr, acc, mag, coef, x0, out, euler_out, bias_out):
         out[i, 1] = s1 * c2 * c3 - c1 * s2 * s3
         out[i, 2] = c1 * s2 * c3 + s1 * c2 * s3
         out[i, 3] = c1 * c2 * s3 - s1 * s2 * c3
+    state[0] = phi
+    state[1] = th
+    state[2] = psi
+    state[3] = i0
+    state[4] = i1
+    state[5] = i2
 
 
 def quat_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
@@ -278,27 +285,48 @@ def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp
     -------
     quat : (N, 4) sensor-to-earth NED, or (quat, euler, bias) when ``detailed``.
     """
-    gyr, acc, mag = _imu_arrays(gyr, acc, mag)
-    n = gyr.shape[0]
-    if not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-    if not (np.isfinite(alpha) and 0.0 <= alpha <= 1.0):
-        raise ValueError(f"alpha must be in [0, 1], got {alpha!r}")
-    for name, v in (("kp", kp), ("ki", ki)):
-        if not (np.isfinite(v) and v >= 0):
-            raise ValueError(f"{name} must be finite and >= 0, got {v!r}")
+    own = "complementary"
+    gyr, acc, mag = imu_arrays(own, gyr, acc, mag)
+    dt = check_number(own, "dt", dt, POSITIVE, "s")
+    alpha = check_number(own, "alpha", alpha, ALPHA_RANGE)
+    kp = check_number(own, "Kp", kp, NONNEG, "1/s")
+    ki = check_number(own, "Ki", ki, NONNEG, "1/s^2")
+    acc_gate = check_number(own, "acc_gate", acc_gate, GATE_RANGE)
+    g_ref = check_number(own, "g_ref", g_ref, POSITIVE)
     x0 = np.asarray(euler0, dtype=np.float64).reshape(-1)
     if x0.shape != (3,) or not np.all(np.isfinite(x0)):
-        raise ValueError(f"euler0 must be a finite (3,) array of radians, got {euler0!r}")
-    if not (acc_gate > 0 and g_ref > 0 and math.isfinite(g_ref)):
-        raise ValueError(f"acc_gate and g_ref must be > 0, got {acc_gate!r}, {g_ref!r}")
-    coef = np.array([dt, alpha, kp, ki, 1.0 if mag.shape[0] else 0.0, acc_gate, g_ref])
+        raise ValueError(f"{own}: euler0 must be a finite (3,) array of radians, got {euler0!r}")
+    return _run_arrays(gyr, acc, mag, _coef(dt, alpha, kp, ki, mag.shape[0] > 0, acc_gate, g_ref), x0, detailed)
+
+
+def _coef(dt: float, alpha: float, kp: float, ki: float, has_mag: bool, acc_gate: float, g_ref: float) -> np.ndarray:
+    """The kernel's coefficient array (the only place it is built)."""
+    return np.array([dt, alpha, kp, ki, 1.0 if has_mag else 0.0, acc_gate, g_ref])
+
+
+def _run_arrays(gyr, acc, mag, coef: np.ndarray, euler0: np.ndarray, detailed: bool):
+    """Kernel call on checked contiguous arrays."""
+    n = gyr.shape[0]
+    state = np.zeros(6)
+    state[:3] = euler0
     out = np.empty((n, 4))
     m = n if detailed else 0
     euler = np.empty((m, 3))
     bias = np.empty((m, 3))
-    _cf_kernel(gyr, acc, mag, coef, x0, out, euler, bias)
+    _cf_kernel(gyr, acc, mag, coef, state, out, euler, bias)
     return (out, euler, bias) if detailed else out
+
+
+ALPHA_RANGE = UNIT_CLOSED
+GATE_RANGE = Interval(0.0, math.inf, low_open=True, allow_inf=True)
+_ALPHA = dict(unit="1", doc="gyro weight per sample, eq. (8)", eq="eq. (8)", allowed=ALPHA_RANGE)
+_KP = dict(bounds=(0.01, 100.0), scale="log", unit="1/s", doc="proportional gain of eq. (10)", eq="eq. (10)",
+           allowed=NONNEG)
+_KI = dict(bounds=(1e-3, 10.0), scale="log", unit="1/s^2", doc="integral gain of eq. (10)", eq="eq. (10)",
+           allowed=NONNEG)
+_USE_MAG = Param("use_mag", True, doc="yaw from the magnetometer (true) or gyro only (false)")
+_GATE = Param("acc_gate", math.inf, unit="1", allowed=GATE_RANGE,
+              doc="no correction when | |acc| - g | > acc_gate g (inf: never, as the paper)")
 
 
 class _ComplementaryBase(AttitudeFilter):
@@ -314,52 +342,43 @@ class _ComplementaryBase(AttitudeFilter):
     def _gains(self) -> tuple[float, float, float]:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def _check(self) -> None:
-        v = self.values
-        for key in ("Kp", "Ki"):
-            if key in v:
-                _check_gain(self.name, key, v[key])
-        if "alpha" in v:
-            a = v["alpha"]
-            ok = not isinstance(a, bool) and isinstance(a, (int, float, np.integer, np.floating))
-            if not (ok and 0.0 <= a <= 1.0):
-                raise ValueError(f"{self.name}: alpha must be a number in [0, 1], got {a!r}")
-        if "acc_gate" in v:
-            try:
-                v["acc_gate"] = float(v["acc_gate"])
-            except (TypeError, ValueError):
-                raise ValueError(f"{self.name}: acc_gate must be a number > 0, got {v['acc_gate']!r}") from None
-            if not v["acc_gate"] > 0:
-                raise ValueError(f"{self.name}: acc_gate must be > 0 (inf: off), got {v['acc_gate']!r}")
-        if not isinstance(v["use_mag"], (bool, np.bool_)):
-            raise ValueError(f"{self.name}: use_mag must be true or false, got {v['use_mag']!r}")
+    def _coef(self, has_mag: bool, g_ref: float, dt: float) -> np.ndarray:
+        alpha, kp, ki = self._gains()
+        return _coef(dt, alpha, kp, ki, has_mag, float(self.values.get("acc_gate", math.inf)), g_ref)
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
-        alpha, kp, ki = self._gains()
-        mag = rec.mag if self.values["use_mag"] else None
         from objectives.attitude.filters.ekf import gravity_in_units
 
-        q, euler, bias = complementary_batch(rec.gyr, rec.acc, mag, rec.dt, euler_zyx_from_quat(q0),
-                                             alpha, kp, ki, detailed=True,
-                                             acc_gate=float(self.values.get("acc_gate", math.inf)),
-                                             g_ref=gravity_in_units(rec))
+        gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if self.values["use_mag"] else None)
+        coef = self._coef(mag.shape[0] > 0, gravity_in_units(rec), rec.dt)
+        q, euler, bias = _run_arrays(gyr, acc, mag, coef, euler_zyx_from_quat(q0), detailed=True)
         return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias})
 
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0=None, frame: str = "ENU"):
+        """O(1) per-sample filter (the kernel carries the Euler angles and integrals in ``state``);
+        the accelerometer is in m/s^2 (``g_ref`` = 9.80665) as for :meth:`run` on arrays."""
+        return _CFStream(self, rate_hz, dt, q0, frame)
 
-_ALPHA = Real("alpha", 0.5, 0.9999, unit="1", doc="gyro weight per sample, eq. (8)")
-_KP = Real("Kp", 0.01, 100.0, scale="log", unit="1/s", doc="proportional gain of eq. (10)")
-_KI = Real("Ki", 1e-3, 10.0, scale="log", unit="1/s^2", doc="integral gain of eq. (10)")
-_USE_MAG = Real("use_mag", fixed=True, doc="yaw from the magnetometer (true) or gyro only (false)")
-_GATE = Real("acc_gate", fixed=math.inf, unit="1",
-             doc="no correction when | |acc| - g | > acc_gate g (inf: never, as the paper)")
+
+class _CFStream(StateStream):
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        self._coefs = {m: self.filter._coef(m, 9.80665, self.dt) for m in (False, True)}
+        self._out = np.empty((1, 4))
+        self._none = np.empty((0, 3))
+        state = np.zeros(6)
+        state[:3] = euler_zyx_from_quat(q0)
+        return state
+
+    def _step(self, state, gyr, acc, mag):
+        _cf_kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._none, self._none)
+        return self._out[0]
 
 
 class LCF(_ComplementaryBase):
     """Linear complementary filter, eq. (8). Parameter ``alpha`` (default 0.98), ``use_mag``."""
 
     name = "lcf"
-    params = (_ALPHA, _USE_MAG)
-    defaults = {"alpha": 0.98, "use_mag": True}
+    decl = ParamSet("lcf", (Param("alpha", 0.98, (0.5, 0.9999), **_ALPHA), _USE_MAG))
 
     def _gains(self):
         return float(self.values["alpha"]), 0.0, 0.0
@@ -369,8 +388,7 @@ class NCF(_ComplementaryBase):
     """Nonlinear (PI) complementary filter, eq. (10). ``Kp`` (default 25), ``Ki`` (0.1; Table 4)."""
 
     name = "ncf"
-    params = (_KP, _KI, _USE_MAG)
-    defaults = {"Kp": 25.0, "Ki": 0.1, "use_mag": True}
+    decl = ParamSet("ncf", (Param("Kp", 25.0, **_KP), Param("Ki", 0.1, **_KI), _USE_MAG))
 
     def _gains(self):
         return 1.0, float(self.values["Kp"]), float(self.values["Ki"])
@@ -380,8 +398,8 @@ class CCF(_ComplementaryBase):
     """Cascaded complementary filter, eq. (14). ``alpha`` (default 0.7, section 4), ``Kp`` 25, ``Ki`` 0.1."""
 
     name = "ccf"
-    params = (_ALPHA, _KP, _KI, _USE_MAG, _GATE)
-    defaults = {"alpha": 0.7, "Kp": 25.0, "Ki": 0.1, "use_mag": True, "acc_gate": math.inf}
+    decl = ParamSet("ccf", (Param("alpha", 0.7, (0.5, 0.9999), **_ALPHA), Param("Kp", 25.0, **_KP),
+                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE))
 
     def _gains(self):
         v = self.values

@@ -88,224 +88,17 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_steps
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.quaternion import _triad_into
+from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import fuzzify, grid_rules, sugeno_mu
+from objectives.params import ANY_REAL, POSITIVE, Interval, Param, ParamSet
 from tuner.space import Real, Space
 
 __all__ = [
     "EKF", "FAEKF", "FUZZY_DEFAULTS", "K_DEFAULTS", "FUZZY_INPUTS", "FUZZY_SETS",
     "ekf_kernel", "fuzzy_scale", "gravity_in_units", "rule_consequent_index", "Disturbances", "faekf_rules",
 ]
-
-
-# indices into the coefficient array of the kernel
-_C_DT, _C_QQ, _C_QW, _C_RHO, _C_P0Q, _C_P0B, _C_MAG, _C_EXACT, _C_GATE, _C_G, _C_HUBER, _C_CUR = range(12)
-N_COEF = 12
-
-
-# ---------------------------------------------------------------------------------------------
-# numba kernels
-# ---------------------------------------------------------------------------------------------
-@njit(cache=True)
-def ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b):
-    """Run the EKF / FAEKF over a whole recording (eqs. 16-22, 36; ``R_k = K_k R`` of eq. 31).
-
-    Parameters
-    ----------
-    gyr, acc, mag : (N, 3) float64
-        rad/s, specific force (any unit), magnetic field (any unit; ignored if ``coef[6] == 0``).
-    coef : (8,) to (12,) float64
-        ``dt`` (s), ``q_q``, ``q_w``, ``rho``, ``p0_q``, ``p0_b`` (initial variances), ``use_mag``,
-        ``exact`` (1: exponential quaternion step, 0: the first-order step of eq. 16); optional:
-        ``acc_gate`` (relative, inf: off), ``g`` (gravity in acc units), ``huber`` (rad, inf: off),
-        ``current`` (1: gyro sample ``k`` propagates ``k-1 -> k``; 0: sample ``k-1``).
-    kscale : (N,) or (1,) float64
-        Per-sample scale ``K_k`` of ``R`` (FAEKF), or a single constant (1.0 for the EKF).
-    x0 : (7,) float64
-        Initial state: NED sensor-to-earth quaternion and gyro bias (rad/s).
-    out_q : (N, 4) float64, out
-        Normalised quaternion estimates, NED sensor-to-earth.
-    out_b : (N, 3) float64, out
-        Gyro bias estimates, rad/s.
-    """
-    n = gyr.shape[0]
-    h = 0.5 * coef[_C_DT]
-    qq = coef[_C_QQ]
-    qw = coef[_C_QW]
-    rho = coef[_C_RHO]
-    use_mag = coef[_C_MAG] != 0.0
-    exact = coef[_C_EXACT] != 0.0
-    gate = coef[_C_GATE] if coef.shape[0] > _C_GATE else math.inf
-    g_ref = coef[_C_G] if coef.shape[0] > _C_G else 1.0
-    huber = coef[_C_HUBER] if coef.shape[0] > _C_HUBER else math.inf
-    cur = 1 if (coef.shape[0] > _C_CUR and coef[_C_CUR] != 0.0) else 0
-    nk = kscale.shape[0]
-
-    P = np.zeros((7, 7))
-    for i in range(4):
-        P[i, i] = coef[_C_P0Q]
-    for i in range(4, 7):
-        P[i, i] = coef[_C_P0B]
-    A = np.empty((4, 4))
-    B = np.empty((4, 3))
-    T = np.empty((4, 7))
-    W = np.empty((4, 7))
-    L = np.zeros((4, 4))
-    x = np.empty(7)
-    z = np.empty((1, 4))
-    v = np.empty(4)
-    for i in range(7):
-        x[i] = x0[i]
-    nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
-    for i in range(4):
-        x[i] /= nq
-        out_q[0, i] = x[i]
-    for i in range(3):
-        out_b[0, i] = x[4 + i]
-
-    for k in range(1, n):
-        # ---- time update (eqs. 16, 20, 21) with gyro sample k-1 --------------------------------
-        q0, q1, q2, q3 = x[0], x[1], x[2], x[3]
-        kg = k - 1 + cur
-        wx = gyr[kg, 0] - x[4]
-        wy = gyr[kg, 1] - x[5]
-        wz = gyr[kg, 2] - x[6]
-        if exact:
-            # q_k = q_{k-1} (x) exp(omega Ts / 2): A = cos(|w| Ts/2) I + sin(|w| Ts/2)/|w| Omega_R(w)
-            wn = math.sqrt(wx * wx + wy * wy + wz * wz)
-            ang = h * wn
-            ca = math.cos(ang)
-            sa = h * (math.sin(ang) / ang if ang > 1e-6 else 1.0 - ang * ang / 6.0)
-        else:
-            # eq. 16: q_k = q_{k-1} + Ts/2 q_{k-1} (x) (0, omega)
-            ca = 1.0
-            sa = h
-        hx, hy, hz = sa * wx, sa * wy, sa * wz
-        # A = d q_k / d q_{k-1} = ca I + sa Omega_R(omega)   (q (x) (0, w) = Omega_R(w) q)
-        A[0, 0] = ca
-        A[0, 1] = -hx
-        A[0, 2] = -hy
-        A[0, 3] = -hz
-        A[1, 0] = hx
-        A[1, 1] = ca
-        A[1, 2] = hz
-        A[1, 3] = -hy
-        A[2, 0] = hy
-        A[2, 1] = -hz
-        A[2, 2] = ca
-        A[2, 3] = hx
-        A[3, 0] = hz
-        A[3, 1] = hy
-        A[3, 2] = -hx
-        A[3, 3] = ca
-        # B = d q_k / d b = -h * Xi(q), q (x) (0, w) = Xi(q) w
-        B[0, 0] = h * q1
-        B[0, 1] = h * q2
-        B[0, 2] = h * q3
-        B[1, 0] = -h * q0
-        B[1, 1] = h * q3
-        B[1, 2] = -h * q2
-        B[2, 0] = -h * q3
-        B[2, 1] = -h * q0
-        B[2, 2] = h * q1
-        B[3, 0] = h * q2
-        B[3, 1] = -h * q1
-        B[3, 2] = -h * q0
-        # state: q <- A q (the bias is constant)
-        x[0] = ca * q0 - hx * q1 - hy * q2 - hz * q3
-        x[1] = ca * q1 + hx * q0 + hz * q2 - hy * q3
-        x[2] = ca * q2 + hy * q0 - hz * q1 + hx * q3
-        x[3] = ca * q3 + hz * q0 + hy * q1 - hx * q2
-        # T = Phi[:4, :] P  (4 x 7); Phi = [[A, B], [0, I]]
-        for r in range(4):
-            a0, a1, a2, a3 = A[r, 0], A[r, 1], A[r, 2], A[r, 3]
-            b0, b1, b2 = B[r, 0], B[r, 1], B[r, 2]
-            for c in range(7):
-                T[r, c] = (a0 * P[0, c] + a1 * P[1, c] + a2 * P[2, c] + a3 * P[3, c]
-                           + b0 * P[4, c] + b1 * P[5, c] + b2 * P[6, c])
-        # P^- = T Phi^T + Q: qq block, qb block (= T[:, 4:]), bb block unchanged
-        for r in range(4):
-            for c in range(r, 4):
-                s = (T[r, 0] * A[c, 0] + T[r, 1] * A[c, 1] + T[r, 2] * A[c, 2] + T[r, 3] * A[c, 3]
-                     + T[r, 4] * B[c, 0] + T[r, 5] * B[c, 1] + T[r, 6] * B[c, 2])
-                P[r, c] = s
-                P[c, r] = s
-            P[r, r] += qq
-            for c in range(4, 7):
-                P[r, c] = T[r, c]
-                P[c, r] = T[r, c]
-        for r in range(4, 7):
-            P[r, r] += qw
-
-        # ---- measurement update (eqs. 11-15, 17, 22) -------------------------------------------
-        if use_mag:
-            _triad_into(acc[k, 0], acc[k, 1], acc[k, 2], mag[k, 0], mag[k, 1], mag[k, 2], 1, z, 0)
-        else:
-            # predicted north in sensor coordinates: first row of R(q^-), up to scale
-            p0, p1, p2, p3 = x[0], x[1], x[2], x[3]
-            nx = p0 * p0 + p1 * p1 - p2 * p2 - p3 * p3
-            ny = 2.0 * (p1 * p2 - p0 * p3)
-            nz = 2.0 * (p1 * p3 + p0 * p2)
-            _triad_into(acc[k, 0], acc[k, 1], acc[k, 2], nx, ny, nz, 1, z, 0)
-        ok = not math.isnan(z[0, 0])
-        if ok and gate < math.inf:
-            # acceleration gate: |acc| far from g means the TRIAD's first vector is not gravity
-            an = math.sqrt(acc[k, 0] * acc[k, 0] + acc[k, 1] * acc[k, 1] + acc[k, 2] * acc[k, 2])
-            ok = abs(an - g_ref) <= gate * g_ref
-        dot = z[0, 0] * x[0] + z[0, 1] * x[1] + z[0, 2] * x[2] + z[0, 3] * x[3]
-        if ok and dot < 0.0:
-            dot = -dot
-            for r in range(4):
-                z[0, r] = -z[0, r]
-        if ok:
-            r_k = rho * (kscale[k] if nk > 1 else kscale[0])
-            if huber < math.inf:
-                # Huber weight: innovation angle d beyond huber -> R scaled by d / huber
-                nx = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
-                d = 2.0 * math.acos(min(dot / nx, 1.0))
-                if d > huber:
-                    r_k *= d / huber
-            # Cholesky of S = P_qq + R_k (4 x 4, SPD)
-            for r in range(4):
-                for c in range(r + 1):
-                    s = P[r, c]
-                    if r == c:
-                        s += r_k
-                    for m in range(c):
-                        s -= L[r, m] * L[c, m]
-                    if r == c:
-                        L[r, r] = math.sqrt(s)
-                    else:
-                        L[r, c] = s / L[c, c]
-            # W = L^{-1} P[:4, :], v = L^{-1} (z - q^-)
-            for r in range(4):
-                inv = 1.0 / L[r, r]
-                for c in range(7):
-                    s = P[r, c]
-                    for m in range(r):
-                        s -= L[r, m] * W[m, c]
-                    W[r, c] = s * inv
-                s = z[0, r] - x[r]
-                for m in range(r):
-                    s -= L[r, m] * v[m]
-                v[r] = s * inv
-            # x += G (z - q^-) = W^T v;  P -= W^T W
-            for c in range(7):
-                x[c] += W[0, c] * v[0] + W[1, c] * v[1] + W[2, c] * v[2] + W[3, c] * v[3]
-            for r in range(7):
-                for c in range(r, 7):
-                    s = P[r, c] - (W[0, r] * W[0, c] + W[1, r] * W[1, c]
-                                   + W[2, r] * W[2, c] + W[3, r] * W[3, c])
-                    P[r, c] = s
-                    P[c, r] = s
-        nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
-        inv = 1.0 / nq
-        for i in range(4):
-            x[i] *= inv
-            out_q[k, i] = x[i]
-        for i in range(3):
-            out_b[k, i] = x[4 + i]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -405,35 +198,46 @@ def _fuzzy_params(tunable: bool) -> tuple[Real, ...]:
     return tuple(out)
 
 
-_EKF_PARAMS: tuple[Real, ...] = (
-    Real("q_q", 1e-9, 1e-3, scale="log", unit="1 per sample",
-         doc="process noise variance of each quaternion component per sample "
-             "(eq. 36 Q_q; paper 1.45e-6 at 1 kHz)"),
-    Real("q_w", 1e-13, 1e-6, scale="log", unit="(rad/s)^2 per sample",
-         doc="gyro-bias random-walk variance per sample (eq. 36 Q_omega; paper 9.71e-10 at 1 kHz)"),
+def _fuzzy_decl() -> tuple[Param, ...]:
+    """The 18 set parameters as declarations (fixed by default; bounds in :data:`FUZZY_BOUNDS`)."""
+    out = []
+    for r in _fuzzy_params(tunable=False):
+        std = r.name.split("_")[2] == "std"
+        out.append(Param(r.name, r.fixed, unit=r.unit, doc=r.doc, eq="eq. 28", allowed=POSITIVE if std else ANY_REAL))
+    return tuple(out)
+
+
+_GATE_RANGE = Interval(0.0, math.inf, low_open=True, allow_inf=True)
+
+#: the EKF's parameters (per sample at the recording's rate, see the module docstring)
+_EKF_DECL: tuple[Param, ...] = (
+    Param("q_q", 1.45e-6, (1e-9, 1e-3), "log", "1 per sample",
+          "process noise variance of each quaternion component per sample "
+          "(eq. 36 Q_q; paper 1.45e-6 at 1 kHz)",
+          "eq. 36 Q_q", POSITIVE),
+    Param("q_w", 9.71e-10, (1e-13, 1e-6), "log", "(rad/s)^2 per sample",
+          "gyro-bias random-walk variance per sample (eq. 36 Q_omega; paper 9.71e-10 at 1 kHz)",
+          "eq. 36 Q_omega", POSITIVE),
     # rho up to 1e3 (was 1e2, where the tuned EKF of the 6-DOF bench sat at the bound): the filter
     # depends on q_q / rho (time constant of the TRIAD correction) and on p0_q / rho (trust in the
     # initial state), so a large rho with the fixed P0 is a legitimate optimum, not a wrong one.
-    Real("rho", 1e-3, 1e3, scale="log", unit="1",
-         doc="variance of each TRIAD quaternion component (eq. 36 R = rho I4; paper 3.53)"),
-    Real("use_mag", fixed=True, doc="9-D TRIAD with the magnetometer; false: heading from the gyro"),
-    Real("integration", fixed="exact",
-         doc="quaternion step: 'exact' (q exp(omega Ts/2)) or 'euler' (eq. 16, first order)"),
-    Real("p0_q", fixed=1e-2, unit="1", doc="initial variance of each quaternion component (P0, eq. 18)"),
-    Real("p0_b", fixed=1e-6, unit="(rad/s)^2",
-         doc="initial variance of each gyro-bias component (P0, eq. 18)"),
-    Real("acc_gate", fixed=math.inf, unit="1",
-         doc="skip the TRIAD update when | |acc| - g | > acc_gate g (inf: never, as the paper)"),
-    Real("huber_deg", fixed=math.inf, unit="deg",
-         doc="innovation angle beyond which R grows in proportion to it (inf: never, as the paper)"),
-    Real("gyro_sample", fixed="previous",
-         doc="gyro sample that propagates k-1 -> k: 'previous' (k-1, eq. 16) or 'current' (k, BROAD)"),
+    Param("rho", 3.53, (1e-3, 1e3), "log", "1",
+          "variance of each TRIAD quaternion component (eq. 36 R = rho I4; paper 3.53)", "eq. 36 R = rho I4",
+          POSITIVE),
+    Param("use_mag", True, choices=(True, False), doc="9-D TRIAD with the magnetometer; false: heading from the gyro"),
+    Param("integration", "exact", choices=("exact", "euler"),
+          doc="quaternion step: 'exact' (q exp(omega Ts/2)) or 'euler' (eq. 16, first order)", eq="eq. 16"),
+    Param("p0_q", 1e-2, unit="1", doc="initial variance of each quaternion component (P0, eq. 18)", eq="eq. 18 P0",
+          allowed=POSITIVE),
+    Param("p0_b", 1e-6, unit="(rad/s)^2", doc="initial variance of each gyro-bias component (P0, eq. 18)",
+          eq="eq. 18 P0", allowed=POSITIVE),
+    Param("acc_gate", math.inf, unit="1", allowed=_GATE_RANGE,
+          doc="skip the TRIAD update when | |acc| - g | > acc_gate g (inf: never, as the paper)"),
+    Param("huber_deg", math.inf, unit="deg", allowed=_GATE_RANGE,
+          doc="innovation angle beyond which R grows in proportion to it (inf: never, as the paper)"),
+    Param("gyro_sample", "previous", choices=("previous", "current"),
+          doc="gyro sample that propagates k-1 -> k: 'previous' (k-1, eq. 16) or 'current' (k, BROAD)"),
 )
-_EKF_DEFAULTS: dict[str, Any] = {
-    "q_q": 1.45e-6, "q_w": 9.71e-10, "rho": 3.53, "use_mag": True, "integration": "exact",
-    "p0_q": 1e-2, "p0_b": 1e-6, "acc_gate": math.inf, "huber_deg": math.inf,
-    "gyro_sample": "previous",
-}
 
 
 def gravity_in_units(rec: Recording) -> float:
@@ -445,16 +249,6 @@ def gravity_in_units(rec: Recording) -> float:
     if unit == "g":
         return 1.0
     return float(np.median(np.linalg.norm(rec.acc, axis=1)))
-
-
-def _positive(name: str, value: Any, flt: str) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{flt}: {name} must be a number, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ValueError(f"{flt}: {name} must be finite and > 0, got {value!r}")
-    return v
 
 
 class EKF(AttitudeFilter):
@@ -485,40 +279,9 @@ class EKF(AttitudeFilter):
     """
 
     name: ClassVar[str] = "ekf"
-    params: ClassVar[tuple[Real, ...]] = _EKF_PARAMS
-    defaults: ClassVar[dict[str, Any]] = dict(_EKF_DEFAULTS)
+    decl: ClassVar[ParamSet] = ParamSet("ekf", _EKF_DECL)
     working_frame: ClassVar[str] = "NED"
     needs_mag: ClassVar[bool] = True
-
-    def _check(self) -> None:
-        for key in ("q_q", "q_w", "rho", "p0_q", "p0_b"):
-            self.values[key] = _positive(key, self.values[key], self.name)
-        gate = self.values["acc_gate"]
-        try:
-            gate = float(gate)
-        except (TypeError, ValueError):
-            raise ValueError(f"{self.name}: acc_gate must be a number > 0 or inf, got {gate!r}") from None
-        if not gate > 0:
-            raise ValueError(f"{self.name}: acc_gate must be > 0 (inf: no gate), got {self.values['acc_gate']!r}")
-        self.values["acc_gate"] = gate
-        hub = self.values["huber_deg"]
-        try:
-            hub = float(hub)
-        except (TypeError, ValueError):
-            raise ValueError(f"{self.name}: huber_deg must be a number > 0 or inf, got {hub!r}") from None
-        if not hub > 0:
-            raise ValueError(f"{self.name}: huber_deg must be > 0 (inf: off), got {self.values['huber_deg']!r}")
-        self.values["huber_deg"] = hub
-        if self.values["gyro_sample"] not in ("previous", "current"):
-            raise ValueError(
-                f"{self.name}: gyro_sample must be 'previous' or 'current', got {self.values['gyro_sample']!r}"
-            )
-        if not isinstance(self.values["use_mag"], (bool, np.bool_)) and self.values["use_mag"] not in (0, 1):
-            raise ValueError(f"{self.name}: use_mag must be true or false, got {self.values['use_mag']!r}")
-        if self.values["integration"] not in ("exact", "euler"):
-            raise ValueError(
-                f"{self.name}: integration must be 'exact' or 'euler', got {self.values['integration']!r}"
-            )
 
     def coefficients(self, dt: float, use_mag: bool, g_ref: float = 1.0) -> np.ndarray:
         """The kernel's (10,) coefficient array (see :func:`ekf_kernel`); ``g_ref``: g in acc units."""
@@ -548,6 +311,44 @@ class EKF(AttitudeFilter):
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         q, b = self._kernel(rec, q0, np.ones(1))
         return FilterResult(q, self.working_frame, {"gyr_bias": b})
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample EKF (state and covariance carried between :func:`ekf_steps` calls); the
+        accelerometer is in m/s^2 as for :meth:`run` on arrays."""
+        return _EKFStream(self, rate_hz, dt, q0, frame)
+
+
+class _EKFStream(StateStream):
+    """Per-sample EKF: sample 0 is the initial state, every later sample one :func:`ekf_steps` call on
+    the (previous, current) pair, which is what the batch kernel does at that sample."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        self._coef = self.filter.coefficients(self.dt, bool(self.use_mag), 9.80665)
+        self._P = np.zeros((7, 7))
+        for i in range(4):
+            self._P[i, i] = self._coef[4]
+        for i in range(4, 7):
+            self._P[i, i] = self._coef[5]
+        x = np.zeros(7)
+        x[:4] = q0
+        nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
+        x[:4] = [x[0] / nq, x[1] / nq, x[2] / nq, x[3] / nq]
+        self._pair = (np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3)))
+        self._out_q = np.empty((2, 4))
+        self._out_b = np.empty((2, 3))
+        self._one = np.ones(1)
+        return x
+
+    def _step(self, state, gyr, acc, mag):
+        g2, a2, m2 = self._pair
+        g2[0], a2[0], m2[0] = g2[1], a2[1], m2[1]
+        g2[1], a2[1] = gyr[0], acc[0]
+        if mag.shape[0]:
+            m2[1] = mag[0]
+        if self.n == 0:  # sample 0: the initial state, as ekf_kernel writes it
+            return state[:4].copy()
+        ekf_steps(g2, a2, m2, self._coef, self._one, state, self._P, 1, self._out_q, self._out_b)
+        return self._out_q[1].copy()
 
 
 @dataclass(frozen=True)
@@ -594,26 +395,20 @@ class FAEKF(EKF):
     """
 
     name: ClassVar[str] = "faekf"
-    params: ClassVar[tuple[Real, ...]] = (
-        _EKF_PARAMS
-        + tuple(Real(f"K{i + 1}", K_BOUNDS[0], K_BOUNDS[1], scale="log", unit="1",
-                     doc=f"singleton K{i + 1} of Table 1 (scale of R)") for i in range(7))
-        + _fuzzy_params(tunable=False)
-        + (
-            Real("window", fixed=400, unit="samples", doc="L: window of eqs. 24, 26, 27"),
-            Real("fft_length", fixed=512, unit="samples", doc="L_FFT of eq. 23"),
-            Real("f_thr", fixed=10.0, unit="Hz", doc="highest expected oscillation frequency (eq. 25)"),
-            Real("omega_thr", fixed=0.26, unit="rad/s", doc="|Omega|_thr of eq. 25"),
-            Real("tune_fuzzy", fixed=False, doc="search the fuzzy sets too (FAEKF.space(tune_fuzzy=True))"),
-        )
-    )
-    defaults: ClassVar[dict[str, Any]] = {
-        **_EKF_DEFAULTS,
-        **{f"K{i + 1}": K_DEFAULTS[i] for i in range(7)},
-        **{_mf_name(inp, s, w): FUZZY_DEFAULTS[f"{inp}_{s}"][j]
-           for inp in FUZZY_INPUTS for s in FUZZY_SETS for j, w in enumerate(("mean", "std"))},
-        "window": 400, "fft_length": 512, "f_thr": 10.0, "omega_thr": 0.26, "tune_fuzzy": False,
-    }
+    decl: ClassVar[ParamSet] = ParamSet("faekf", (
+        *_EKF_DECL,
+        *(Param(f"K{i + 1}", K_DEFAULTS[i], K_BOUNDS, "log", "1", f"singleton K{i + 1} of Table 1 (scale of R)",
+                "eq. 31, Table 1", POSITIVE) for i in range(7)),
+        *_fuzzy_decl(),
+        Param("window", 400, unit="samples", doc="L: window of eqs. 24, 26, 27", eq="eqs. 24, 26, 27",
+              allowed=Interval(2.0), integer=True),
+        Param("fft_length", 512, unit="samples", doc="L_FFT of eq. 23", eq="eq. 23", allowed=Interval(2.0),
+              integer=True),
+        Param("f_thr", 10.0, unit="Hz", doc="highest expected oscillation frequency (eq. 25)", eq="eq. 25",
+              allowed=POSITIVE),
+        Param("omega_thr", 0.26, unit="rad/s", doc="|Omega|_thr of eq. 25", eq="eq. 25", allowed=POSITIVE),
+        Param("tune_fuzzy", False, doc="search the fuzzy sets too (FAEKF.space(tune_fuzzy=True))"),
+    ))
 
     @classmethod
     def space(cls, tune_fuzzy: bool | None = None) -> Space:
@@ -626,30 +421,11 @@ class FAEKF(EKF):
         return Space(params)
 
     def _check(self) -> None:
-        super()._check()
         v = self.values
-        for i in range(7):
-            v[f"K{i + 1}"] = _positive(f"K{i + 1}", v[f"K{i + 1}"], self.name)
-        for inp in FUZZY_INPUTS:
-            for s in FUZZY_SETS:
-                m, d = _mf_name(inp, s, "mean"), _mf_name(inp, s, "std")
-                try:
-                    v[m] = float(v[m])
-                except (TypeError, ValueError):
-                    raise ValueError(f"{self.name}: {m} must be a number, got {v[m]!r}") from None
-                if not math.isfinite(v[m]):
-                    raise ValueError(f"{self.name}: {m} must be finite, got {v[m]!r}")
-                v[d] = _positive(d, v[d], self.name)
-        for key in ("window", "fft_length"):
-            if int(v[key]) != v[key] or int(v[key]) < 2:
-                raise ValueError(f"{self.name}: {key} must be an integer >= 2, got {v[key]!r}")
-            v[key] = int(v[key])
         if v["fft_length"] < v["window"]:
             raise ValueError(
                 f"{self.name}: fft_length ({v['fft_length']}) must be >= window ({v['window']})"
             )
-        v["f_thr"] = _positive("f_thr", v["f_thr"], self.name)
-        v["omega_thr"] = _positive("omega_thr", v["omega_thr"], self.name)
 
     # --- fuzzy system -----------------------------------------------------------------------
     def membership_table(self) -> np.ndarray:
@@ -706,6 +482,13 @@ class FAEKF(EKF):
         return Disturbances(*arrs)
 
     # --- running ----------------------------------------------------------------------------
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """Per-sample FAEKF through the buffered fallback of :class:`AttitudeFilter` (the fuzzy inputs
+        need the packets so far). The batch normalises eq. 27 by the median ``|m|`` of the whole
+        recording, the stream by that of the samples so far: with the magnetometer they agree over
+        the first packet (``window`` samples) only; without it (``use_mag=False``) at every sample."""
+        return AttitudeFilter.stream(self, rate_hz, dt, q0, frame)
+
     def run_detailed(
         self, rec: Recording, q0: Any = None, disturbances: Disturbances | None = None
     ) -> FilterResult:
@@ -718,9 +501,6 @@ class FAEKF(EKF):
             return super().run_detailed(rec, q0)
         finally:
             self._given = None
-
-    def run(self, rec: Recording, q0: Any = None, disturbances: Disturbances | None = None) -> np.ndarray:
-        return self.run_detailed(rec, q0, disturbances).quat
 
     def _run(self, rec: Recording, q0: np.ndarray, disturbances: Disturbances | None = None) -> FilterResult:
         dist = disturbances if disturbances is not None else getattr(self, "_given", None)

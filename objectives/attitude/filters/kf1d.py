@@ -79,153 +79,14 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._kf1d_kernels import kf1d_kernel, madgwick1d_kernel, mahony1d_kernel, tilt_state
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
-from tuner.space import Real
+from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["KF1D", "AKF1D", "Mahony1D", "Madgwick1D", "kf1d_kernel", "mahony1d_kernel",
            "madgwick1d_kernel", "tilt_from_quat", "quat_from_tilt", "akf1d_fis"]
-
-_TWO_PI = 2.0 * math.pi
-
-
-# --- kernels -------------------------------------------------------------------------------------
-@njit(cache=True)
-def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, out_theta, out_bias):
-    """2-state tilt KF (thesis eqs. 3.9-3.13) over whole arrays.
-
-    Parameters
-    ----------
-    gyr_y : (N,) rate about y, rad/s.
-    acc_x, acc_z : (N,) specific force x and z, any unit.
-    up_sign : +1.0 (z-up earth frame) or -1.0 (NED).
-    coef : (7,) ``dt, q00, q11, rho, p0_theta, p0_bias, theta0``.
-    kscale : (N,) scale of R per sample (AKF1D), or (1,) constant scale (KF1D: ones(1)).
-    out_theta, out_bias : (N,) outputs, rad and rad/s.
-    """
-    n = gyr_y.shape[0]
-    dt = coef[0]
-    q00 = coef[1]
-    q11 = coef[2]
-    rho = coef[3]
-    p00 = coef[4]
-    p01 = 0.0
-    p11 = coef[5]
-    th = coef[6]
-    b = 0.0
-    per_sample = kscale.shape[0] > 1
-    r = rho * kscale[0]
-    out_theta[0] = th
-    out_bias[0] = b
-    dt2 = dt * dt
-    for k in range(1, n):
-        # time update (3.11)
-        th += dt * (gyr_y[k - 1] - b)
-        m00 = p00 - 2.0 * dt * p01 + dt2 * p11 + q00
-        m01 = p01 - dt * p11
-        m11 = p11 + q11
-        # measurement update (3.12, 3.13)
-        if per_sample:
-            r = rho * kscale[k]
-        z = math.atan2(-up_sign * acc_x[k], up_sign * acc_z[k])
-        res = z - th
-        if res > math.pi or res < -math.pi:
-            res -= _TWO_PI * math.floor((res + math.pi) / _TWO_PI)
-        s = m00 + r
-        g0 = m00 / s
-        g1 = m01 / s
-        th += g0 * res
-        b += g1 * res
-        p00 = (1.0 - g0) * m00
-        p01 = (1.0 - g0) * m01
-        p11 = m11 - g1 * m01
-        out_theta[k] = th
-        out_bias[k] = b
-
-
-@njit(cache=True, inline="always")
-def _step(q0, q2, w, dt, exact):
-    """Rotate (q0, q2) by the rate w about y over dt: exact or the first-order quaternion step."""
-    if exact:
-        c = math.cos(0.5 * w * dt)
-        s = math.sin(0.5 * w * dt)
-        return c * q0 - s * q2, s * q0 + c * q2
-    h = 0.5 * w * dt
-    return q0 - h * q2, q2 + h * q0
-
-
-@njit(cache=True)
-def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, theta0, exact, out_theta, out_bias):
-    """Mahony's IMU update (sample code) restricted to rotations about y; see the module docstring.
-
-    ``out_bias`` receives ``-I`` (the integral term estimates minus the gyro bias), rad/s.
-    """
-    n = gyr_y.shape[0]
-    q0 = math.cos(0.5 * theta0)
-    q2 = math.sin(0.5 * theta0)
-    integ = 0.0
-    out_theta[0] = theta0
-    out_bias[0] = 0.0
-    for k in range(n - 1):
-        w = gyr_y[k]
-        ax = up_sign * acc_x[k]
-        az = up_sign * acc_z[k]
-        nrm = math.sqrt(ax * ax + az * az)
-        if nrm > 0.0:
-            ax /= nrm
-            az /= nrm
-            vx = -2.0 * q0 * q2           # estimated up direction (sample code: halfv * 2)
-            vz = q0 * q0 - q2 * q2
-            e = az * vx - ax * vz          # y component of a x v
-            if ki > 0.0:
-                integ += ki * e * dt
-                w += integ
-            else:
-                integ = 0.0
-            w += kp * e
-        q0, q2 = _step(q0, q2, w, dt, exact)
-        inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
-        q0 *= inv
-        q2 *= inv
-        out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
-        out_bias[k + 1] = -integ
-
-
-@njit(cache=True)
-def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, theta0, exact, out_theta):
-    """Madgwick's IMU update (sample code) restricted to rotations about y; see the module docstring."""
-    n = gyr_y.shape[0]
-    q0 = math.cos(0.5 * theta0)
-    q2 = math.sin(0.5 * theta0)
-    out_theta[0] = theta0
-    for k in range(n - 1):
-        w = gyr_y[k]
-        ax = up_sign * acc_x[k]
-        az = up_sign * acc_z[k]
-        nrm = math.sqrt(ax * ax + az * az)
-        d0 = 0.0
-        d2 = 0.0
-        if nrm > 0.0:
-            ax /= nrm
-            az /= nrm
-            # gradient J^T f of the sample code with q1 = q3 = 0 and ay = 0
-            s0 = 4.0 * q0 * q2 * q2 + 2.0 * q2 * ax
-            s2 = 4.0 * q0 * q0 * q2 + 2.0 * q0 * ax - 4.0 * q2 + 8.0 * q2 * q2 * q2 + 4.0 * q2 * az
-            sn = math.sqrt(s0 * s0 + s2 * s2)
-            if sn > 0.0:
-                d0 = -beta * s0 / sn
-                d2 = -beta * s2 / sn
-        if exact:
-            q0, q2 = _step(q0, q2, w, dt, True)
-            q0 += d0 * dt
-            q2 += d2 * dt
-        else:
-            q0, q2 = q0 + (-0.5 * q2 * w + d0) * dt, q2 + (0.5 * q0 * w + d2) * dt
-        inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
-        q0 *= inv
-        q2 *= inv
-        out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
-
 
 # --- helpers ------------------------------------------------------------------------------------
 def _up_sign(frame: str) -> float:
@@ -271,27 +132,24 @@ def _inputs(rec: Recording) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return gy, ax, az
 
 
-def _positive(flt: str, name: str, value: Any, allow_zero: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{flt}: {name} must be a number, got {value!r}") from None
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ValueError(f"{flt}: {name} must be finite and {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-    return v
-
-
-def _check_bool(flt: str, name: str, value: Any) -> bool:
-    if not isinstance(value, (bool, np.bool_)) and value not in (0, 1):
-        raise ValueError(f"{flt}: {name} must be true or false, got {value!r}")
-    return bool(value)
-
-
 # --- KF1D ----------------------------------------------------------------------------------------
 _P0_OPTIONS = (
-    Real("p0_theta", fixed=0.0, unit="rad^2", doc="initial angle variance (thesis 3.1.3.1: P0 = 0)"),
-    Real("p0_bias", fixed=0.0, unit="(rad/s)^2", doc="initial bias variance (thesis 3.1.3.1: P0 = 0)"),
+    Param("p0_theta", 0.0, unit="rad^2", doc="initial angle variance (thesis 3.1.3.1: P0 = 0)", eq="eq. 3.13",
+          allowed=NONNEG),
+    Param("p0_bias", 0.0, unit="(rad/s)^2", doc="initial bias variance (thesis 3.1.3.1: P0 = 0)", eq="eq. 3.13",
+          allowed=NONNEG),
 )
+
+
+def _kf_noise(rho, q00, q11, defaults, rho_doc) -> tuple[Param, ...]:
+    """rho, q00, q11 with search bounds ``(rho, q00, q11)`` and defaults ``defaults``."""
+    return (
+        Param("rho", defaults[0], rho, "log", "angle^2 per sample", rho_doc, "eq. 3.17", POSITIVE),
+        Param("q00", defaults[1], q00, "log", "angle^2 per sample", "angle process noise (eq. 3.17)", "eq. 3.17",
+              POSITIVE),
+        Param("q11", defaults[2], q11, "log", "(angle/s)^2 per sample", "gyro-bias random-walk variance (eq. 3.17)",
+              "eq. 3.17", POSITIVE),
+    )
 
 
 class KF1D(AttitudeFilter):
@@ -317,39 +175,33 @@ class KF1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "kf1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("rho", 0.008, 0.45, scale="log", unit="angle^2 per sample",
-             doc="accelerometer-angle noise variance R (eq. 3.17)"),
-        Real("q00", 7e-9, 2e-6, scale="log", unit="angle^2 per sample", doc="angle process noise (eq. 3.17)"),
-        Real("q11", 1e-13, 2e-8, scale="log", unit="(angle/s)^2 per sample",
-             doc="gyro-bias random-walk variance (eq. 3.17)"),
-    ) + _P0_OPTIONS
-    defaults: ClassVar[dict[str, Any]] = {
-        "rho": 0.05, "q00": 5e-7, "q11": 5e-9, "p0_theta": 0.0, "p0_bias": 0.0,
-    }
+    decl: ClassVar[ParamSet] = ParamSet("kf1d", _kf_noise(
+        (0.008, 0.45), (7e-9, 2e-6), (1e-13, 2e-8), (0.05, 5e-7, 5e-9),
+        "accelerometer-angle noise variance R (eq. 3.17)") + _P0_OPTIONS)
 
-    def _check(self) -> None:
+    def _coef(self, dt: float) -> np.ndarray:
         v = self.values
-        for key in ("rho", "q00", "q11"):
-            v[key] = _positive(self.name, key, v[key])
-        for key in ("p0_theta", "p0_bias"):
-            v[key] = _positive(self.name, key, v[key], allow_zero=True)
+        return np.array([dt, v["q00"], v["q11"], v["rho"]])
 
-    def _coef(self, rec: Recording, theta0: float) -> np.ndarray:
+    def _state0(self, theta0: float) -> np.ndarray:
         v = self.values
-        return np.array([rec.dt, v["q00"], v["q11"], v["rho"], v["p0_theta"], v["p0_bias"], theta0])
+        return np.array([theta0, 0.0, v["p0_theta"], 0.0, v["p0_bias"]])
 
     def _kf(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         b = np.empty(rec.n)
-        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
-        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), self._coef(rec, theta0), kscale, th, b)
+        state = self._state0(tilt_from_quat(q0, rec.frame, self.working_frame))
+        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), self._coef(rec.dt), kscale, state, 1, th, b)
         return th, b
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         th, b = self._kf(rec, q0, np.ones(1))
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample tilt KF (the kernel carries angle, bias and covariance in ``state``)."""
+        return _TiltStream(self, rate_hz, dt, q0, frame)
 
 
 # --- AKF1D ---------------------------------------------------------------------------------------
@@ -400,42 +252,33 @@ class AKF1D(KF1D):
     """
 
     name: ClassVar[str] = "akf1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("rho", 0.005, 0.43, scale="log", unit="angle^2 per sample",
-             doc="accelerometer-angle noise variance before fuzzy scaling (eq. 3.24)"),
-        Real("q00", 1e-8, 8e-7, scale="log", unit="angle^2 per sample", doc="angle process noise (eq. 3.17)"),
-        Real("q11", 1e-12, 5e-11, scale="log", unit="(angle/s)^2 per sample",
-             doc="gyro-bias random-walk variance (eq. 3.17)"),
-    ) + _P0_OPTIONS + (
-        Real("window", fixed=400, unit="samples", doc="packet length L (eqs. 3.19-3.22)"),
-        Real("fft_length", fixed=512, unit="samples", doc="FFT length L_FFT (eq. 3.19)"),
-        Real("f_thr", fixed=8.0, unit="Hz", doc="highest vibration frequency considered (eq. 3.21)"),
-        Real("omega_thr", fixed=math.radians(10.0), unit="rad/s", doc="amplitude threshold (eq. 3.21)"),
-        Real("f_range_hz", fixed=6.5, unit="Hz", doc="range of the vibration input (sets Z, S, B)"),
-        Real("acc_range_g", fixed=0.35, unit="g", doc="range of the external-acceleration input"),
-    ) + tuple(Real(f"K{i + 1}", fixed=k, unit="1", doc=f"singleton K{i + 1} of Table 3.2")
-              for i, k in enumerate(AKF1D_K_DEFAULTS))
-    defaults: ClassVar[dict[str, Any]] = {
-        "rho": 0.05, "q00": 7e-8, "q11": 5e-12, "p0_theta": 0.0, "p0_bias": 0.0,
-        "window": 400, "fft_length": 512, "f_thr": 8.0, "omega_thr": math.radians(10.0),
-        "f_range_hz": 6.5, "acc_range_g": 0.35,
-        **{f"K{i + 1}": k for i, k in enumerate(AKF1D_K_DEFAULTS)},
-    }
+    decl: ClassVar[ParamSet] = ParamSet("akf1d", _kf_noise(
+        (0.005, 0.43), (1e-8, 8e-7), (1e-12, 5e-11), (0.05, 7e-8, 5e-12),
+        "accelerometer-angle noise variance before fuzzy scaling (eq. 3.24)") + _P0_OPTIONS + (
+        Param("window", 400, unit="samples", doc="packet length L (eqs. 3.19-3.22)", eq="eqs. 3.19-3.22",
+              allowed=Interval(2.0), integer=True),
+        Param("fft_length", 512, unit="samples", doc="FFT length L_FFT (eq. 3.19)", eq="eq. 3.19",
+              allowed=Interval(2.0), integer=True),
+        Param("f_thr", 8.0, unit="Hz", doc="highest vibration frequency considered (eq. 3.21)", eq="eq. 3.21",
+              allowed=POSITIVE),
+        Param("omega_thr", math.radians(10.0), unit="rad/s", doc="amplitude threshold (eq. 3.21)", eq="eq. 3.21",
+              allowed=NONNEG),
+        Param("f_range_hz", 6.5, unit="Hz", doc="range of the vibration input (sets Z, S, B)", eq="Table 3.2",
+              allowed=POSITIVE),
+        Param("acc_range_g", 0.35, unit="g", doc="range of the external-acceleration input", eq="Table 3.2",
+              allowed=POSITIVE),
+    ) + tuple(Param(f"K{i + 1}", k, unit="1", doc=f"singleton K{i + 1} of Table 3.2", eq="eq. 3.24, Table 3.2",
+                    allowed=POSITIVE) for i, k in enumerate(AKF1D_K_DEFAULTS)))
 
     def _check(self) -> None:
-        super()._check()
         v = self.values
-        for key in ("window", "fft_length"):
-            if isinstance(v[key], bool) or int(v[key]) != v[key] or int(v[key]) < 2:
-                raise ValueError(f"{self.name}: {key} must be an integer >= 2, got {v[key]!r}")
-            v[key] = int(v[key])
         if v["fft_length"] < v["window"]:
             raise ValueError(f"{self.name}: fft_length ({v['fft_length']}) must be >= window ({v['window']})")
-        for key in ("f_thr", "f_range_hz", "acc_range_g"):
-            v[key] = _positive(self.name, key, v[key])
-        v["omega_thr"] = _positive(self.name, "omega_thr", v["omega_thr"], allow_zero=True)
-        for i in range(5):
-            v[f"K{i + 1}"] = _positive(self.name, f"K{i + 1}", v[f"K{i + 1}"])
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """Per-sample AKF1D through the buffered fallback of :class:`AttitudeFilter`: the fuzzy scale of
+        R needs the packets so far (eqs. 3.19-3.22); equal to the batch, O(n) per sample."""
+        return AttitudeFilter.stream(self, rate_hz, dt, q0, frame)
 
     def fis(self) -> SugenoFIS:
         """The fuzzy system of eq. 3.24 with this filter's options."""
@@ -475,8 +318,8 @@ class AKF1D(KF1D):
 
 
 # --- Mahony1D / Madgwick1D -----------------------------------------------------------------------
-_EXACT = Real("exact_step", fixed=True,
-              doc="exact rotation per sample (true) or the sample code's first-order step (false)")
+_EXACT = Param("exact_step", True, choices=(True, False),
+               doc="exact rotation per sample (true) or the sample code's first-order step (false)")
 
 
 class Mahony1D(AttitudeFilter):
@@ -499,27 +342,37 @@ class Mahony1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "mahony1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("Kp", 0.125, 0.7, unit="rad/s", doc="proportional gain (Table 3.4)"),
-        Real("Ki", 0.0, 0.005, unit="rad/s^2", doc="integral gain (Table 3.4)"),
+    decl: ClassVar[ParamSet] = ParamSet("mahony1d", (
+        Param("Kp", 0.5, (0.125, 0.7), unit="rad/s", doc="proportional gain (Table 3.4)", eq="Table 3.4",
+              allowed=NONNEG),
+        Param("Ki", 0.0, (0.0, 0.005), unit="rad/s^2", doc="integral gain (Table 3.4)", eq="Table 3.4",
+              allowed=NONNEG),
         _EXACT,
-    )
-    defaults: ClassVar[dict[str, Any]] = {"Kp": 0.5, "Ki": 0.0, "exact_step": True}
-
-    def _check(self) -> None:
-        v = self.values
-        v["Kp"] = _positive(self.name, "Kp", v["Kp"], allow_zero=True)
-        v["Ki"] = _positive(self.name, "Ki", v["Ki"], allow_zero=True)
-        v["exact_step"] = _check_bool(self.name, "exact_step", v["exact_step"])
+    ))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         b = np.empty(rec.n)
         v = self.values
-        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt,
-                        tilt_from_quat(q0, rec.frame, self.working_frame), v["exact_step"], th, b)
+        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
+        th[0], b[0] = theta0, 0.0
+        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt, self._state0(theta0),
+                        bool(v["exact_step"]), th, b)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
+
+    def _state0(self, theta0: float) -> np.ndarray:
+        state = np.empty(3)
+        tilt_state(theta0, state)
+        return state
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample filter (the kernel carries the quaternion and integral in ``state``)."""
+        return _TiltStream(self, rate_hz, dt, q0, frame)
+
+    def _pair_step(self, state, gy, ax, az, up_sign, dt, th, b) -> None:
+        v = self.values
+        mahony1d_kernel(gy, ax, az, up_sign, v["Kp"], v["Ki"], dt, state, bool(v["exact_step"]), th, b)
 
 
 class Madgwick1D(AttitudeFilter):
@@ -537,20 +390,56 @@ class Madgwick1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "madgwick1d"
-    params: ClassVar[tuple[Real, ...]] = (
-        Real("beta", 0.01, 0.15, scale="log", unit="rad/s", doc="gradient step gain (Table 3.5)"),
+    decl: ClassVar[ParamSet] = ParamSet("madgwick1d", (
+        Param("beta", 0.1, (0.01, 0.15), "log", "rad/s", "gradient step gain (Table 3.5)", "Table 3.5", NONNEG),
         _EXACT,
-    )
-    defaults: ClassVar[dict[str, Any]] = {"beta": 0.1, "exact_step": True}
-
-    def _check(self) -> None:
-        self.values["beta"] = _positive(self.name, "beta", self.values["beta"], allow_zero=True)
-        self.values["exact_step"] = _check_bool(self.name, "exact_step", self.values["exact_step"])
+    ))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         v = self.values
-        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt,
-                          tilt_from_quat(q0, rec.frame, self.working_frame), v["exact_step"], th)
+        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
+        th[0] = theta0
+        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt, self._state0(theta0),
+                          bool(v["exact_step"]), th)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th})
+
+    _state0 = Mahony1D._state0
+    stream = Mahony1D.stream
+
+    def _pair_step(self, state, gy, ax, az, up_sign, dt, th, b) -> None:
+        v = self.values
+        madgwick1d_kernel(gy, ax, az, up_sign, v["beta"], dt, state, bool(v["exact_step"]), th)
+
+
+class _TiltStream(StateStream):
+    """Per-sample 1-D filter: sample 0 is the initial angle, every later sample one kernel call on the
+    (previous, current) pair, as the batch kernels do at that sample. Output in the stream's frame."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        f = self.filter
+        self.output_frame = self.frame  # the 1-D filters work in the recording's own frame
+        self._up = _up_sign(self.frame)
+        self._pair = (np.zeros(2), np.zeros(2), np.zeros(2))
+        self._th = np.empty(2)
+        self._b = np.empty(2)
+        self._one = np.ones(1)
+        self._theta = tilt_from_quat(q0, self.frame, f.working_frame)
+        if isinstance(f, KF1D):
+            self._coef = f._coef(self.dt)
+        return f._state0(self._theta)
+
+    def _step(self, state, gyr, acc, mag):
+        f = self.filter
+        gy, ax, az = self._pair
+        gy[0], ax[0], az[0] = gy[1], ax[1], az[1]
+        gy[1], ax[1], az[1] = gyr[0, 1], acc[0, 0], acc[0, 2]
+        if self.n > 0:
+            if isinstance(f, KF1D):
+                kf1d_kernel(gy, ax, az, self._up, self._coef, self._one, state, 1, self._th, self._b)
+            else:
+                f._pair_step(state, gy, ax, az, self._up, self.dt, self._th, self._b)
+            self._theta = self._th[1]
+        return quat_from_tilt(np.array([self._theta]))[0]
+

@@ -35,21 +35,20 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
+from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from tuner.space import Real
+from objectives.attitude.filters.stream import StateStream
+from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
-__all__ = ["Madgwick", "madgwick_batch", "VARIANTS"]
+__all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
 
 #: name -> factor k with ``2 b_x = k |h_xy|``, ``2 b_z = k h_z`` (paper: 2; the 2010 C code: 1)
 VARIANTS = {"paper": 2.0, "original_c": 1.0}
 
-# no 'nnan'/'ninf': the kernel tests for non-finite input
-_FM = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
-@njit(cache=True, fastmath=_FM)
-def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
+@njit(cache=True, fastmath=FASTMATH)
+def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
 
     Parameters
@@ -59,8 +58,9 @@ def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
     coef : (5,) float64
         ``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k`` the
         field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1).
-    q0 : (4,) float64
-        Initial sensor-to-earth quaternion (NWU).
+    state : (7,) float64
+        Read and written: the sensor-to-earth quaternion (NWU) and the gyro bias estimate ``omega_b``
+        (rad/s); in: before the first sample, out: after the last (for streaming).
     out : (N, 4) float64
         Written: the estimate after each sample's update.
     bias_out : (N, 3) or (0, 3) float64
@@ -72,10 +72,10 @@ def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
     k = coef[3]
     use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
     write_bias = bias_out.shape[0] == gyr.shape[0]
-    q0_, q1, q2, q3 = q0[0], q0[1], q0[2], q0[3]
-    bx_ = 0.0
-    by_ = 0.0
-    bz_ = 0.0
+    q0_, q1, q2, q3 = state[0], state[1], state[2], state[3]
+    bx_ = state[4]
+    by_ = state[5]
+    bz_ = state[6]
     for i in range(gyr.shape[0]):
         gx, gy, gz = read_rate(gyr, i)
         if write_bias:
@@ -157,43 +157,41 @@ def _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias_out):
         out[i, 1] = q1
         out[i, 2] = q2
         out[i, 3] = q3
+    state[0] = q0_
+    state[1] = q1
+    state[2] = q2
+    state[3] = q3
+    state[4] = bx_
+    state[5] = by_
+    state[6] = bz_
 
 
-def _check_gain(filt: str, key: str, x) -> None:
-    """ValueError unless ``x`` is a finite real number >= 0."""
-    ok = not isinstance(x, bool) and isinstance(x, (int, float, np.integer, np.floating))
-    if not (ok and np.isfinite(x) and x >= 0):
-        raise ValueError(f"{filt}: {key} must be a finite number >= 0, got {x!r}")
+#: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)
+DECL = ParamSet("madgwick", (
+    Param("beta", 0.1, (1e-3, 1.0), "log", "rad/s", "gradient step gain (eq. 33)", "report eq. 33", NONNEG),
+    Param("zeta", 0.0, None, unit="1/s", doc="gyro bias drift gain (eq. 48), 0 = off", eq="report eq. 48",
+          allowed=NONNEG),
+    Param("variant", "paper", choices=tuple(VARIANTS), doc="'paper' or 'original_c' (2010 C code field scale)",
+          eq="report eqs. 45-46"),
+    Param("use_mag", True, doc="MARG (true) or IMU (false)"),
+))
 
 
-def _as_c(name: str, a, ncols: int) -> np.ndarray:
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    if a.ndim != 2 or a.shape[1] != ncols:
-        raise ValueError(f"{name} must have shape (N, {ncols}), got {a.shape}")
-    return a
+def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
+    """The kernel's coefficient array from validated values (the only place it is built)."""
+    return np.array([dt, float(v["beta"]), float(v["zeta"]), VARIANTS[v["variant"]], 1.0 if has_mag else 0.0])
 
-def _imu_arrays(gyr, acc, mag) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Contiguous float64 (N, 3) gyr and acc, and mag (N, 3) or an empty (0, 3) when ``None``."""
-    gyr = _as_c("gyr", gyr, 3)
-    acc = _as_c("acc", acc, 3)
+
+def _run_arrays(v: dict, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, dt: float, q0: np.ndarray,
+                with_bias: bool):
+    """Kernel call on checked contiguous arrays and validated values."""
     n = gyr.shape[0]
-    if acc.shape[0] != n:
-        raise ValueError(f"acc has {acc.shape[0]} samples, gyr {n}")
-    if mag is None:
-        return gyr, acc, np.empty((0, 3))
-    mag = _as_c("mag", mag, 3)
-    if mag.shape[0] != n:
-        raise ValueError(f"mag has {mag.shape[0]} samples, gyr {n}")
-    return gyr, acc, mag
-
-
-def _unit_q0(q0) -> np.ndarray:
-    """The initial quaternion as a unit (4,) float64 array; ValueError when not finite and non-zero."""
-    q = np.asarray(q0, dtype=np.float64).reshape(-1)
-    if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
-        raise ValueError(f"q0 must be a finite non-zero (4,) quaternion, got {q0!r}")
-    return q / np.linalg.norm(q)
-
+    state = np.zeros(7)
+    state[:4] = q0
+    out = np.empty((n, 4))
+    bias = np.empty((n if with_bias else 0, 3))
+    _madgwick_kernel(gyr, acc, mag, _coef(v, dt, mag.shape[0] > 0), state, out, bias)
+    return (out, bias) if with_bias else out
 
 
 def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float = 0.0,
@@ -210,12 +208,8 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
         Sample time, s (``1 / sampleFreq`` of the C code).
     q0 : (4,)
         Initial sensor-to-earth quaternion (w, x, y, z), NWU.
-    beta : float
-        Gain of the gradient step, rad/s (report eq. 33).
-    zeta : float
-        Gain of the gyro bias drift compensation, 1/s (report eq. 48); 0 disables it.
-    variant : {"paper", "original_c"}
-        See the module docstring.
+    beta, zeta, variant :
+        As :data:`DECL` declares them (validated against it).
     with_bias : bool
         Also return the (N, 3) bias estimate.
 
@@ -223,19 +217,10 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
     -------
     quat : (N, 4), or (quat, bias) when ``with_bias``.
     """
-    if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {sorted(VARIANTS)}, got {variant!r}")
-    gyr, acc, mag = _imu_arrays(gyr, acc, mag)
-    n = gyr.shape[0]
-    for name, v in (("dt", dt), ("beta", beta), ("zeta", zeta)):
-        if not np.isfinite(v) or v < 0 or (name == "dt" and v == 0):
-            raise ValueError(f"{name} must be finite and {'> 0' if name == 'dt' else '>= 0'}, got {v!r}")
-    q0 = _unit_q0(q0)
-    coef = np.array([dt, beta, zeta, VARIANTS[variant], 1.0 if mag.shape[0] else 0.0])
-    out = np.empty((n, 4))
-    bias = np.empty((n if with_bias else 0, 3))
-    _madgwick_kernel(gyr, acc, mag, coef, q0, out, bias)
-    return (out, bias) if with_bias else out
+    v = DECL.validate({"beta": beta, "zeta": zeta, "variant": variant})
+    gyr, acc, mag = imu_arrays("madgwick", gyr, acc, mag)
+    dt = check_number("madgwick", "dt", dt, POSITIVE, "s")
+    return _run_arrays(v, gyr, acc, mag, dt, unit_quaternion("madgwick", "q0", q0), with_bias)
 
 
 class Madgwick(AttitudeFilter):
@@ -254,34 +239,38 @@ class Madgwick(AttitudeFilter):
 
     The kernel works in NWU (``working_frame``); :meth:`run` returns quaternions in ``rec.frame``.
     ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s, when ``zeta > 0``.
+    :meth:`stream` updates in O(1) per sample (the kernel carries quaternion and bias in ``state``).
     """
 
     name = "madgwick"
     working_frame = "NWU"
     needs_mag = True
-    params = (
-        Real("beta", 1e-3, 1.0, scale="log", unit="rad/s", doc="gradient step gain (eq. 33)"),
-        Real("zeta", fixed=0.0, unit="1/s", doc="gyro bias drift gain (eq. 48), 0 = off"),
-        Real("variant", fixed="paper", doc="'paper' or 'original_c' (2010 C code field scale)"),
-        Real("use_mag", fixed=True, doc="MARG (true) or IMU (false)"),
-    )
-    defaults = {"beta": 0.1, "zeta": 0.0, "variant": "paper", "use_mag": True}
-
-    def _check(self) -> None:
-        v = self.values
-        if v["variant"] not in VARIANTS:
-            raise ValueError(f"madgwick: variant must be one of {sorted(VARIANTS)}, got {v['variant']!r}")
-        for key in ("beta", "zeta"):
-            _check_gain("madgwick", key, v[key])
-        if not isinstance(v["use_mag"], (bool, np.bool_)):
-            raise ValueError(f"madgwick: use_mag must be true or false, got {v['use_mag']!r}")
+    decl = DECL
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         v = self.values
-        mag = rec.mag if v["use_mag"] else None
-        zeta = float(v["zeta"])
-        res = madgwick_batch(rec.gyr, rec.acc, mag, rec.dt, q0, float(v["beta"]), zeta, v["variant"],
-                             with_bias=zeta > 0)
+        gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if v["use_mag"] else None)
+        zeta = v["zeta"]
+        res = _run_arrays(v, gyr, acc, mag, rec.dt, q0, with_bias=zeta > 0)
         if zeta > 0:
             return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
         return FilterResult(res, self.working_frame)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0=None, frame: str = "ENU"):
+        return _MadgwickStream(self, rate_hz, dt, q0, frame)
+
+
+class _MadgwickStream(StateStream):
+    """O(1) per-sample Madgwick: the kernel on one sample with quaternion and bias carried in ``state``."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        self._coefs = {m: _coef(self.filter.values, self.dt, m) for m in (False, True)}
+        self._out = np.empty((1, 4))
+        self._bias = np.empty((0, 3))
+        state = np.zeros(7)
+        state[:4] = q0
+        return state
+
+    def _step(self, state, gyr, acc, mag):
+        _madgwick_kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._bias)
+        return self._out[0]

@@ -35,16 +35,16 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._scalar import read_rate, read_unit, rotate_sensor_to_earth
+from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_unit, rotate_sensor_to_earth
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.madgwick import _FM, _check_gain, _imu_arrays, _unit_q0
-from tuner.space import Real
+from objectives.attitude.filters.stream import StateStream
+from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
-__all__ = ["Mahony", "mahony_batch"]
+__all__ = ["Mahony", "mahony_batch", "DECL"]
 
 
-@njit(cache=True, fastmath=_FM)
-def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
+@njit(cache=True, fastmath=FASTMATH)
+def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Mahony filter over whole arrays (see module docstring).
 
     Parameters
@@ -53,8 +53,9 @@ def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
         rad/s, any unit, any unit; ``mag`` may be (0, 3) for the IMU version.
     coef : (4,) float64
         ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` (0/1).
-    q0 : (4,) float64
-        Initial sensor-to-earth quaternion (NWU).
+    state : (7,) float64
+        Read and written: the sensor-to-earth quaternion (NWU) and the integral ``I`` (rad/s); in:
+        before the first sample, out: after the last (for streaming).
     out : (N, 4) float64
         Written: estimate after each sample.
     bias_out : (N, 3) or (0, 3) float64
@@ -65,10 +66,10 @@ def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
     ki = coef[2]
     use_mag = coef[3] != 0.0 and mag.shape[0] == gyr.shape[0]
     write_bias = bias_out.shape[0] == gyr.shape[0]
-    q0_, q1, q2, q3 = q0[0], q0[1], q0[2], q0[3]
-    ix = 0.0
-    iy = 0.0
-    iz = 0.0
+    q0_, q1, q2, q3 = state[0], state[1], state[2], state[3]
+    ix = state[4]
+    iy = state[5]
+    iz = state[6]
     for i in range(gyr.shape[0]):
         gx, gy, gz = read_rate(gyr, i)
         ax, ay, az, acc_ok = read_unit(acc, i)
@@ -133,6 +134,39 @@ def _mahony_kernel(gyr, acc, mag, coef, q0, out, bias_out):
         out[i, 1] = q1
         out[i, 2] = q2
         out[i, 3] = q3
+    state[0] = q0_
+    state[1] = q1
+    state[2] = q2
+    state[3] = q3
+    state[4] = ix
+    state[5] = iy
+    state[6] = iz
+
+
+#: the one declaration of Mahony's parameters (defaults, search space, validation, docs)
+DECL = ParamSet("mahony", (
+    Param("Kp", 0.5, (1e-2, 10.0), "log", "rad/s", "proportional gain", "TAC 2008 eq. 32 (k_P)", NONNEG),
+    Param("Ki", 0.0, (1e-5, 1.0), "log", "rad/s^2", "integral gain (gyro bias)", "TAC 2008 eq. 32 (k_I)",
+          NONNEG),
+    Param("use_mag", True, doc="MARG (true) or IMU (false)"),
+))
+
+
+def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
+    """The kernel's coefficient array from validated values (the only place it is built)."""
+    return np.array([dt, float(v["Kp"]), float(v["Ki"]), 1.0 if has_mag else 0.0])
+
+
+def _run_arrays(v: dict, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, dt: float, q0: np.ndarray,
+                with_bias: bool):
+    """Kernel call on checked contiguous arrays and validated values."""
+    n = gyr.shape[0]
+    state = np.zeros(7)
+    state[:4] = q0
+    out = np.empty((n, 4))
+    bias = np.empty((n if with_bias else 0, 3))
+    _mahony_kernel(gyr, acc, mag, _coef(v, dt, mag.shape[0] > 0), state, out, bias)
+    return (out, bias) if with_bias else out
 
 
 def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
@@ -150,21 +184,14 @@ def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
     q0 : (4,)
         Initial sensor-to-earth quaternion, NWU.
     kp, ki : float
-        Proportional gain, rad/s, and integral gain, rad/s^2 (per unit of ``omega_mes``).
+        ``Kp`` and ``Ki`` of :data:`DECL` (validated against it).
     with_bias : bool
         Also return the (N, 3) gyro bias estimate, rad/s.
     """
-    gyr, acc, mag = _imu_arrays(gyr, acc, mag)
-    n = gyr.shape[0]
-    for name, v in (("dt", dt), ("kp", kp), ("ki", ki)):
-        if not np.isfinite(v) or v < 0 or (name == "dt" and v == 0):
-            raise ValueError(f"{name} must be finite and {'> 0' if name == 'dt' else '>= 0'}, got {v!r}")
-    q0 = _unit_q0(q0)
-    coef = np.array([dt, kp, ki, 1.0 if mag.shape[0] else 0.0])
-    out = np.empty((n, 4))
-    bias = np.empty((n if with_bias else 0, 3))
-    _mahony_kernel(gyr, acc, mag, coef, q0, out, bias)
-    return (out, bias) if with_bias else out
+    v = DECL.validate({"Kp": kp, "Ki": ki})
+    gyr, acc, mag = imu_arrays("mahony", gyr, acc, mag)
+    dt = check_number("mahony", "dt", dt, POSITIVE, "s")
+    return _run_arrays(v, gyr, acc, mag, dt, unit_quaternion("mahony", "q0", q0), with_bias)
 
 
 class Mahony(AttitudeFilter):
@@ -180,30 +207,38 @@ class Mahony(AttitudeFilter):
         MARG (True, default) or IMU version.
 
     Works in NWU; ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s, when ``Ki > 0``.
+    :meth:`stream` updates in O(1) per sample (the kernel carries quaternion and integral in ``state``).
     """
 
     name = "mahony"
     working_frame = "NWU"
     needs_mag = True
-    params = (
-        Real("Kp", 1e-2, 10.0, scale="log", unit="rad/s", doc="proportional gain"),
-        Real("Ki", 1e-5, 1.0, scale="log", unit="rad/s^2", doc="integral gain (gyro bias)"),
-        Real("use_mag", fixed=True, doc="MARG (true) or IMU (false)"),
-    )
-    defaults = {"Kp": 0.5, "Ki": 0.0, "use_mag": True}
-
-    def _check(self) -> None:
-        v = self.values
-        for key in ("Kp", "Ki"):
-            _check_gain("mahony", key, v[key])
-        if not isinstance(v["use_mag"], (bool, np.bool_)):
-            raise ValueError(f"mahony: use_mag must be true or false, got {v['use_mag']!r}")
+    decl = DECL
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         v = self.values
-        mag = rec.mag if v["use_mag"] else None
-        ki = float(v["Ki"])
-        res = mahony_batch(rec.gyr, rec.acc, mag, rec.dt, q0, float(v["Kp"]), ki, with_bias=ki > 0)
+        gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if v["use_mag"] else None)
+        ki = v["Ki"]
+        res = _run_arrays(v, gyr, acc, mag, rec.dt, q0, with_bias=ki > 0)
         if ki > 0:
             return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
         return FilterResult(res, self.working_frame)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0=None, frame: str = "ENU"):
+        return _MahonyStream(self, rate_hz, dt, q0, frame)
+
+
+class _MahonyStream(StateStream):
+    """O(1) per-sample Mahony: the kernel on one sample with quaternion and integral in ``state``."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        self._coefs = {m: _coef(self.filter.values, self.dt, m) for m in (False, True)}
+        self._out = np.empty((1, 4))
+        self._bias = np.empty((0, 3))
+        state = np.zeros(7)
+        state[:4] = q0
+        return state
+
+    def _step(self, state, gyr, acc, mag):
+        _mahony_kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._bias)
+        return self._out[0]

@@ -78,7 +78,7 @@ from numba import njit
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from tuner.space import Real
+from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["QUKF", "QRAUKF", "run_ukf"]
 
@@ -577,22 +577,23 @@ def run_ukf(gyr, acc, mag, dt, q0, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sig
 
 
 # ----------------------------------------------------------------------------------------------
+#: parameters shared by the QUKF and the QRAUKF (one declaration; see the module docstring for units)
 _COMMON = (
-    Real("sigma_gyr", 1e-4, 1e-1, scale="log", unit="rad/s",
-         doc="gyroscope noise std per sample (Q1; paper 0.0077 rad/s at 40 Hz)"),
-    Real("sigma_acc", 1e-3, 10.0, scale="log", unit="m/s^2",
-         doc="accelerometer noise std per axis (R_a of eq. 25; paper 0.038)"),
-    Real("sigma_mag", 1e-4, 1.0, scale="log", unit="1",
-         doc="magnetometer noise std relative to the field norm (R_b of eq. 25; paper about 0.004)"),
-    Real("bias_rw", 1e-10, 1e-2, scale="log", unit="rad/s/sqrt(s)",
-         doc="gyro bias random walk density (Q2 bias block; paper 6.3e-9)"),
-    Real("att_rw", 1e-20, 1e-1, scale="log", unit="rad/sqrt(s)",
-         doc="additive attitude random walk density (Q2 attitude block; paper 6.3e-20)"),
-    Real("p0_att", fixed=0.1, unit="rad", doc="initial attitude std"),
-    Real("p0_bias", fixed=0.01, unit="rad/s", doc="initial gyro bias std"),
+    Param("sigma_gyr", 0.0077, (1e-4, 1e-1), "log", "rad/s",
+          "gyroscope noise std per sample (Q1; paper 0.0077 rad/s at 40 Hz)", "eq. 18 q_u", NONNEG),
+    Param("sigma_acc", 0.038, (1e-3, 10.0), "log", "m/s^2",
+          "accelerometer noise std per axis (R_a of eq. 25; paper 0.038)", "eq. 25 R_a", POSITIVE),
+    Param("sigma_mag", 0.004, (1e-4, 1.0), "log", "1",
+          "magnetometer noise std relative to the field norm (R_b of eq. 25; paper about 0.004)", "eq. 25 R_b",
+          POSITIVE),
+    Param("bias_rw", 6.3e-9, (1e-10, 1e-2), "log", "rad/s/sqrt(s)",
+          "gyro bias random walk density (Q2 bias block; paper 6.3e-9)", "eq. 19 q_beta", NONNEG),
+    Param("att_rw", 6.3e-20, (1e-20, 1e-1), "log", "rad/sqrt(s)",
+          "additive attitude random walk density (Q2 attitude block; paper 6.3e-20)", "eq. 20 Q2", NONNEG),
+    Param("p0_att", 0.1, unit="rad", doc="initial attitude std", allowed=POSITIVE),
+    Param("p0_bias", 0.01, unit="rad/s", doc="initial gyro bias std", allowed=POSITIVE),
 )
-_COMMON_DEFAULTS = {"sigma_gyr": 0.0077, "sigma_acc": 0.038, "sigma_mag": 0.004, "bias_rw": 6.3e-9,
-                    "att_rw": 6.3e-20, "p0_att": 0.1, "p0_bias": 0.01}
+_KERNEL_KEYS = ("sigma_gyr", "sigma_acc", "sigma_mag", "bias_rw", "att_rw", "p0_att", "p0_bias")
 
 
 class QUKF(AttitudeFilter):
@@ -610,30 +611,21 @@ class QUKF(AttitudeFilter):
     bias_rw : float, rad/s/sqrt(s), bias random walk density (Q2).
     att_rw : float, rad/sqrt(s), additive attitude random walk density (Q2).
     p0_att, p0_bias : fixed options, initial std of attitude (rad) and bias (rad/s).
+
+    :meth:`stream` uses the buffered fallback of :mod:`objectives.attitude.filters.stream` (equal to
+    the batch, O(n) per sample): the kernel does not yet take and return its state (quaternion, bias,
+    covariance and, for the QRAUKF, the innovation window).
     """
 
     name = "qukf"
     working_frame = "ENU"
     needs_mag = True
-    params = _COMMON
-    defaults = dict(_COMMON_DEFAULTS)
+    decl = ParamSet("qukf", _COMMON)
     robust = False
-
-    def _check(self) -> None:
-        for k, v in self.values.items():
-            try:
-                f = float(v)
-            except (TypeError, ValueError):
-                raise ValueError(f"{self.name}: {k} must be a number, got {v!r}") from None
-            if not (math.isfinite(f) and f >= 0):
-                raise ValueError(f"{self.name}: {k} must be a finite number >= 0, got {v!r}")
-        for k in ("sigma_acc", "sigma_mag", "p0_att", "p0_bias"):
-            if float(self.values[k]) <= 0:
-                raise ValueError(f"{self.name}: {k} must be > 0, got {self.values[k]!r}")
 
     def _kwargs(self) -> dict[str, Any]:
         v = self.values
-        return {k: float(v[k]) for k in _COMMON_DEFAULTS}
+        return {k: v[k] for k in _KERNEL_KEYS}
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         out = run_ukf(rec.gyr, rec.acc, rec.mag, rec.dt, q0, robust=self.robust, **self._kwargs())
@@ -658,23 +650,16 @@ class QRAUKF(QUKF):
     """
 
     name = "qraukf"
-    params = _COMMON + (
-        Real("window", 5, 400, integer=True, unit="samples", doc="sliding window length N (paper 20)"),
-        Real("n_sigma", 1.0, 10.0, unit="1", doc="Hampel confidence region (paper 3)"),
-    )
-    defaults = {**_COMMON_DEFAULTS, "window": 20, "n_sigma": 3.0}
+    decl = ParamSet("qraukf", _COMMON + (
+        Param("window", 20, (5, 400), unit="samples", doc="sliding window length N (paper 20)", eq="eqs. 34-35",
+              allowed=Interval(2.0), integer=True),
+        Param("n_sigma", 3.0, (1.0, 10.0), unit="1", doc="Hampel confidence region (paper 3)", eq="eq. 36",
+              allowed=POSITIVE),
+    ))
     robust = True
-
-    def _check(self) -> None:
-        super()._check()
-        w = self.values["window"]
-        if float(w) != int(w) or int(w) < 2:
-            raise ValueError(f"{self.name}: window must be an integer >= 2, got {w!r}")
-        if float(self.values["n_sigma"]) <= 0:
-            raise ValueError(f"{self.name}: n_sigma must be > 0, got {self.values['n_sigma']!r}")
 
     def _kwargs(self) -> dict[str, Any]:
         kw = super()._kwargs()
-        kw["window"] = int(self.values["window"])
-        kw["n_sigma"] = float(self.values["n_sigma"])
+        kw["window"] = self.values["window"]
+        kw["n_sigma"] = self.values["n_sigma"]
         return kw

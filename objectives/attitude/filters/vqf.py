@@ -27,7 +27,8 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from tuner.space import Real
+from objectives.attitude.filters.stream import StreamBase
+from objectives.params import POSITIVE, Param, ParamSet
 
 __all__ = ["VQF", "VQF_PARAMS", "INSTALL_HINT"]
 
@@ -47,6 +48,27 @@ VQF_PARAMS: dict[str, Any] = {
     "magMinUndisturbedTime": 0.5, "magMaxRejectionTime": 60.0, "magRejectionFactor": 2.0,
 }
 _BOOL_PARAMS = ("motionBiasEstEnabled", "restBiasEstEnabled", "magDistRejectionEnabled")
+#: units of the numeric parameters as VQF documents them
+_UNITS = {
+    "tauAcc": "s", "tauMag": "s", "biasSigmaInit": "deg/s", "biasForgettingTime": "s", "biasClip": "deg/s",
+    "biasSigmaMotion": "deg/s", "biasVerticalForgettingFactor": "1", "biasSigmaRest": "deg/s", "restMinT": "s",
+    "restFilterTau": "s", "restThGyr": "deg/s", "restThAcc": "m/s^2", "magCurrentTau": "s", "magRefTau": "s",
+    "magNormTh": "1", "magDipTh": "deg", "magNewTime": "s", "magNewFirstTime": "s", "magNewMinGyr": "deg/s",
+    "magMinUndisturbedTime": "s", "magMaxRejectionTime": "s", "magRejectionFactor": "1",
+}
+# VQF treats tau <= 0 as "no filtering" (immediate correction), which is allowed but not what a tuner
+# should wander into by accident: the time constants must be positive.
+_SEARCHED = {p.name: p for p in (
+    Param("tauAcc", 3.0, (0.1, 30.0), "log", "s", "time constant of the accelerometer correction",
+          allowed=POSITIVE),
+    Param("tauMag", 9.0, (0.3, 100.0), "log", "s", "time constant of the magnetometer correction",
+          allowed=POSITIVE),
+    Param("biasSigmaMotion", 0.1, (0.01, 1.0), "log", "deg/s", "std of the bias random walk during motion"),
+    Param("biasForgettingTime", 100.0, (10.0, 1000.0), "log", "s",
+          "time in which the bias uncertainty grows back to biasClip"),
+    Param("magRejectionFactor", 2.0, (1.0, 10.0), "log", "1",
+          "factor by which tauMag is raised after a magnetic disturbance"),
+)}
 
 
 def _import_vqf():
@@ -85,42 +107,19 @@ class VQF(AttitudeFilter):
     name = "vqf"
     working_frame = "ENU"
     needs_mag = True
-    params = (
-        Real("tauAcc", 0.1, 30.0, scale="log", unit="s", doc="time constant of the accelerometer correction"),
-        Real("tauMag", 0.3, 100.0, scale="log", unit="s", doc="time constant of the magnetometer correction"),
-        Real("biasSigmaMotion", 0.01, 1.0, scale="log", unit="deg/s",
-             doc="std of the bias random walk during motion"),
-        Real("biasForgettingTime", 10.0, 1000.0, scale="log", unit="s",
-             doc="time in which the bias uncertainty grows back to biasClip"),
-        Real("magRejectionFactor", 1.0, 10.0, scale="log", unit="1",
-             doc="factor by which tauMag is raised after a magnetic disturbance"),
-        *(Real(k, fixed=v) for k, v in VQF_PARAMS.items()
-          if k not in ("tauAcc", "tauMag", "biasSigmaMotion", "biasForgettingTime", "magRejectionFactor")),
-        Real("use_mag", fixed=True, doc="9-D (true) or 6-D (false) fusion"),
-        Real("offline", fixed=False, doc="acausal offlineVQF instead of the causal VQF"),
-    )
-    defaults = {**VQF_PARAMS, "use_mag": True, "offline": False}
+    decl = ParamSet("vqf", (
+        *_SEARCHED.values(),  # first, in this order: the unit-cube encoding of recorded runs
+        *(Param(k, v, unit=_UNITS.get(k, ""), doc="VQF parameter (see vqf.VQF's documentation)")
+          for k, v in VQF_PARAMS.items() if k not in _SEARCHED),
+        Param("use_mag", True, doc="9-D (true) or 6-D (false) fusion"),
+        Param("offline", False, doc="acausal offlineVQF instead of the causal VQF"),
+    ))
 
     def __init__(self, **values: Any):
         _import_vqf()
         super().__init__(**values)
 
     def _check(self) -> None:
-        for k, v in self.values.items():
-            if k in _BOOL_PARAMS or k in ("use_mag", "offline"):
-                if not isinstance(v, (bool, np.bool_)):
-                    raise ValueError(f"vqf: {k} must be true or false, got {v!r}")
-                continue
-            try:
-                f = float(v)
-            except (TypeError, ValueError):
-                raise ValueError(f"vqf: {k} must be a number, got {v!r}") from None
-            if not np.isfinite(f):
-                raise ValueError(f"vqf: {k} must be finite, got {v!r}")
-            if k in ("tauAcc", "tauMag") and f <= 0:
-                # VQF treats tau <= 0 as "no filtering" (immediate correction), which is allowed but
-                # not what a tuner should wander into by accident: require a positive time constant.
-                raise ValueError(f"vqf: {k} must be > 0 s, got {v!r}")
         vqf = _import_vqf()
         known = set(vqf.VQF(0.01).params)
         unknown = sorted(set(VQF_PARAMS) - known)
@@ -152,3 +151,26 @@ class VQF(AttitudeFilter):
             diag["mag_dist"] = np.asarray(out["magDistDetected"])
             diag["delta"] = np.asarray(out["delta"])
         return FilterResult(quat, "ENU", diag)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """Per-sample VQF through the package's own ``VQF.update`` (O(1)); ``q0`` is ignored as in
+        :meth:`run`. Not available with ``offline: true`` (the offline filter is acausal)."""
+        if self.values["offline"]:
+            raise ValueError("vqf: offline=True is acausal and has no per-sample stream; use offline=False")
+        return _VQFStream(self, rate_hz, dt, q0, frame)
+
+
+class _VQFStream(StreamBase):
+    def update(self, gyr: Any, acc: Any, mag: Any = None) -> np.ndarray:
+        """Feed one sample (rad/s, m/s^2, any unit); the estimate after it, (4,) in ``frame``."""
+        from objectives.attitude.quaternion import to_frame
+
+        g, a, m = self._read(gyr, acc, mag)
+        if self.n == 0:
+            self._vqf = _import_vqf().VQF(self.dt, **self.filter.vqf_params())
+        self._vqf.update(np.ascontiguousarray(g), np.ascontiguousarray(a),
+                         None if m is None else np.ascontiguousarray(m))
+        self.n += 1
+        q = np.asarray(self._vqf.getQuat9D() if self.use_mag else self._vqf.getQuat6D(), dtype=np.float64)
+        return to_frame(q[None, :], "ENU", self.frame)[0]
+

@@ -6,9 +6,10 @@ kernel (see :mod:`objectives.control.controllers.kernels`) plus a thin subclass 
 
 - ``name``: the YAML name (``controller: pid``);
 - ``kind``: the ``KIND_*`` constant of its branch in ``kernels.controller_step``;
-- ``params``: tuple of :class:`tuner.space.Real` with default search bounds (options as
-  ``Real(name, fixed=default)``);
-- ``defaults``: initial values of every parameter (thesis Table 2.7 where it gives them);
+- ``decl``: the one :class:`objectives.params.ParamSet` of its parameters (default -- thesis Table 2.7
+  where it gives them --, search bounds, scale, unit, allowed range, doc, equation); ``params`` (the
+  default search space as :class:`tuner.space.Real`) and ``defaults`` derive from it, and
+  :meth:`Controller.resolve` validates the values of every evaluation against it;
 - ``state_size``: length of the zeroed float state array the step function uses;
 
 and implements ``_build(values) -> np.ndarray``, the float parameter array of its step function.
@@ -22,6 +23,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from objectives.control.wmp import SensorParams, WMPParams
+from objectives.params import ParamSet
 from tuner.space import Real, Space
 
 __all__ = ["Controller"]
@@ -38,9 +40,17 @@ class Controller:
 
     name: ClassVar[str] = ""
     kind: ClassVar[int] = -1
+    #: the one declaration of the parameters (``params`` and ``defaults`` derive from it)
+    decl: ClassVar[ParamSet | None] = None
     params: ClassVar[tuple[Real, ...]] = ()
     defaults: ClassVar[dict[str, Any]] = {}
     state_size: ClassVar[int] = 0
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("decl") is not None:
+            cls.params = cls.decl.reals()
+            cls.defaults = cls.decl.defaults()
 
     def __init__(self, plant: WMPParams | None = None, sensors: SensorParams | None = None):
         self.plant = plant or WMPParams()
@@ -51,9 +61,27 @@ class Controller:
         return Space(cls.params)
 
     @classmethod
+    def declaration(cls) -> ParamSet:
+        """The parameter declaration (built from ``params``/``defaults`` for undeclared controllers)."""
+        if cls.decl is not None:
+            return cls.decl
+        return ParamSet.from_space(cls.name, cls.params, cls.defaults)
+
+    @classmethod
+    def describe(cls) -> dict[str, Any]:
+        """Structured description: name, class, summary and every parameter with default, bounds,
+        scale, unit, allowed values, doc and the thesis's equation or table."""
+        doc = (cls.__doc__ or "").strip().splitlines()
+        return {"name": cls.name, "class": f"{cls.__module__}.{cls.__qualname__}",
+                "summary": doc[0] if doc else "", "params": cls.declaration().describe()}
+
+    @classmethod
     def resolve(cls, values: Mapping[str, Any] | None = None) -> dict[str, Any]:
-        """Defaults updated with ``values``; unknown names are a ``ValueError`` listing the known ones."""
+        """Defaults updated with ``values``, validated against ``decl``; unknown names are a
+        ``ValueError`` listing the known ones, a bad value one naming the key and the allowed range."""
         values = dict(values or {})
+        if cls.decl is not None:
+            return cls.decl.validate(values)
         known = [p.name for p in cls.params]
         unknown = sorted(set(values) - set(known))
         if unknown:

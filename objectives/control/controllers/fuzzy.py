@@ -76,7 +76,7 @@ p33       0          [0, 20]            FLC3 Z narrowing (deg/s)
 u3        1.5        [0.1, 10]          FLC3 output gain (V/s)
 ========  =========  =================  ==============================================
 
-Fixed options (``Real(name, fixed=...)``, tunable by listing them in a config's ``parameters``):
+Fixed options (declared without search bounds, tunable by listing them in a config's ``parameters``):
 p12 = p22 = d22 = p32 = 0 (the N/P gaps, 0 in both columns of Table 2.7) and p13 = 0. Table 2.7 has
 16 entries that differ from zero or change between its columns, while the text says 15 parameters
 were tuned; we leave out p13, the only one the thesis's optimiser left within 1 % of its initial value
@@ -115,7 +115,7 @@ from objectives.control.controllers.fuzzy_steps import (
 )
 from objectives.control.controllers.kernels import KIND_FLC, KIND_LUT_FUZZY, KIND_PROTECTIVE_FUZZY
 from objectives.fuzzy import TRAP, SugenoFIS, surface
-from tuner.space import Real
+from objectives.params import Interval, Param, ParamSet
 
 __all__ = [
     "FLC",
@@ -181,26 +181,26 @@ def _flc2_flc3(v: dict[str, Any], p: np.ndarray) -> None:
 # --------------------------------------------------------------------------------------------------
 # Python classes
 # --------------------------------------------------------------------------------------------------
-def _flc23_params() -> tuple[Real, ...]:
-    return (
-        Real("p21", 2.0, 60.0, unit="deg", doc="FLC2 theta3 universe (N peak / P peak)"),
-        Real("p22", fixed=0.0, unit="deg", doc="FLC2 theta3 N/P gap"),
-        Real("p23", 0.0, 10.0, unit="deg", doc="FLC2 theta3 Z narrowing"),
-        Real("d21", 20.0, 1000.0, unit="deg/s", doc="FLC2 omega3 universe"),
-        Real("d22", fixed=0.0, unit="deg/s", doc="FLC2 omega3 N/P gap"),
-        Real("d23", 0.0, 100.0, unit="deg/s", doc="FLC2 omega3 Z narrowing"),
-        Real("u2", 0.05, 3.0, unit="V", doc="FLC2 output gain"),
-        Real("p31", 5.0, 90.0, unit="deg/s", doc="FLC3 yaw-rate universe"),
-        Real("p32", fixed=0.0, unit="deg/s", doc="FLC3 N/P gap"),
-        Real("p33", 0.0, 20.0, unit="deg/s", doc="FLC3 Z narrowing"),
-        Real("u3", 0.1, 10.0, unit="V/s", doc="FLC3 output gain (integrated)"),
-    )
+def _p(name: str, default: float, bounds: tuple[float, float] | None, unit: str, doc: str,
+       eq: str = "Table 2.7") -> Param:
+    """A fuzzy-controller parameter: any finite number, searched linearly within ``bounds`` (None: fixed)."""
+    return Param(name, default, bounds, unit=unit, doc=doc, eq=eq)
 
 
-_FLC23_DEFAULTS = {
-    "p21": 15.0, "p22": 0.0, "p23": 0.0, "d21": 220.0, "d22": 0.0, "d23": 0.0, "u2": 0.6,
-    "p31": 30.0, "p32": 0.0, "p33": 0.0, "u3": 1.5,
-}  # fmt: skip
+#: FLC2 (oscillation) and FLC3 (yaw) parameters shared by the fuzzy controllers (Fig. 2.12, Table 2.7)
+_FLC23 = (
+    _p("p21", 15.0, (2.0, 60.0), "deg", "FLC2 theta3 universe (N peak / P peak)"),
+    _p("p22", 0.0, None, "deg", "FLC2 theta3 N/P gap"),
+    _p("p23", 0.0, (0.0, 10.0), "deg", "FLC2 theta3 Z narrowing"),
+    _p("d21", 220.0, (20.0, 1000.0), "deg/s", "FLC2 omega3 universe"),
+    _p("d22", 0.0, None, "deg/s", "FLC2 omega3 N/P gap"),
+    _p("d23", 0.0, (0.0, 100.0), "deg/s", "FLC2 omega3 Z narrowing"),
+    _p("u2", 0.6, (0.05, 3.0), "V", "FLC2 output gain"),
+    _p("p31", 30.0, (5.0, 90.0), "deg/s", "FLC3 yaw-rate universe", "eq. 2.30, Table 2.7"),
+    _p("p32", 0.0, None, "deg/s", "FLC3 N/P gap", "eq. 2.30"),
+    _p("p33", 0.0, (0.0, 20.0), "deg/s", "FLC3 Z narrowing", "eq. 2.30, Table 2.7"),
+    _p("u3", 1.5, (0.1, 10.0), "V/s", "FLC3 output gain (integrated)", "eq. 2.30, Table 2.7"),
+)
 
 
 class _FuzzyBase(Controller):
@@ -247,13 +247,12 @@ class FLC(_FuzzyBase):
 
     name = "flc"
     kind = KIND_FLC
-    params = (
-        Real("p11", 0.05, 1.0, unit="m/s", doc="FLC1 speed-error universe"),
-        Real("p12", fixed=0.0, unit="m/s", doc="FLC1 N/P gap"),
-        Real("p13", 0.0, 0.2, unit="m/s", doc="FLC1 Z narrowing"),
-        Real("u1", 0.1, 15.0, unit="V/s", doc="FLC1 output gain (integrated)"),
-    ) + _flc23_params()
-    defaults = {"p11": 0.35, "p12": 0.0, "p13": 0.0, "u1": 3.0, **_FLC23_DEFAULTS}
+    decl = ParamSet("controller 'flc'", (
+        _p("p11", 0.35, (0.05, 1.0), "m/s", "FLC1 speed-error universe", "Fig. 2.6"),
+        _p("p12", 0.0, None, "m/s", "FLC1 N/P gap", "Fig. 2.6"),
+        _p("p13", 0.0, (0.0, 0.2), "m/s", "FLC1 Z narrowing", "Fig. 2.6"),
+        _p("u1", 3.0, (0.1, 15.0), "V/s", "FLC1 output gain (integrated)", "Fig. 2.6"),
+    ) + _FLC23)
 
     def _build(self, v):
         return self._direct(v)
@@ -280,21 +279,17 @@ class ProtectiveFuzzy(_FuzzyBase):
 
     name = "protective_fuzzy"
     kind = KIND_PROTECTIVE_FUZZY
-    params = (
-        Real("p11", 0.05, 1.0, unit="m/s", doc="FLC1 speed-error universe"),
-        Real("p12", fixed=0.0, unit="m/s", doc="FLC1 N/P gap"),
-        Real("p13", fixed=0.0, unit="m/s", doc="FLC1 Z narrowing (fixed: see module docstring)"),
-        Real("d11", 0.05, 1.5, unit="A", doc="current set S foot"),
-        Real("d12", 0.0, 1.0, unit="A", doc="current set L foot"),
-        Real("d13", 0.1, 2.0, unit="A", doc="current set L peak"),
-        Real("u11", 0.1, 6.0, unit="V", doc="proportional tag gain (P, N)"),
-        Real("u12", 0.0, 3.0, unit="V", doc="protective voltage (Px, Nx)"),
-        Real("u13", 0.1, 15.0, unit="V/s", doc="integral tag gain"),
-    ) + _flc23_params()
-    defaults = {
-        "p11": 0.35, "p12": 0.0, "p13": 0.0, "d11": 0.5, "d12": 0.0, "d13": 0.5,
-        "u11": 3.0, "u12": 1.0, "u13": 1.5, **_FLC23_DEFAULTS,
-    }  # fmt: skip
+    decl = ParamSet("controller 'protective_fuzzy'", (
+        _p("p11", 0.35, (0.05, 1.0), "m/s", "FLC1 speed-error universe"),
+        _p("p12", 0.0, None, "m/s", "FLC1 N/P gap"),
+        _p("p13", 0.0, None, "m/s", "FLC1 Z narrowing (fixed: see module docstring)"),
+        _p("d11", 0.5, (0.05, 1.5), "A", "current set S foot", "Table 2.6, Table 2.7"),
+        _p("d12", 0.0, (0.0, 1.0), "A", "current set L foot", "Table 2.6, Table 2.7"),
+        _p("d13", 0.5, (0.1, 2.0), "A", "current set L peak", "Table 2.6, Table 2.7"),
+        _p("u11", 3.0, (0.1, 6.0), "V", "proportional tag gain (P, N)", "Table 2.6, Table 2.7"),
+        _p("u12", 1.0, (0.0, 3.0), "V", "protective voltage (Px, Nx)", "Table 2.6, Table 2.7"),
+        _p("u13", 1.5, (0.1, 15.0), "V/s", "integral tag gain", "Table 2.6, Table 2.7"),
+    ) + _FLC23)
 
     def _build(self, v):
         return self._direct(v)
@@ -375,15 +370,13 @@ class LUTFuzzy(ProtectiveFuzzy):
 
     name = "lut"
     kind = KIND_LUT_FUZZY
-    params = ProtectiveFuzzy.params + (
-        Real("lut_size", fixed=LUT_SIZE, doc="grid points per input"),
-        Real("lut_mode", fixed=0, doc="0 nearest (eq. 2.32), 1 bilinear"),
-    )
-    defaults = {**ProtectiveFuzzy.defaults, "lut_size": LUT_SIZE, "lut_mode": 0}
+    decl = ParamSet("controller 'lut'", ProtectiveFuzzy.decl.params + (
+        Param("lut_size", LUT_SIZE, unit="1", doc="grid points per input", eq="eq. 2.32",
+              allowed=Interval(2.0), integer=True),
+        Param("lut_mode", 0, choices=(0, 1), doc="0 nearest (eq. 2.32), 1 bilinear", eq="eq. 2.32"),
+    ))
 
     def _build(self, v):
-        if v["lut_mode"] not in (0, 1):
-            raise ValueError(f"lut_mode must be 0 (nearest) or 1 (bilinear), got {v['lut_mode']!r}")
         tabs = self.tables(v, v["lut_size"])
         head = [self.sensors.Ts_s, float(v["lut_mode"]), 0.0, 0.0, 0.0, 0.0]
         body: list[np.ndarray] = []

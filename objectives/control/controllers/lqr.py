@@ -31,7 +31,7 @@ import scipy.linalg
 from objectives.control.controllers.base import Controller
 from objectives.control.controllers.kernels import KIND_LQG, KIND_LQR
 from objectives.control.wmp import WMPParams, derivatives
-from tuner.space import Real
+from objectives.params import NONNEG, POSITIVE, Param, ParamSet
 
 __all__ = ["LQR", "LQG", "LQDesign", "linearize", "reduced_model", "lq_design"]
 
@@ -154,6 +154,19 @@ def lq_design(
     return LQDesign(K=K, Nx=Nx, Nu=Nu, Fr=Nu + K @ Nx, P=P, Ad=Ad, Bd=Bd, Cc=Cc, poles=np.linalg.eigvals(Ad - Bd @ K))
 
 
+_Q = dict(scale="log", eq="eq. 2.13 Q (Q >= 0), section 2.2.1.2", allowed=NONNEG)
+_R = dict(scale="log", eq="eq. 2.13 R (R > 0), section 2.2.1.2", allowed=POSITIVE)
+#: LQR/LQG weights: the thesis's heuristic Q, R (section 2.2.1.2), bounds two decades either side
+_LQ_WEIGHTS = (
+    Param("q_theta3", 14.5, (0.1, 1.0e4), unit="1/rad^2", doc="Q11, IB angle weight", **_Q),
+    Param("q_nu", 156.2, (1.0, 1.0e5), unit="s^2/m^2", doc="Q22, linear speed weight", **_Q),
+    Param("q_omega3", 1.3, (1.0e-2, 1.0e3), unit="s^2/rad^2", doc="Q33, IB rate weight", **_Q),
+    Param("q_xi", 1.3, (1.0e-2, 1.0e3), unit="s^2/rad^2", doc="Q44, yaw rate weight", **_Q),
+    Param("r_u1", 0.1, (1.0e-3, 10.0), unit="1/V^2", doc="R11, left motor voltage weight", **_R),
+    Param("r_u2", 0.1, (1.0e-3, 10.0), unit="1/V^2", doc="R22, right motor voltage weight", **_R),
+)
+
+
 class LQR(Controller):
     """Discrete LQR with reference tracking (eqs. 2.13-2.15, 2.19) on the true state.
 
@@ -164,15 +177,7 @@ class LQR(Controller):
     name = "lqr"
     kind = KIND_LQR
     state_size = 0
-    params = (
-        Real("q_theta3", 0.1, 1.0e4, "log", unit="1/rad^2", doc="Q11, IB angle weight"),
-        Real("q_nu", 1.0, 1.0e5, "log", unit="s^2/m^2", doc="Q22, linear speed weight"),
-        Real("q_omega3", 1.0e-2, 1.0e3, "log", unit="s^2/rad^2", doc="Q33, IB rate weight"),
-        Real("q_xi", 1.0e-2, 1.0e3, "log", unit="s^2/rad^2", doc="Q44, yaw rate weight"),
-        Real("r_u1", 1.0e-3, 10.0, "log", unit="1/V^2", doc="R11, left motor voltage weight"),
-        Real("r_u2", 1.0e-3, 10.0, "log", unit="1/V^2", doc="R22, right motor voltage weight"),
-    )
-    defaults = {"q_theta3": 14.5, "q_nu": 156.2, "q_omega3": 1.3, "q_xi": 1.3, "r_u1": 0.1, "r_u2": 0.1}
+    decl = ParamSet("controller 'lqr'", _LQ_WEIGHTS)
 
     def design(self, values=None) -> LQDesign:
         v = self.resolve(values)
@@ -191,3 +196,4 @@ class LQG(LQR):
 
     name = "lqg"
     kind = KIND_LQG
+    decl = LQR.decl.with_owner("controller 'lqg'")

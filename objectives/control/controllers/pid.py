@@ -37,7 +37,7 @@ import numpy as np
 
 from objectives.control.controllers.base import Controller
 from objectives.control.controllers.kernels import KIND_PID, PID_STATE_SIZE
-from tuner.space import Real
+from objectives.params import POSITIVE, Param, ParamSet
 
 __all__ = ["PID"]
 
@@ -48,30 +48,20 @@ class PID(Controller):
     name = "pid"
     kind = KIND_PID
     state_size = PID_STATE_SIZE
-    params = (
-        Real("kp1", 1.0, 24.0, unit="V s/m", doc="PID1 proportional gain"),
-        Real("ki1", 5.0, 35.0, unit="V/m", doc="PID1 integral gain"),
-        Real("kd1", fixed=0.0, unit="V s^2/m", doc="PID1 derivative gain"),
-        Real("kp2", 0.002, 0.1, unit="V/deg", doc="PID2 proportional gain"),
-        Real("ki2", fixed=0.0, unit="V/(deg s)", doc="PID2 integral gain"),
-        Real("kd2", 7e-8, 5e-5, "log", unit="V s/deg", doc="PID2 derivative gain"),
-        Real("yaw_gain_V", fixed=0.15, unit="V", doc="yaw loop voltage step per period at full error"),
-        Real("yaw_range_deg_s", fixed=30.0, unit="deg/s", doc="yaw error at which the step saturates"),
-    )
-    defaults = {
-        "kp1": 12.0,
-        "ki1": 25.0,
-        "kd1": 0.0,
-        "kp2": 0.03,
-        "ki2": 0.0,
-        "kd2": 3e-5,
-        "yaw_gain_V": 0.15,
-        "yaw_range_deg_s": 30.0,
-    }
+    decl = ParamSet("controller 'pid'", (
+        Param("kp1", 12.0, (1.0, 24.0), unit="V s/m", doc="PID1 proportional gain", eq="eq. 2.38, Table 2.7"),
+        Param("ki1", 25.0, (5.0, 35.0), unit="V/m", doc="PID1 integral gain", eq="eq. 2.38, Table 2.7"),
+        Param("kd1", 0.0, unit="V s^2/m", doc="PID1 derivative gain", eq="eq. 2.38"),
+        Param("kp2", 0.03, (0.002, 0.1), unit="V/deg", doc="PID2 proportional gain", eq="eq. 2.38, Table 2.7"),
+        Param("ki2", 0.0, unit="V/(deg s)", doc="PID2 integral gain", eq="eq. 2.38"),
+        Param("kd2", 3e-5, (7e-8, 5e-5), "log", unit="V s/deg", doc="PID2 derivative gain",
+              eq="eq. 2.38, Table 2.7"),
+        Param("yaw_gain_V", 0.15, unit="V", doc="yaw loop voltage step per period at full error", eq="eq. 2.30"),
+        Param("yaw_range_deg_s", 30.0, unit="deg/s", doc="yaw error at which the step saturates", eq="eq. 2.30",
+              allowed=POSITIVE),
+    ))
 
     def _build(self, v):
-        if v["yaw_range_deg_s"] <= 0:
-            raise ValueError(f"yaw_range_deg_s must be > 0, got {v['yaw_range_deg_s']}")
         return np.array(
             [
                 v["kp1"],
