@@ -45,6 +45,8 @@ _S2 = 1.0 / math.sqrt(2.0)
 _SQRT2 = math.sqrt(2.0)
 _TOL_MEAN = 1e-12
 _MAX_MEAN_ITER = 6
+_BCH_STEP2 = 1e-16  # (1e-8 rad)^2
+_BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
 
 #: entries of ``state`` before the innovation window
 N_STATE_FIXED = 46
@@ -65,6 +67,10 @@ _R2Q_SERIES_TH2 = 0.25
 _A = tuple(math.factorial(2 * k) / (4 ** k * math.factorial(k) ** 2 * (2 * k + 1)) for k in range(10))
 _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8, _A9 = _A[1:]
 _Q2R_SERIES_N2 = 0.01
+_SHORT_TH2 = 1e-4  # shorter series below 0.01 rad (eq. 2) and |n| = 0.01 (eq. 1)
+_SHORT_N2 = 1e-4
+# rounding-level freedoms only (FMA, reassociation, reciprocal): NaN/inf semantics are kept for the checks
+_FM = {"nsz", "arcp", "contract", "reassoc"}
 
 
 # ----------------------------------------------------------------------------------------------
@@ -82,8 +88,12 @@ def _qm(a0, a1, a2, a3, b0, b1, b2, b3):
 def _r2q(rx, ry, rz):
     """Exponential map, eq. 2: rotation vector (rad) -> unit quaternion."""
     th2 = rx * rx + ry * ry + rz * rz
+    y = 0.25 * th2
+    if th2 < _SHORT_TH2:  # th < 0.01 rad: the y^4 terms are below 1e-23
+        c = 1.0 + y * (_C1 + y * (_C2 + y * _C3))
+        s = 0.5 * (1.0 + y * (_S1 + y * (_S2C + y * _S3)))
+        return c, s * rx, s * ry, s * rz
     if th2 < _R2Q_SERIES_TH2:
-        y = 0.25 * th2
         c = 1.0 + y * (_C1 + y * (_C2 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))
         s = 0.5 * (1.0 + y * (_S1 + y * (_S2C + y * (_S3 + y * (_S4 + y * (_S5 + y * _S6))))))
         return c, s * rx, s * ry, s * rz
@@ -97,6 +107,11 @@ def _r2q(rx, ry, rz):
 def _q2r(w, x, y, z):
     """Logarithm map, eq. 1 (antipodal sign handled): unit quaternion -> rotation vector (rad)."""
     n2 = x * x + y * y + z * z
+    if n2 < _SHORT_N2:  # |n| < 0.01: the n^10 term is below 1e-21
+        f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * _A4))))
+        if w < 0.0:
+            f = -f
+        return f * x, f * y, f * z
     if n2 < _Q2R_SERIES_N2:
         # 2 asin(|n|)/|n| for a unit quaternion (= 2 atan2(|n|, |w|)/|n| to rounding)
         f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
@@ -308,8 +323,14 @@ def _mad_sorted(S, n, med):
 def _wmean_cov(Y, m, r0, r1, r2, r3, D):
     """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3) and covariance.
 
-    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` of the last iteration. Returns the mean
+    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
     (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
+
+    The iteration stops when a step is below 1e-12 rad, or when the step ``s`` just taken is below
+    1e-8 rad and the next one is predicted below 1e-13 rad (the contraction per step is at most the
+    trace of the covariance): the deviations then move to the new mean by the first-order
+    Baker-Campbell-Hausdorff form ``D_j - s + s x D_j / 2`` (error O(|s|^2 |D|)) instead of one
+    more pass of logarithms.
     """
     w = 1.0 / m
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
@@ -333,11 +354,28 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D):
         sx *= w
         sy *= w
         sz *= w
-        if sx * sx + sy * sy + sz * sz < _TOL_MEAN * _TOL_MEAN:
+        s2 = sx * sx + sy * sy + sz * sz
+        if s2 < _TOL_MEAN * _TOL_MEAN:
             break
         e0, e1, e2, e3 = _r2q(sx, sy, sz)
         r0, r1, r2, r3 = _qm(e0, e1, e2, e3, r0, r1, r2, r3)
-    # covariance about the mean (the residual mean step is below 1e-12 rad)
+        tr = (cxx + cyy + czz) * w
+        if s2 < _BCH_STEP2 and s2 * tr * tr < _BCH_NEXT2:
+            hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz
+            cxx = cxy = cxz = cyy = cyz = czz = 0.0
+            for j in range(m):
+                dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
+                dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
+                D[j, 0] = dx
+                D[j, 1] = dy
+                D[j, 2] = dz
+                cxx += dx * dx
+                cxy += dx * dy
+                cxz += dx * dz
+                cyy += dy * dy
+                cyz += dy * dz
+                czz += dz * dz
+            break
     return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
 
 
@@ -422,7 +460,7 @@ def _hampel_gain(v, med, thr):
 
 
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath=_FM)
 def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip, out_fallback):
     """QUKF (eqs. 26-33) and, with ``robust``, QRAUKF (eqs. 34-38) over the samples of ``gyr``.
 
