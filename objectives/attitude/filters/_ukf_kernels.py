@@ -21,7 +21,7 @@ holds the per-sample arithmetic, written for the fixed sizes of the problem (6 e
 
 State passed in and out
 -----------------------
-A run is ``_ukf_run(gyr, acc, mag, coef, state, istate, work, outputs...)``: it reads the filter
+A run is ``_ukf_run(gyr, acc, mag, coef, robust, state, istate, work, outputs...)``: it reads the filter
 state from ``state`` / ``istate``, processes the samples and writes the state back, so a recording
 processed in pieces (down to one sample per call) gives the same result, bit for bit, as one call
 over the whole of it. Layout (:func:`new_state` builds it):
@@ -68,11 +68,11 @@ _BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
 N_STATE_FIXED = 46
 _I_Q, _I_B, _I_P, _I_G = 0, 4, 7, 43
 
-# work layout (float64): E (18, 4), D (18, 3), DB (18, 3), Ym (12, 4), Dm (12, 3), L (6, 6), 3x3 x 5, K (6, 3)
+# work layout (float64): E (18, 4), D (18, 3), DB (18, 3), Ym (12, 4), Dm (12, 3), L (6, 6), 3x3 x 4, K (6, 3)
 _W_E, _W_D, _W_DB, _W_YM, _W_DM, _W_L = 0, 72, 126, 180, 228, 264
-_W_R0, _W_RH, _W_PYY, _W_LYY, _W_SYY, _W_K = 300, 309, 318, 327, 336, 345
+_W_R0, _W_RH, _W_PYY, _W_SYY, _W_K = 300, 309, 318, 327, 336
 #: size of ``work``
-WORK_SIZE = 363
+WORK_SIZE = 354
 
 # rounding-level freedoms only (FMA, reassociation, reciprocal): NaN/inf semantics are kept for the checks
 _FM = {"nsz", "arcp", "contract", "reassoc"}
