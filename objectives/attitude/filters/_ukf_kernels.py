@@ -79,7 +79,7 @@ _FM = {"nsz", "arcp", "contract", "reassoc"}
 
 
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", fastmath=_FM)
 def _wmean_cov(Y, m, r0, r1, r2, r3, D):
     """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3) and covariance.
 
@@ -139,7 +139,7 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D):
     return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", fastmath=_FM)
 def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
     """Eq. 25: quaternion pseudo-measurement (ENU) and its covariance R (3x3) by the UT of eqs. 9-15.
 
