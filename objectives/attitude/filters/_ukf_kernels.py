@@ -1,0 +1,466 @@
+"""Numba kernels of the quaternion UKFs (QUKF, QRAUKF; Chiella, Teixeira & Pereira, Sensors 19:2372, 2019).
+
+The equations and deviations are documented in :mod:`objectives.attitude.filters.ukf`; this module
+holds the per-sample arithmetic, written for the fixed sizes of the problem (6 error dimensions,
+3 gyro-noise dimensions, 18 forecast and 12 measurement sigma points):
+
+- The forecast (eq. 26) uses that the Cholesky factor ``L`` is lower triangular: only its first
+  three columns move the attitude, so 6 of the 18 sigma points have a rotated attitude and the
+  other 12 share ``e``; the bias-bias block of ``P`` is unchanged by the forecast (``L L^T``) and
+  only the attitude-bias block is summed over the 12 points that carry a bias deviation.
+- The exponential and logarithm maps (eqs. 1-2) use their power series for small angles (see
+  :mod:`objectives.attitude.filters._ukf_scalar`, which holds the scalar helpers).
+- The iterative mean (eqs. 5, 13) saves its last pass when the next step is predicted below
+  1e-13 rad (:func:`_wmean_cov`).
+- Compiled with the NumPy error model (no division checks) and rounding-only fast-math flags
+  (FMA contraction, reassociation, reciprocals; no NaN/inf assumptions, the degeneracy checks stay).
+- The pseudo-measurement UT (eq. 25) shares the accelerometer quaternion between the 6 magnetometer
+  sigma points, and uses that the magnetometer quaternion of eq. 24 does not depend on the length
+  of the field vector.
+- All scratch lives in one ``work`` array allocated by the caller; nothing is allocated per sample.
+
+State passed in and out
+-----------------------
+A run is ``_ukf_run(gyr, acc, mag, coef, robust, state, istate, work, outputs...)``: it reads the filter
+state from ``state`` / ``istate``, processes the samples and writes the state back, so a recording
+processed in pieces (down to one sample per call) gives the same result, bit for bit, as one call
+over the whole of it. Layout (:func:`new_state` builds it):
+
+``state`` float64 (46 + 6 W,)
+    [0:4] quaternion ``e`` (ENU, sensor-to-earth), [4:7] gyro bias (rad/s), [7:43] ``P`` (6 x 6,
+    row-major; rad^2, rad^2/s, rad^2/s^2), [43:46] the previous gyro sample (rad/s; the forecast
+    into sample k uses gyr[k-1], eq. 20), [46:46 + 3 W] the innovation window of eqs. 34-37
+    (W x 3, rad, ring buffer), [46 + 3 W:] the same innovations sorted per component (3 x W).
+``istate`` int64 (4,)
+    samples processed so far, next write position in the window, filled window length, ``W``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from objectives.attitude.filters._ukf_scalar import (
+    _acc_frame,
+    _acc_quat,
+    _aqua_finish,
+    _chol,
+    _inv3_spd,
+    _is_pd3,
+    _mad_sorted,
+    _median_sorted,
+    _qdiff,
+    _qm,
+    _r2q,
+    _sorted_update,
+)
+
+__all__ = ["N_STATE_FIXED", "WORK_SIZE", "new_state", "new_work", "ukf_chunk"]
+
+_TOL_MEAN = 1e-12
+_MAX_MEAN_ITER = 6
+_BCH_STEP2 = 1e-16  # (1e-8 rad)^2
+_BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
+
+#: entries of ``state`` before the innovation window
+N_STATE_FIXED = 46
+_I_Q, _I_B, _I_P, _I_G = 0, 4, 7, 43
+
+# work layout (float64): E (18, 4), D (18, 3), DB (18, 3), Ym (12, 4), Dm (12, 3), L (6, 6), 3x3 x 4, K (6, 3)
+_W_E, _W_D, _W_DB, _W_YM, _W_DM, _W_L = 0, 72, 126, 180, 228, 264
+_W_R0, _W_RH, _W_PYY, _W_SYY, _W_K = 300, 309, 318, 327, 336
+#: size of ``work``
+WORK_SIZE = 354
+
+# rounding-level freedoms only (FMA, reassociation, reciprocal): NaN/inf semantics are kept for the checks
+_FM = {"nsz", "arcp", "contract", "reassoc"}
+
+
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy", fastmath=_FM)
+def _wmean_cov(Y, m, r0, r1, r2, r3, D):
+    """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3) and covariance.
+
+    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
+    (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
+
+    The iteration stops when a step is below 1e-12 rad, or when the step ``s`` just taken is below
+    1e-8 rad and the next one is predicted below 1e-13 rad (the contraction per step is at most the
+    trace of the covariance): the deviations then move to the new mean by the first-order
+    Baker-Campbell-Hausdorff form ``D_j - s + s x D_j / 2`` (error O(|s|^2 |D|)) instead of one
+    more pass of logarithms.
+    """
+    w = 1.0 / m
+    cxx = cxy = cxz = cyy = cyz = czz = 0.0
+    for _ in range(_MAX_MEAN_ITER):
+        sx = sy = sz = 0.0
+        cxx = cxy = cxz = cyy = cyz = czz = 0.0
+        for j in range(m):
+            dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
+            D[j, 0] = dx
+            D[j, 1] = dy
+            D[j, 2] = dz
+            sx += dx
+            sy += dy
+            sz += dz
+            cxx += dx * dx
+            cxy += dx * dy
+            cxz += dx * dz
+            cyy += dy * dy
+            cyz += dy * dz
+            czz += dz * dz
+        sx *= w
+        sy *= w
+        sz *= w
+        s2 = sx * sx + sy * sy + sz * sz
+        if s2 < _TOL_MEAN * _TOL_MEAN:
+            break
+        e0, e1, e2, e3 = _r2q(sx, sy, sz)
+        r0, r1, r2, r3 = _qm(e0, e1, e2, e3, r0, r1, r2, r3)
+        tr = (cxx + cyy + czz) * w
+        if s2 < _BCH_STEP2 and s2 * tr * tr < _BCH_NEXT2:
+            hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz
+            cxx = cxy = cxz = cyy = cyz = czz = 0.0
+            for j in range(m):
+                dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
+                dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
+                D[j, 0] = dx
+                D[j, 1] = dy
+                D[j, 2] = dz
+                cxx += dx * dx
+                cxy += dx * dy
+                cxz += dx * dz
+                cyy += dy * dy
+                cyz += dy * dz
+                czz += dz * dz
+            break
+    return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FM)
+def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
+    """Eq. 25: quaternion pseudo-measurement (ENU) and its covariance R (3x3) by the UT of eqs. 9-15.
+
+    ``(ax, ay, az)`` and ``(bx, by, bz)`` are the raw acc and mag; the UT runs on the normalised
+    vectors with the noise scaled by the norms (h of eq. 22 does not depend on the vectors' lengths).
+    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (12, 4) and ``D``
+    (12, 3) are scratch.
+    """
+    na = math.sqrt(ax * ax + ay * ay + az * az)
+    nb = math.sqrt(bx * bx + by * by + bz * bz)
+    if not (na > 0.0 and nb > 0.0 and math.isfinite(na) and math.isfinite(nb)):
+        return False, 1.0, 0.0, 0.0, 0.0
+    ax, ay, az = ax / na, ay / na, az / na
+    bx, by, bz = bx / nb, by / nb, bz / nb
+    a0, a1, a2, a3 = _acc_quat(ax, ay, az)
+    r00, r01, r02, r10, r11, r12 = _acc_frame(a0, a1, a2, a3)
+    lx = r00 * bx + r01 * by + r02 * bz
+    ly = r10 * bx + r11 * by + r12 * bz
+    ok, q0, q1, q2, q3 = _aqua_finish(a0, a1, a2, a3, lx, ly, 1.0)
+    if not ok:
+        return False, 1.0, 0.0, 0.0, 0.0
+    sq = math.sqrt(6.0)
+    da = sq * sig_a / na
+    db = sq * sig_b
+    for j in range(12):
+        i = j % 3
+        sgn = 1.0 if j < 6 else -1.0
+        if (j % 6) < 3:
+            # accelerometer sigma point: a new tilt quaternion, the same unit field
+            px, py, pz = ax, ay, az
+            if i == 0:
+                px += sgn * da
+            elif i == 1:
+                py += sgn * da
+            else:
+                pz += sgn * da
+            h = 1.0 / math.sqrt(px * px + py * py + pz * pz)
+            c0, c1, c2, c3 = _acc_quat(px * h, py * h, pz * h)
+            s00, s01, s02, s10, s11, s12 = _acc_frame(c0, c1, c2, c3)
+            ok, w, x, y, z = _aqua_finish(c0, c1, c2, c3, s00 * bx + s01 * by + s02 * bz,
+                                          s10 * bx + s11 * by + s12 * bz, 1.0)
+        else:
+            # magnetometer sigma point: the nominal tilt, the field moved along axis i (unnormalised)
+            d = sgn * db
+            if i == 0:
+                mx, my = lx + d * r00, ly + d * r10
+                n2 = (bx + d) * (bx + d) + by * by + bz * bz
+            elif i == 1:
+                mx, my = lx + d * r01, ly + d * r11
+                n2 = bx * bx + (by + d) * (by + d) + bz * bz
+            else:
+                mx, my = lx + d * r02, ly + d * r12
+                n2 = bx * bx + by * by + (bz + d) * (bz + d)
+            ok, w, x, y, z = _aqua_finish(a0, a1, a2, a3, mx, my, n2)
+        if not ok:
+            return False, 1.0, 0.0, 0.0, 0.0
+        Y[j, 0] = w
+        Y[j, 1] = x
+        Y[j, 2] = y
+        Y[j, 3] = z
+    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D)
+    R[0, 0] = cxx
+    R[0, 1] = R[1, 0] = cxy
+    R[0, 2] = R[2, 0] = cxz
+    R[1, 1] = cyy
+    R[1, 2] = R[2, 1] = cyz
+    R[2, 2] = czz
+    return True, y0, y1, y2, y3
+
+
+@njit(cache=True, inline="always")
+def _hampel_gain(v, med, thr):
+    """Eq. 36: ``min(1, thr / |v - med|)`` with gain 1 where the deviation is zero."""
+    dev = abs(v - med)
+    if dev > thr:
+        return thr / dev
+    return 1.0
+
+
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy", fastmath=_FM)
+def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip, out_fallback):
+    """QUKF (eqs. 26-33) and, with ``robust``, QRAUKF (eqs. 34-38) over the samples of ``gyr``.
+
+    gyr, acc, mag : (N, 3) rad/s, m/s^2, any unit.
+    coef : (7,) dt [s], sigma_gyr [rad/s], att_rw [rad/sqrt(s)], bias_rw [rad/s/sqrt(s)],
+        sigma_acc [m/s^2], sigma_mag [1, relative], n_sigma [1].
+    robust : bool, QRAUKF.
+    state, istate : filter state (module docstring), read and updated in place.
+    work : (WORK_SIZE,) scratch.
+    Outputs (N, 4), (N, 3), (N, 3), (N,) bool, (N,) bool: ENU quaternion, bias, Hampel gains,
+    sample without assimilation, eq. 37 replaced by R0.
+    """
+    n = gyr.shape[0]
+    dt, sig_g, att_rw, bias_rw, sig_a, sig_m, n_sig = (
+        coef[0], coef[1], coef[2], coef[3], coef[4], coef[5], coef[6])
+    q2a = att_rw * att_rw * dt
+    q2b = bias_rw * bias_rw * dt
+    window = istate[3]
+    P = state[_I_P:_I_P + 36].reshape((6, 6))
+    win = state[N_STATE_FIXED:N_STATE_FIXED + 3 * window].reshape((window, 3))
+    srt = state[N_STATE_FIXED + 3 * window:N_STATE_FIXED + 6 * window].reshape((3, window))
+    E = work[_W_E:_W_E + 72].reshape((18, 4))       # forecast sigma quaternions (eq. 26)
+    D = work[_W_D:_W_D + 54].reshape((18, 3))       # their deviations from the mean
+    DB = work[_W_DB:_W_DB + 54].reshape((18, 3))    # their bias deviations
+    Ym = work[_W_YM:_W_YM + 48].reshape((12, 4))    # measurement UT sigma images (eq. 25)
+    Dm = work[_W_DM:_W_DM + 36].reshape((12, 3))
+    L = work[_W_L:_W_L + 36].reshape((6, 6))
+    R0 = work[_W_R0:_W_R0 + 9].reshape((3, 3))
+    Rh = work[_W_RH:_W_RH + 9].reshape((3, 3))
+    Pyy = work[_W_PYY:_W_PYY + 9].reshape((3, 3))
+    Syy = work[_W_SYY:_W_SYY + 9].reshape((3, 3))
+    K = work[_W_K:_W_K + 18].reshape((6, 3))
+    seen, iwin, nwin = istate[0], istate[1], istate[2]
+    e0, e1, e2, e3 = state[0], state[1], state[2], state[3]
+    b0, b1, b2 = state[4], state[5], state[6]
+    wx, wy, wz = state[_I_G], state[_I_G + 1], state[_I_G + 2]
+    sq9 = 3.0  # sqrt(n~ - 1) with the 9-D augmented tangent space (6 state + 3 gyro noise)
+
+    for k in range(n):
+        # ---------------- forecast, eqs. 26-27 (gyr of the previous sample, eq. 20) -----------
+        if seen > 0:
+            if math.isfinite(wx) and math.isfinite(wy) and math.isfinite(wz):
+                if not _chol(P, L, 6):
+                    for i in range(6):
+                        for j in range(6):
+                            if i != j:
+                                P[i, j] = 0.0
+                        P[i, i] = max(abs(P[i, i]), 1e-30)
+                    _chol(P, L, 6)
+                # mean-input image as the start of the iterative mean
+                d0, d1, d2, d3 = _r2q((wx - b0) * dt, (wy - b1) * dt, (wz - b2) * dt)
+                r0, r1, r2, r3 = _qm(e0, e1, e2, e3, d0, d1, d2, d3)
+                for j in range(18):
+                    col = j % 9
+                    sgn = sq9 if j < 9 else -sq9
+                    db0 = db1 = db2 = 0.0
+                    nq0 = nq1 = nq2 = 0.0
+                    if col < 6:
+                        db0, db1, db2 = sgn * L[3, col], sgn * L[4, col], sgn * L[5, col]
+                    elif col == 6:
+                        nq0 = sgn * sig_g
+                    elif col == 7:
+                        nq1 = sgn * sig_g
+                    else:
+                        nq2 = sgn * sig_g
+                    DB[j, 0] = db0
+                    DB[j, 1] = db1
+                    DB[j, 2] = db2
+                    # f of eqs. 17-20 with u = u_m - beta - q_u (eq. 18)
+                    a0, a1, a2, a3 = _r2q((wx - (b0 + db0) - nq0) * dt, (wy - (b1 + db1) - nq1) * dt,
+                                          (wz - (b2 + db2) - nq2) * dt)
+                    if col < 3:
+                        # sigma point, eqs. 4 and 9: e_j = R2Q(d) * e (L lower triangular: only
+                        # its first three columns have an attitude part)
+                        p0, p1, p2, p3 = _r2q(sgn * L[0, col], sgn * L[1, col], sgn * L[2, col])
+                        s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                    else:
+                        s0, s1, s2, s3 = e0, e1, e2, e3
+                    E[j, 0], E[j, 1], E[j, 2], E[j, 3] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D)
+                # eq. 14: attitude block from the mean; the bias mean is unchanged (symmetric
+                # points) and the bias block is L_b L_b^T = P_bb, so only the cross block is summed
+                P[0, 0] = cxx
+                P[0, 1] = P[1, 0] = cxy
+                P[0, 2] = P[2, 0] = cxz
+                P[1, 1] = cyy
+                P[1, 2] = P[2, 1] = cyz
+                P[2, 2] = czz
+                for r in range(3):
+                    for c in range(3):
+                        s = 0.0
+                        for j in range(6):
+                            s += D[j, r] * DB[j, c] + D[j + 9, r] * DB[j + 9, c]
+                        P[r, c + 3] = P[c + 3, r] = s / 18.0
+            # eq. 27: additive process noise Q2
+            for i in range(3):
+                P[i, i] += q2a
+                P[i + 3, i + 3] += q2b
+        wx, wy, wz = gyr[k, 0], gyr[k, 1], gyr[k, 2]
+        seen += 1
+
+        # ---------------- data assimilation, eqs. 28-33 (and 34-38) ---------------------------
+        skipped = True
+        ok = math.isfinite(mag[k, 0] + mag[k, 1] + mag[k, 2] + acc[k, 0] + acc[k, 1] + acc[k, 2])
+        y0 = 1.0
+        y1 = y2 = y3 = 0.0
+        if ok:
+            ok, y0, y1, y2, y3 = _meas_ut(acc[k, 0], acc[k, 1], acc[k, 2], mag[k, 0], mag[k, 1], mag[k, 2],
+                                          sig_a, sig_m, Ym, Dm, R0)
+        lx = ly = lz = 1.0
+        if ok:
+            # eq. 28 closed form: y_hat = e, P~yy = P_ee, Pxy = P[:, :3]; eq. 30 innovation
+            vx, vy, vz = _qdiff(y0, y1, y2, y3, e0, e1, e2, e3)
+            use_nominal = True
+            if robust:
+                # eq. 36: Hampel identifier per innovation component; the window is kept sorted per
+                # component (one removal and one insertion per sample) for the median and the MAD
+                full = nwin == window
+                _sorted_update(srt[0], nwin, full, win[iwin, 0], vx)
+                _sorted_update(srt[1], nwin, full, win[iwin, 1], vy)
+                nwin = _sorted_update(srt[2], nwin, full, win[iwin, 2], vz)
+                win[iwin, 0], win[iwin, 1], win[iwin, 2] = vx, vy, vz
+                iwin = (iwin + 1) % window
+                m0 = _median_sorted(srt[0], nwin)
+                m1 = _median_sorted(srt[1], nwin)
+                m2 = _median_sorted(srt[2], nwin)
+                t0 = n_sig * (1.4826 * _mad_sorted(srt[0], nwin, m0))
+                t1 = n_sig * (1.4826 * _mad_sorted(srt[1], nwin, m1))
+                t2 = n_sig * (1.4826 * _mad_sorted(srt[2], nwin, m2))
+                # eq. 37: covariance matching with the Hampel-weighted innovations
+                sxx = sxy = sxz = syy = syz = szz = 0.0
+                for j in range(nwin):
+                    ux = _hampel_gain(win[j, 0], m0, t0) * win[j, 0]
+                    uy = _hampel_gain(win[j, 1], m1, t1) * win[j, 1]
+                    uz = _hampel_gain(win[j, 2], m2, t2) * win[j, 2]
+                    sxx += ux * ux
+                    sxy += ux * uy
+                    sxz += ux * uz
+                    syy += uy * uy
+                    syz += uy * uz
+                    szz += uz * uz
+                Syy[0, 0], Syy[0, 1], Syy[0, 2] = sxx / nwin, sxy / nwin, sxz / nwin
+                Syy[1, 1], Syy[1, 2], Syy[2, 2] = syy / nwin, syz / nwin, szz / nwin
+                Syy[1, 0], Syy[2, 0], Syy[2, 1] = Syy[0, 1], Syy[0, 2], Syy[1, 2]
+                for r in range(3):
+                    for c in range(3):
+                        Rh[r, c] = max(Syy[r, c] - P[r, c], R0[r, c])
+                        Pyy[r, c] = P[r, c] + Rh[r, c]
+                # R_hat must be a covariance (positive definite), else eq. 33 loses definiteness
+                use_nominal = not (_is_pd3(Rh) and _inv3_spd(Pyy, Syy))
+                out_fallback[k] = use_nominal
+                # gain of the current innovation (eq. 38)
+                lx = _hampel_gain(vx, m0, t0)
+                ly = _hampel_gain(vy, m1, t1)
+                lz = _hampel_gain(vz, m2, t2)
+            if use_nominal:
+                for r in range(3):
+                    for c in range(3):
+                        Pyy[r, c] = P[r, c] + R0[r, c]  # eq. 29
+                ok = _inv3_spd(Pyy, Syy)
+        if ok:
+            # eq. 31: K = Pxy Pyy^-1 with Pxy = P[:, :3]
+            for r in range(6):
+                for c in range(3):
+                    K[r, c] = P[r, 0] * Syy[0, c] + P[r, 1] * Syy[1, c] + P[r, 2] * Syy[2, c]
+            gx, gy, gz = lx * vx, ly * vy, lz * vz
+            # eq. 32 / 38: x = x (+) K lambda v
+            cx = K[0, 0] * gx + K[0, 1] * gy + K[0, 2] * gz
+            cy = K[1, 0] * gx + K[1, 1] * gy + K[1, 2] * gz
+            cz = K[2, 0] * gx + K[2, 1] * gy + K[2, 2] * gz
+            p0, p1, p2, p3 = _r2q(cx, cy, cz)
+            e0, e1, e2, e3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+            b0 += K[3, 0] * gx + K[3, 1] * gy + K[3, 2] * gz
+            b1 += K[4, 0] * gx + K[4, 1] * gy + K[4, 2] * gz
+            b2 += K[5, 0] * gx + K[5, 1] * gy + K[5, 2] * gz
+            # eq. 33: P = P - K Pyy K^T = P - K Pxy^T (lower triangle first: P[:, :3] is read)
+            for r in range(6):
+                for c in range(r + 1):
+                    L[r, c] = K[r, 0] * P[c, 0] + K[r, 1] * P[c, 1] + K[r, 2] * P[c, 2]
+            for r in range(6):
+                for c in range(r + 1):
+                    P[r, c] -= L[r, c]
+                    P[c, r] = P[r, c]
+            skipped = False
+        out_q[k, 0], out_q[k, 1], out_q[k, 2], out_q[k, 3] = e0, e1, e2, e3
+        out_bias[k, 0], out_bias[k, 1], out_bias[k, 2] = b0, b1, b2
+        out_lam[k, 0], out_lam[k, 1], out_lam[k, 2] = lx, ly, lz
+        out_skip[k] = skipped
+
+    state[0], state[1], state[2], state[3] = e0, e1, e2, e3
+    state[4], state[5], state[6] = b0, b1, b2
+    state[_I_G], state[_I_G + 1], state[_I_G + 2] = wx, wy, wz
+    istate[0], istate[1], istate[2] = seen, iwin, nwin
+
+
+# ----------------------------------------------------------------------------------------------
+def new_state(q0: np.ndarray, p0_att: float, p0_bias: float, window: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Initial ``(state, istate)`` of a run (layout in the module docstring).
+
+    q0 : (4,) unit ENU sensor-to-earth quaternion. p0_att : rad, p0_bias : rad/s, initial standard
+    deviations (diagonal ``P``). window : int >= 1, samples in the innovation window (QRAUKF).
+    """
+    window = int(window)
+    if window < 1:
+        raise ValueError(f"window must be an integer >= 1, got {window!r}")
+    state = np.zeros(N_STATE_FIXED + 6 * window)
+    state[_I_Q:_I_Q + 4] = np.asarray(q0, dtype=np.float64).reshape(4)
+    P = state[_I_P:_I_P + 36].reshape(6, 6)
+    P[[0, 1, 2], [0, 1, 2]] = float(p0_att) ** 2
+    P[[3, 4, 5], [3, 4, 5]] = float(p0_bias) ** 2
+    return state, np.array([0, 0, 0, window], dtype=np.int64)
+
+
+def new_work() -> np.ndarray:
+    """Scratch array of one run (:data:`WORK_SIZE` values)."""
+    return np.zeros(WORK_SIZE)
+
+
+def ukf_chunk(gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, coef: np.ndarray, robust: bool,
+              state: np.ndarray, istate: np.ndarray, work: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Run the kernel over contiguous float64 (N, 3) arrays (N >= 0), continuing from ``state`` / ``istate``.
+
+    ``state`` and ``istate`` (from :func:`new_state` or a previous call) are updated in place, so
+    consecutive calls over consecutive pieces of a recording equal one call over all of it. The
+    arrays are expected validated (:func:`objectives.attitude.filters.ukf.run_ukf` does it).
+    Returns ``quat`` (N, 4) ENU, ``bias`` (N, 3), ``lam`` (N, 3), ``skipped`` and ``fallback`` (N,).
+    """
+    if state.dtype != np.float64 or istate.dtype != np.int64 or istate.shape != (4,):
+        raise ValueError("state must be float64 and istate int64 (4,), as built by new_state")
+    window = int(istate[3])
+    if window < 1 or state.shape != (N_STATE_FIXED + 6 * window,):
+        raise ValueError(f"state must have shape ({N_STATE_FIXED + 6 * window},) for a window of {window}, "
+                         f"got {state.shape}")
+    if work is None:
+        work = new_work()
+    elif work.dtype != np.float64 or work.shape != (WORK_SIZE,):
+        raise ValueError(f"work must be a float64 ({WORK_SIZE},) array, got {work.dtype} {work.shape}")
+    n = gyr.shape[0]
+    out = {"quat": np.empty((n, 4)), "bias": np.empty((n, 3)), "lam": np.empty((n, 3)),
+           "skipped": np.zeros(n, dtype=np.bool_), "fallback": np.zeros(n, dtype=np.bool_)}
+    _ukf_run(gyr, acc, mag, coef, bool(robust), state, istate, work,
+             out["quat"], out["bias"], out["lam"], out["skipped"], out["fallback"])
+    return out
