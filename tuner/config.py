@@ -198,6 +198,14 @@ def _check_optimizer(f: Any, method: str, population: int | None, generations: i
     except (ValueError, TypeError) as exc:
         msg = str(exc)
         key = next((k for k in kwargs if msg.startswith(k) or f" {k} " in f" {msg} "), "")
+        for k in kwargs if not key else ():  # the message does not say: find the option that fails alone
+            try:
+                OPTIMIZERS[method](2, np.random.default_rng(0), **{k: kwargs[k], "generations": generations})
+            except (ValueError, TypeError):
+                key = k
+                break
+        if key and isinstance(exc, TypeError):
+            msg = f"expected a number, got {kwargs[key]!r}"
         if not key and isinstance(exc, TypeError):
             bad = [f"{k}={v!r}" for k, v in options.items() if isinstance(v, str)]
             msg = f"an option has the wrong type ({', '.join(bad) or msg}); numbers expected"

@@ -43,7 +43,7 @@ _SWEEP_KEYS = ("name", "description", "base", "variants", "grid", "seeds", "jobs
 def is_sweep_file(path: str | Path) -> bool:
     try:
         raw = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError):
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):  # the job loader reports it
         return False
     return isinstance(raw, dict) and "sweep" in raw
 
