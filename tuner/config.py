@@ -25,6 +25,7 @@ from typing import Any
 
 import yaml
 
+from tuner.objective import hook
 from tuner.space import Space, SpaceError
 
 __all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig",
@@ -97,8 +98,9 @@ class RunConfig:
                 return Space.from_dict(self.parameters)
             except SpaceError as exc:
                 raise ConfigError(self.source, "parameters", str(exc)) from None
-        if objective is not None and hasattr(objective, "default_space"):
-            return objective.default_space()
+        default_space = hook(objective, "default_space") if objective is not None else None
+        if default_space is not None:
+            return default_space()
         raise ConfigError(self.source, "parameters", "missing: this objective has no default search space")
 
 
