@@ -157,3 +157,35 @@ def test_dask_worker_check_reports_a_callable_missing_there(tmp_path):
     msg = _worker_preflight(PythonObjective("no_such_mod_q:f"))
     assert msg.startswith("ValueError: objective.callable: cannot import 'no_such_mod_q:f'")
     json.dumps(msg)
+
+
+class _FailsOffMainThread:
+    """Passes its preflight in the driver, fails where Dask runs it (a worker's thread)."""
+
+    def __call__(self, params):
+        return 0.0
+
+    def preflight(self):
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            raise ValueError("objective.callable: cannot import 'mymod:f' (No module named 'mymod')")
+        return []
+
+
+def test_preflight_runs_on_every_dask_worker(tmp_path):
+    pytest.importorskip("distributed")
+    from distributed import LocalCluster
+
+    from tuner.config import ConfigError, config_from_dict
+    from tuner.preflight import preflight
+    from tuner.space import Real, Space
+
+    with LocalCluster(n_workers=2, processes=False, dashboard_address=None) as cluster:
+        cfg = config_from_dict({"objective": {"kind": "python", "callable": "m:f"},
+                                "parameters": {"a": {"low": 0.0, "high": 1.0}},
+                                "parallel": {"backend": "dask", "address": cluster.scheduler_address}},
+                               source=str(tmp_path / "job.yaml"))
+        with pytest.raises(ConfigError, match=r"objective: fails on Dask worker .* \(2 of 2 workers\): "
+                                              r"ValueError: objective.callable: cannot import 'mymod:f'"):
+            preflight(cfg, _FailsOffMainThread(), Space([Real("a", 0.0, 1.0)]), evaluate=False)
