@@ -5,6 +5,12 @@ in the order asked, whatever the backend (pycma's ``eval_all``). Each evaluation
 exception, NaN or inf becomes a failed :class:`~tuner.objective.Evaluation` with the penalty fitness
 and the error text, and the run goes on.
 
+An objective's ``SystemExit`` and its own ``KeyboardInterrupt`` are failures too; a SIGINT delivered to
+the process (the user's Ctrl-C) still stops the run. With ``objective.timeout_s`` the objective is a
+:class:`TimedObjective` and each evaluation runs in a forked child that is killed when time is up. A
+loky worker that dies takes no result with it: its candidates are re-run one at a time and those that
+kill a worker again are recorded as failed.
+
 Objectives are shipped to workers once: each worker process keeps the first copy it receives in a
 module-level cache keyed by a token, so lazy state (loaded recordings, compiled kernels) is built once
 per worker, not per evaluation.
@@ -75,8 +81,9 @@ def _call(objective: Any, params: dict[str, Any]) -> tuple[Evaluation, bool]:
     try:
         return as_evaluation(objective(params)), False
     except KeyboardInterrupt as exc:
-        if _SigintWatch.count != seen or threading.current_thread() is threading.main_thread() and \
-                signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        unwatched = (threading.current_thread() is threading.main_thread()
+                     and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+        if _SigintWatch.count != seen or unwatched:
             raise  # the user pressed Ctrl-C (or we cannot tell): stop the run
         return _failure(exc), True
     except (Exception, SystemExit) as exc:  # the objective is user code: record what it raised and go on
