@@ -89,6 +89,18 @@ class FunctionObjective:
         return cls(fn, dim, float(section.get("sleep_s", 0.0)), float(section.get("busy_s", 0.0)),
                    int(section.get("fail_every", 0)), int(section.get("nan_every", 0)))
 
+    @classmethod
+    def catalog(cls) -> dict[str, list[str]]:
+        """Names ``objective.function`` accepts (``tuner list functions``)."""
+        return {"functions": sorted(FUNCTIONS)}
+
+    def parameter_names(self) -> list[str]:
+        return [f"x{i}" for i in range(self.dim)]
+
+    def describe(self) -> dict[str, Any]:
+        """Provenance for ``tuner export``."""
+        return {"objective": {"kind": "function", "function": self.function}, "data": None}
+
     def default_space(self) -> Space:
         lo, hi = FUNCTIONS[self.function][1]
         return Space(Real(f"x{i}", lo, hi) for i in range(self.dim))

@@ -67,7 +67,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("list", help="what can be named in a config, or the runs of a directory")
     p.add_argument("what", nargs="?", default="all",
-                   choices=["all", "optimizers", "objectives", "filters", "controllers", "functions", "runs"])
+                   help="all, optimizers, objectives, runs, or a section an objective kind lists "
+                        "(filters, controllers, functions)")
     p.add_argument("--dir", default="runs", help="runs directory for `list runs` (default: runs)")
 
     p = sub.add_parser("export", help="best parameters as yaml, json, python or a C header")
@@ -118,7 +119,28 @@ def _print_result(res) -> int:
     print(f"run directory: {res.run_dir}")
     if (res.run_dir / "report.md").exists():
         print(f"report: {res.run_dir / 'report.md'}")
+    if res.status == "finished" and res.n_evals and not res.best_params:
+        print(f"error: {res.run_dir}: every one of {res.n_evals} evaluations failed; "
+              f"{_failure_summary(res.run_dir)}", file=sys.stderr)
+        return 1
     return 0 if res.status == "finished" else 1
+
+
+def _failure_summary(run_dir: Path) -> str:
+    """The most frequent error text of a run's history (why every evaluation failed)."""
+    import csv
+    from collections import Counter
+
+    try:
+        with open(run_dir / "history.csv", newline="") as fh:
+            errors = Counter(row.get("error", "") for row in csv.DictReader(fh))
+    except OSError:
+        return "see history.csv"
+    errors.pop("", None)
+    if not errors:
+        return "see history.csv"
+    (text, n), = errors.most_common(1)
+    return f"most common reason ({n}x): {text}"
 
 
 def _cmd_resume(a) -> int:
@@ -189,30 +211,20 @@ def _cmd_list(a) -> int:
         for name, cls in sorted(OPTIMIZERS.items()):
             doc = (cls.__doc__ or "").strip().splitlines()[0]
             print(f"  {name:10s} {doc}")
+    from tuner.registry import REGISTRY
+
+    catalog = REGISTRY.catalog() if what not in ("optimizers", "objectives") else {}
+    if what not in ("all", "optimizers", "objectives", *catalog):
+        raise UsageError(f"list: unknown section {what!r}; allowed: all, optimizers, objectives, runs, "
+                         f"{', '.join(sorted(catalog))}")
     if what in ("all", "objectives"):
-        from objectives.registry import OBJECTIVE_KINDS
-
         print("objective kinds:")
-        for name, spec in OBJECTIVE_KINDS.items():
-            print(f"  {name:12s} {spec}")
-    if what in ("all", "functions"):
-        from objectives.functions import FUNCTIONS
-
-        print("test functions (objective.kind: function):")
-        print("  " + ", ".join(sorted(FUNCTIONS)))
-    if what in ("all", "filters"):
-        from objectives.attitude.filters import FILTERS
-
-        print("filters (objective.kind: filter):")
-        print("  " + ", ".join(sorted(FILTERS)))
-    if what in ("all", "controllers"):
-        try:
-            from objectives.control.controllers import CONTROLLERS
-            names = sorted(CONTROLLERS)
-        except ImportError:
-            names = []
-        print("controllers (objective.kind: closed_loop):")
-        print("  " + (", ".join(names) or "-"))
+        for name, source in REGISTRY.kinds().items():
+            print(f"  {name:12s} {source}")
+    for section, (kind, names) in catalog.items():
+        if what in ("all", section):
+            print(f"{section} (objective.kind: {kind}):")
+            print("  " + (", ".join(names) or "-"))
     return 0
 
 
@@ -232,7 +244,7 @@ def _cmd_export(a) -> int:
 
 
 def _cmd_evaluate(a) -> int:
-    from tuner.scoring import evaluate_target
+    from tuner.rescore import evaluate_target
 
     out = evaluate_target(a.target, params_file=a.params, data_file=a.data)
     if a.json:
@@ -277,6 +289,7 @@ COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare"
 
 def main(argv: list[str] | None = None) -> int:
     from tuner.config import ConfigError
+    from tuner.registry import RegistryError
     from tuner.run import RunError
     from tuner.space import SpaceError
 
@@ -286,13 +299,38 @@ def main(argv: list[str] | None = None) -> int:
         ap.print_help()
         return 2
     try:
-        return COMMANDS[a.command](a)
-    except (ConfigError, RunError, SpaceError, UsageError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:  # pragma: no cover - runs handle their own interrupts
-        print("interrupted", file=sys.stderr)
-        return 1
+        try:
+            code = COMMANDS[a.command](a)
+            sys.stdout.flush()
+            return code
+        except (ConfigError, RunError, SpaceError, UsageError, RegistryError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except OSError as exc:  # read-only directory, full disk...: one line naming the path
+            if isinstance(exc, BrokenPipeError):
+                raise
+            where = exc.filename or "?"
+            print(f"error: {where}: {exc.strerror or exc} (results written before this point are kept; "
+                  "`tuner resume` continues a run)", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:  # pragma: no cover - runs handle their own interrupts
+            print("interrupted", file=sys.stderr)
+            return 1
+    except BrokenPipeError:  # stdout closed early (`tuner list | head -1`): stop quietly
+        _silence_stdout()
+        return 0
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # pragma: no cover
+        pass
 
 
 def _entry() -> Any:  # pragma: no cover

@@ -25,6 +25,7 @@ from typing import Any
 
 import yaml
 
+from tuner.objective import hook
 from tuner.space import Space, SpaceError
 
 __all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig",
@@ -97,8 +98,9 @@ class RunConfig:
                 return Space.from_dict(self.parameters)
             except SpaceError as exc:
                 raise ConfigError(self.source, "parameters", str(exc)) from None
-        if objective is not None and hasattr(objective, "default_space"):
-            return objective.default_space()
+        default_space = hook(objective, "default_space") if objective is not None else None
+        if default_space is not None:
+            return default_space()
         raise ConfigError(self.source, "parameters", "missing: this objective has no default search space")
 
 
@@ -147,10 +149,21 @@ def apply_overrides(raw: dict[str, Any], overrides: list[str], file: Any = None)
 def read_yaml(path: str | Path, what: str = "") -> Any:
     """Parse a YAML file; a missing file or bad YAML is a :class:`ConfigError` naming the file."""
     path = Path(path)
+    label = f"{what + ': ' if what else ''}"
     if not path.exists():
-        raise ConfigError(path, "", f"{what + ': ' if what else ''}file not found")
+        raise ConfigError(path, "", f"{label}file not found")
+    if path.is_dir():
+        raise ConfigError(path, "", f"{label}is a directory; expected a YAML file")
     try:
-        return yaml.safe_load(path.read_text())
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(path, "", f"{label}not a text file (not UTF-8); expected a YAML file") from None
+    except OSError as exc:
+        raise ConfigError(path, "", f"{label}cannot read: {exc.strerror or exc}") from None
+    if "\x00" in text:
+        raise ConfigError(path, "", f"{label}is a binary file; expected a YAML file")
+    try:
+        return yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise ConfigError(path, "", f"not valid YAML: {exc}") from None
 
@@ -169,6 +182,36 @@ def load_config(path: str | Path, overrides: list[str] | None = None, seed: int 
         raw.setdefault("parallel", {})
         raw["parallel"] = {**(raw["parallel"] or {}), "n_jobs": int(n_jobs)}
     return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
+
+
+def _check_optimizer(f: Any, method: str, population: int | None, generations: int | None,
+                     options: Mapping[str, Any]) -> None:
+    """Build the optimiser once on a throwaway problem: bad option values fail here, not in the run."""
+    import numpy as np
+
+    from tuner.optimizers import OPTIMIZERS
+
+    kwargs = {k: v for k, v in options.items() if k != "x0"}  # x0 is encoded against the space later
+    if population is not None:
+        kwargs["population"] = population
+    kwargs["generations"] = generations
+    try:
+        OPTIMIZERS[method](2, np.random.default_rng(0), **kwargs)
+    except (ValueError, TypeError) as exc:
+        msg = str(exc)
+        key = next((k for k in kwargs if msg.startswith(k) or f" {k} " in f" {msg} "), "")
+        for k in kwargs if not key else ():  # the message does not say: find the option that fails alone
+            try:
+                OPTIMIZERS[method](2, np.random.default_rng(0), **{k: kwargs[k], "generations": generations})
+            except (ValueError, TypeError):
+                key = k
+                break
+        if key and isinstance(exc, TypeError):
+            msg = f"expected a number, got {kwargs[key]!r}"
+        if not key and isinstance(exc, TypeError):
+            bad = [f"{k}={v!r}" for k, v in options.items() if isinstance(v, str)]
+            msg = f"an option has the wrong type ({', '.join(bad) or msg}); numbers expected"
+        raise ConfigError(f, f"optimizer.{key}" if key else "optimizer", f"invalid for {method}: {msg}") from None
 
 
 def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir: Path | None = None) -> RunConfig:
@@ -190,6 +233,10 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     objective = _get(raw, "objective", dict, f, "", required=True)
     if "kind" not in objective:
         raise ConfigError(f, "objective.kind", "missing; one of function, filter, closed_loop, python")
+    timeout_s = objective.get("timeout_s")
+    if timeout_s is not None and (isinstance(timeout_s, bool) or not isinstance(timeout_s, (int, float))
+                                  or not 0 < timeout_s < float("inf")):
+        raise ConfigError(f, "objective.timeout_s", f"expected a number of seconds > 0, got {timeout_s!r}")
     parameters = _get(raw, "parameters", dict, f, "", default=None)
     if parameters is not None:
         try:
@@ -224,6 +271,7 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
             raise ConfigError(f, f"optimizer.{k}", f"unknown option for {method}; allowed: {sorted(allowed)}")
     if generations is None and not any(k in options for k in ("max_evals", "target", "patience")):
         generations = 30
+    _check_optimizer(f, method, population, generations, options)
     optimizer = OptimizerConfig(method, population, generations, options, RefineConfig(stages, shrink))
 
     par = dict(_get(raw, "parallel", dict, f, "", default={}))

@@ -5,6 +5,12 @@ in the order asked, whatever the backend (pycma's ``eval_all``). Each evaluation
 exception, NaN or inf becomes a failed :class:`~tuner.objective.Evaluation` with the penalty fitness
 and the error text, and the run goes on.
 
+An objective's ``SystemExit`` and its own ``KeyboardInterrupt`` are failures too; a SIGINT delivered to
+the process (the user's Ctrl-C) still stops the run. With ``objective.timeout_s`` the objective is a
+:class:`TimedObjective` and each evaluation runs in a forked child that is killed when time is up. A
+loky worker that dies takes no result with it: its candidates are re-run one at a time and those that
+kill a worker again are recorded as failed.
+
 Objectives are shipped to workers once: each worker process keeps the first copy it receives in a
 module-level cache keyed by a token, so lazy state (loaded recordings, compiled kernels) is built once
 per worker, not per evaluation.
@@ -14,6 +20,8 @@ from __future__ import annotations
 
 import math
 import os
+import signal
+import threading
 import time
 import traceback
 import uuid
@@ -22,7 +30,7 @@ from typing import Any
 
 from tuner.objective import Evaluation, as_evaluation
 
-__all__ = ["Evaluator", "EvalRecord", "BACKENDS", "evaluate_one"]
+__all__ = ["Evaluator", "EvalRecord", "BACKENDS", "evaluate_one", "TimedObjective"]
 
 BACKENDS = ("serial", "loky", "dask")
 
@@ -31,25 +39,152 @@ _WORKER_CACHE: dict[str, Any] = {}
 
 @dataclass(frozen=True)
 class EvalRecord:
-    """One evaluation as the run records it."""
+    """One evaluation as the run records it.
+
+    ``raised`` is True when the objective raised (or timed out) rather than returning a result.
+    """
 
     evaluation: Evaluation
     seconds: float
     worker: str = field(default="")
+    raised: bool = False
+
+
+class _SigintWatch:
+    """Count SIGINTs delivered to this process, so that a KeyboardInterrupt raised by an objective's
+    own code (a recorded failure) is told apart from the user's Ctrl-C (which stops the run)."""
+
+    count = 0
+
+    @classmethod
+    def install(cls) -> None:
+        if threading.current_thread() is not threading.main_thread():
+            return
+        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            signal.signal(signal.SIGINT, cls._handler)
+
+    @classmethod
+    def _handler(cls, signum, frame):
+        cls.count += 1
+        raise KeyboardInterrupt
+
+
+def _failure(exc: BaseException) -> Evaluation:
+    tb = traceback.extract_tb(exc.__traceback__)
+    where = f" at {tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno}" if tb else ""
+    return Evaluation.failed(f"{type(exc).__name__}: {exc}{where}")
+
+
+def _call(objective: Any, params: dict[str, Any]) -> tuple[Evaluation, bool]:
+    """(evaluation, raised): exceptions, SystemExit and an objective's own KeyboardInterrupt are failures."""
+    seen = _SigintWatch.count
+    try:
+        return as_evaluation(objective(params)), False
+    except KeyboardInterrupt as exc:
+        unwatched = (threading.current_thread() is threading.main_thread()
+                     and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+        if _SigintWatch.count != seen or unwatched:
+            raise  # the user pressed Ctrl-C (or we cannot tell): stop the run
+        return _failure(exc), True
+    except (Exception, SystemExit) as exc:  # the objective is user code: record what it raised and go on
+        return _failure(exc), True
 
 
 def evaluate_one(objective: Any, params: dict[str, Any]) -> EvalRecord:
-    """Call the objective once, turning any exception or non-finite result into a failed record."""
+    """Call the objective once, turning any exception or non-finite result into a failed record.
+
+    A :class:`TimedObjective` runs the call in a child process that is killed after its timeout.
+    """
     t0 = time.perf_counter()
-    try:
-        ev = as_evaluation(objective(params))
-    except Exception as exc:  # the objective is user code: record what it raised and go on
-        tb = traceback.extract_tb(exc.__traceback__)
-        where = f" at {tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno}" if tb else ""
-        ev = Evaluation.failed(f"{type(exc).__name__}: {exc}{where}")
+    if isinstance(objective, TimedObjective) and objective.timeout_s:
+        ev, raised = objective.call_with_timeout(params)
+    else:
+        ev, raised = _call(objective, params)
     if ev.status == "ok" and not math.isfinite(ev.fitness):  # pragma: no cover - as_evaluation handles
         ev = Evaluation.failed(f"non-finite fitness {ev.fitness}")
-    return EvalRecord(ev, time.perf_counter() - t0, f"{os.getpid()}")
+    return EvalRecord(ev, time.perf_counter() - t0, f"{os.getpid()}", raised)
+
+
+class TimedObjective:
+    """An objective whose evaluations stop after ``timeout_s`` seconds (``objective.timeout_s``).
+
+    Each evaluation runs in a forked child process of the worker (or of the driver, with the
+    serial backend): a child that does not answer in time is killed, the evaluation is a recorded
+    failure ``timeout: no result after ... s``, and the next evaluation gets a fresh child. A thread
+    could not be stopped and would keep burning a core; a child process can. The child inherits the
+    objective's loaded state (the parent loads it once, through its ``preflight`` hook, before the
+    first fork), and its result travels back pickled, so fitness values are the ones an in-process
+    call returns. Every hook of the wrapped objective is reachable on this object.
+    """
+
+    def __init__(self, objective: Any, timeout_s: float):
+        self.objective = objective
+        self.timeout_s = float(timeout_s)
+        self._prepared = False
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"objective": self.objective, "timeout_s": self.timeout_s}
+
+    def __setstate__(self, d: dict[str, Any]) -> None:
+        self.objective, self.timeout_s, self._prepared = d["objective"], d["timeout_s"], False
+
+    def __getattr__(self, name: str) -> Any:
+        if name in ("objective", "timeout_s", "_prepared") or name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.objective, name)
+
+    def __call__(self, params: dict[str, Any]) -> Any:
+        return self.objective(params)
+
+    def call_with_timeout(self, params: dict[str, Any]) -> tuple[Evaluation, bool]:
+        import multiprocessing as mp
+
+        if not self._prepared:  # load data once in this process, so every child inherits it
+            self._prepared = True
+            prep = getattr(self.objective, "preflight", None)
+            if callable(prep):
+                try:
+                    prep()
+                except Exception:  # pragma: no cover - the driver's preflight reported it already
+                    pass
+        ctx = mp.get_context("fork")
+        recv, send = ctx.Pipe(duplex=False)
+        child = ctx.Process(target=_child, args=(self.objective, params, send), daemon=True)
+        child.start()
+        send.close()
+        try:
+            if recv.poll(self.timeout_s):
+                try:
+                    ev, raised = recv.recv()
+                except EOFError:
+                    ev, raised = None, True
+            else:
+                ev, raised = Evaluation.failed(f"timeout: no result after {self.timeout_s:g} s "
+                                               "(objective.timeout_s); its process was killed"), True
+        finally:
+            if child.is_alive():
+                child.kill()
+            child.join()
+            recv.close()
+        if ev is None:
+            ev = Evaluation.failed(f"the evaluation process died (exit code {child.exitcode})")
+        return ev, raised
+
+
+def _child(objective: Any, params: dict[str, Any], send: Any) -> None:
+    """In the forked child: evaluate and send (evaluation, raised) back; never return to the caller."""
+    code = 0
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's business
+        try:
+            out = _call(objective, params)
+        except BaseException as exc:  # pragma: no cover - _call records everything but Ctrl-C
+            out = (_failure(exc), True)
+        send.send(out)
+    except BaseException:  # pragma: no cover
+        code = 1
+    finally:
+        os._exit(code)
 
 
 def _eval_chunk(token: str, objective: Any, chunk: list[dict[str, Any]]) -> list[EvalRecord]:
@@ -58,6 +193,7 @@ def _eval_chunk(token: str, objective: Any, chunk: list[dict[str, Any]]) -> list
     if obj is None:
         _WORKER_CACHE.clear()  # a new run in a reused worker: drop the previous objective
         _WORKER_CACHE[token] = obj = objective
+    _SigintWatch.install()
     return [evaluate_one(obj, p) for p in chunk]
 
 
@@ -148,13 +284,35 @@ class Evaluator:
             results = self._run_dask(chunks)
         return [r for chunk in results for r in chunk]
 
-    def _run_loky(self, chunks: list[list[dict]]) -> list[list[EvalRecord]]:
-        from joblib import Parallel, delayed
+    def _pool(self):
+        from joblib import Parallel
 
         if self._parallel is None:
             self._parallel = Parallel(n_jobs=self.n_jobs, backend="loky", batch_size=1)
             self._parallel.__enter__()
-        return self._parallel(delayed(_eval_chunk)(self.token, self.objective, c) for c in chunks)
+        return self._parallel
+
+    def _run_loky(self, chunks: list[list[dict]]) -> list[list[EvalRecord]]:
+        from joblib import delayed
+        from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+        try:
+            return self._pool()(delayed(_eval_chunk)(self.token, self.objective, c) for c in chunks)
+        except TerminatedWorkerError:
+            pass
+        # a worker died (segfault, os._exit, out of memory): find the culprits one candidate at a time
+        # in fresh workers; they become recorded failures, every other candidate gets its real result
+        out = []
+        for chunk in chunks:
+            recs = []
+            for p in chunk:
+                try:
+                    recs += self._pool()([delayed(_eval_chunk)(self.token, self.objective, [p])])[0]
+                except TerminatedWorkerError as exc:
+                    why = str(exc).split("\n")[0][:200]
+                    recs.append(EvalRecord(Evaluation.failed(f"worker process died: {why}"), 0.0, "", True))
+            out.append(recs)
+        return out
 
     def _run_dask(self, chunks: list[list[dict]]) -> list[list[EvalRecord]]:
         if self._client is None:

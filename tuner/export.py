@@ -1,8 +1,11 @@
 """Best parameters out of a run, in forms other projects import: YAML, JSON, Python, C header.
 
 Every format carries the provenance (run id, fitness, objective, data, date). The C header holds
-the parameters as named ``static const`` constants and, where the objective has them, look-up tables
-(``export_tables(params) -> {name: {"table": 2-D array, "x_range": (lo, hi), "y_range": (lo, hi)}}``).
+the parameters as named ``static const`` constants and, where the objective has them, look-up tables.
+What is said about the objective comes from the objective itself, through its optional hooks
+(:class:`tuner.objective.TunableObjective`): ``describe()`` for the provenance and
+``export_tables(params)`` for the tables; an objective without them (or one that no longer builds)
+exports its kind and the parameters only.
 """
 
 from __future__ import annotations
@@ -17,22 +20,37 @@ from typing import Any
 import numpy as np
 import yaml
 
+from tuner.objective import hook
+
 __all__ = ["export", "FORMATS", "provenance"]
 
 FORMATS = ("yaml", "json", "python", "c")
 
 
-def provenance(run_dir: Path) -> dict[str, Any]:
+def _build(run_dir: Path) -> Any:
+    """The run's objective, or None when it no longer builds (moved data, removed package...)."""
+    from tuner.registry import build_objective
+
+    cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
+    try:
+        return build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
+    except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds
+        return None
+
+
+def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
+    """Run id, fitness, optimiser, seed, commit, parameters, and what the objective says of itself."""
     run_dir = Path(run_dir)
     best = yaml.safe_load((run_dir / "best.yaml").read_text())
     meta = json.loads((run_dir / "meta.json").read_text())
     cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
-    obj = cfg.get("objective", {})
+    describe = hook(objective, "describe") if objective is not None else None
+    desc = dict(describe()) if describe else {}
     return {
         "run": run_dir.name,
         "fitness": best.get("fitness"),
-        "objective": {k: obj[k] for k in ("kind", "filter", "controller", "function", "metric") if k in obj},
-        "data": obj.get("data", obj.get("profile")),
+        "objective": dict(desc.get("objective") or {"kind": cfg.get("objective", {}).get("kind")}),
+        "data": desc.get("data"),
         "optimizer": meta.get("optimizer"),
         "seed": meta.get("seed"),
         "n_evals": meta.get("n_evals"),
@@ -111,7 +129,8 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True) -> str:
     """The best parameters of ``run_dir`` in format ``fmt`` (one of :data:`FORMATS`)."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; allowed: {list(FORMATS)}")
-    doc = provenance(Path(run_dir))
+    objective = _build(Path(run_dir))
+    doc = provenance(Path(run_dir), objective)
     if fmt == "yaml":
         return yaml.safe_dump(doc, sort_keys=False)
     if fmt == "json":
@@ -119,18 +138,7 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True) -> str:
     if fmt == "python":
         return to_python(doc)
     tables = None
-    if objective_tables:
-        tables = _objective_tables(Path(run_dir), doc["params"])
+    fn = hook(objective, "export_tables") if objective is not None and objective_tables else None
+    if fn is not None:
+        tables = fn(doc["params"])
     return to_c(doc, tables=tables)
-
-
-def _objective_tables(run_dir: Path, params: dict[str, Any]) -> dict[str, Any] | None:
-    from objectives.registry import build_objective
-
-    cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
-    try:
-        obj = build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
-    except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds
-        return None
-    fn = getattr(obj, "export_tables", None)
-    return fn(params) if callable(fn) else None

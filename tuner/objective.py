@@ -3,25 +3,30 @@
 An objective is a picklable callable ``objective(params: dict) -> Evaluation`` (a bare float, or a
 ``(float, dict)`` pair, is accepted too and normalised by :func:`as_evaluation`). Lower fitness is
 better. The engine never looks inside: it decodes candidates, calls the objective (in this process
-or in workers), and records what comes back.
+or in workers), and records what comes back. A bare function is a complete objective.
 
 Objectives that are expensive to set up (data loading, compilation) do it lazily on the first call,
 so pickling them to workers stays cheap and each worker builds its state once.
 
-Optional hooks the engine uses when present:
-
-- ``default_space() -> tuner.space.Space``: parameters to search when the config gives none;
-- ``finalize(run_dir, best_params) -> dict``: after a run, extra scores (held-out data) and report
-  figures; returns metrics that go into ``best.yaml`` and the report.
+Every other hook is optional and declared in :class:`TunableObjective`; the engine reaches them only
+through :func:`hook`, so an objective without one simply does not get that service (no default
+space: the config must list ``parameters``; no ``finalize``: the report has no extra section...).
+Objective *kinds* that can be named in YAML (``objective.kind``) are registered in
+:mod:`tuner.registry`.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal, Protocol, runtime_checkable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
-__all__ = ["Evaluation", "Objective", "as_evaluation", "PENALTY"]
+if TYPE_CHECKING:  # pragma: no cover
+    from tuner.space import Space
+
+__all__ = ["Evaluation", "Score", "Objective", "TunableObjective", "HOOKS", "hook", "as_evaluation", "PENALTY"]
 
 #: fitness given to failed evaluations (exception, NaN, inf); finite so every optimiser copes.
 PENALTY = 1.0e12
@@ -53,9 +58,99 @@ class Evaluation:
         return cls(PENALTY, dict(metrics or {}), "failed", error)
 
 
+@dataclass(frozen=True)
+class Score:
+    """Detailed score of one parameter set on one split of an objective's data (``score`` hook).
+
+    Attributes
+    ----------
+    fitness : float
+        The objective's value (the same number ``__call__`` returns as fitness); NaN when the split
+        holds no data.
+    recordings : Mapping[str, Mapping[str, float]]
+        Metrics per recording (or per scenario), keyed by its name.
+    failed : str
+        Why the parameters could not be scored (diverged filter...); empty when they could.
+    outputs : Mapping[str, Any]
+        Optional domain outputs per recording (filter traces...), for the objective's own report.
+    """
+
+    fitness: float
+    recordings: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    failed: str = ""
+    outputs: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+
 @runtime_checkable
 class Objective(Protocol):
+    """The whole required contract: a picklable callable from parameters to a result."""
+
     def __call__(self, params: dict[str, Any]) -> Evaluation | float | tuple[float, dict]: ...
+
+
+class TunableObjective(Objective, Protocol):
+    """Every hook the engine calls. All but ``__call__`` are optional (see :func:`hook`)."""
+
+    def default_space(self) -> Space:
+        """Parameters to search when the config gives no ``parameters:`` section."""
+
+    def default_params(self) -> dict[str, Any]:
+        """Initial (untuned) values of the parameters, e.g. a paper's; preflight evaluates them once
+        and ``tuner evaluate`` of a config scores them."""
+
+    def parameter_names(self) -> Collection[str]:
+        """Every name the objective accepts in a parameter dict; others are rejected at preflight."""
+
+    def preflight(self) -> list[str]:
+        """Load and validate all data once, before the first generation. Raise ``ValueError`` whose
+        message starts with the config key (``objective.data[0]: ...``) on bad data; return warnings
+        (e.g. implausible units) as strings."""
+
+    def score(self, params: Mapping[str, Any], which: str = "train") -> Score:
+        """Detailed :class:`Score` of ``params`` on the ``"train"`` or ``"test"`` data."""
+
+    @property
+    def has_test_data(self) -> bool:
+        """True when there is held-out data (``score(params, "test")`` is meaningful)."""
+
+    def with_data(self, data: Any) -> TunableObjective:
+        """The same objective on other data (``tuner evaluate --data``); ``ValueError`` on bad data."""
+
+    def export_tables(self, params: Mapping[str, Any]) -> Mapping[str, Mapping[str, Any]] | None:
+        """Look-up tables for the C header: ``{name: {"table": 2-D array, "x_range": (lo, hi),
+        "y_range": (lo, hi)}}`` (rows follow y, columns follow x)."""
+
+    def describe(self) -> Mapping[str, Any]:
+        """Provenance written by ``tuner export``: ``{"objective": {...}, "data": ...}``."""
+
+    def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
+        """After a finished run: extra scores (held-out data) and figures; the returned metrics go
+        into ``best.yaml`` and the report."""
+
+
+#: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
+HOOKS = ("default_space", "default_params", "parameter_names", "preflight", "score", "has_test_data",
+         "with_data", "export_tables", "describe", "finalize")
+
+
+def hook(objective: Any, name: str) -> Callable[..., Any] | None:
+    """The objective's hook ``name`` (bound method), or None when it does not provide it.
+
+    ``has_test_data`` is a property: it comes back as a callable returning its value.
+    """
+    if name not in HOOKS:
+        raise ValueError(f"unknown objective hook {name!r}; known: {list(HOOKS)}")
+    if name == "has_test_data":
+        if not hasattr(objective, name):
+            return None
+        value = bool(getattr(objective, name))
+        return lambda: value
+    fn = getattr(objective, name, None)
+    return fn if callable(fn) else None
 
 
 def as_evaluation(value: Any) -> Evaluation:

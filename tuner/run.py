@@ -476,7 +476,11 @@ def _printer(quiet: bool) -> Callable[[str], None] | None:
 
 
 def _build(cfg: RunConfig):
-    from objectives.registry import build_objective
+    """Objective and space of ``cfg``, checked by :func:`tuner.preflight.preflight` (bad data, names,
+    a failing default evaluation are :class:`ConfigError` before anything is written)."""
+    from tuner.evaluate import TimedObjective
+    from tuner.preflight import preflight
+    from tuner.registry import build_objective
 
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
@@ -491,6 +495,9 @@ def _build(cfg: RunConfig):
     space = cfg.space(objective)
     if space.dim == 0:
         raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
+    if cfg.objective.get("timeout_s"):
+        objective = TimedObjective(objective, cfg.objective["timeout_s"])
+    preflight(cfg, objective, space, warn=lambda msg: print(msg, file=sys.stderr, flush=True))
     return objective, space
 
 

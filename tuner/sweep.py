@@ -43,7 +43,7 @@ _SWEEP_KEYS = ("name", "description", "base", "variants", "grid", "seeds", "jobs
 def is_sweep_file(path: str | Path) -> bool:
     try:
         raw = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError):
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):  # the job loader reports it
         return False
     return isinstance(raw, dict) and "sweep" in raw
 
@@ -100,10 +100,18 @@ def load_sweep(path: str | Path) -> dict[str, Any]:
     if not isinstance(jobs_n, int) or jobs_n < 1:
         raise ConfigError(path, "sweep.jobs", f"expected an integer >= 1, got {jobs_n!r}")
     name = str(sw.get("name", path.stem))
+    if not name or "/" in name or "\\" in name or name in (".", "..") or name.startswith("."):
+        raise ConfigError(path, "sweep.name", f"must be a plain directory name (no '/', '\\', '..' or leading "
+                                              f"'.'), got {name!r}")
 
     jobs = []
     keys = list(grid)
     for vname, vover in variants.items():
+        if vover is not None and not isinstance(vover, dict):
+            raise ConfigError(path, f"sweep.variants.{vname}",
+                              f"expected a mapping of overrides (key.path: value), got {type(vover).__name__}")
+        if not isinstance(vname, str) or vname in (".", "..") or "/" in vname or "\\" in vname:
+            raise ConfigError(path, f"sweep.variants.{vname}", "variant names are plain names (no '/', '\\', '..')")
         vover = dict(vover or {})
         base_raw, bdir = load_base(vover.pop("base", sw["base"]), f"sweep.variants.{vname}.base")
         for combo in itertools.product(*[grid[k] for k in keys]) if keys else [()]:

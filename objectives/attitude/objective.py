@@ -47,10 +47,10 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.fused_errors import error_sums
-from tuner.objective import Evaluation
+from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
-__all__ = ["FilterObjective", "METRICS"]
+__all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
 METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
 _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "q0", "warmup_s", "report")
@@ -110,6 +110,28 @@ def _check_specs(specs: list, base_dir: Path, where: str) -> None:
             d = d if d.is_absolute() else base_dir / d
             if not d.is_dir():
                 raise ValueError(f"{where}[{i}].broad.dir: directory not found: {d}")
+
+
+#: |gyr| above this (rad/s, ~2000 deg/s, the largest common MEMS range) at the 99th percentile means deg/s
+_GYR_MAX_RAD_S = 35.0
+#: median |acc| inside this band (m/s^2) means the data are in g, not m/s^2 (at rest |acc| is 9.81)
+_ACC_G_BAND = (0.5, 2.0)
+
+
+def unit_warnings(rec: Recording) -> list[str]:
+    """Warnings when a recording's gyr/acc magnitudes do not fit their declared units (rad/s, m/s^2)."""
+    out = []
+    gyr_unit = str(dict(rec.units).get("gyr", "rad/s"))
+    acc_unit = str(dict(rec.units).get("acc", "m/s^2"))
+    g99 = float(np.percentile(np.linalg.norm(rec.gyr, axis=1), 99))
+    if gyr_unit == "rad/s" and g99 > _GYR_MAX_RAD_S:
+        out.append(f"{rec.name}: gyr is declared rad/s but its 99th-percentile magnitude is {g99:.4g} "
+                   f"(> {_GYR_MAX_RAD_S:g} rad/s = {math.degrees(_GYR_MAX_RAD_S):.0f} deg/s): is it in deg/s?")
+    a50 = float(np.median(np.linalg.norm(rec.acc, axis=1)))
+    if acc_unit == "m/s^2" and _ACC_G_BAND[0] < a50 < _ACC_G_BAND[1]:
+        out.append(f"{rec.name}: acc is declared m/s^2 but its median magnitude is {a50:.4g} "
+                   "(gravity is 9.81 m/s^2): is it in g?")
+    return out
 
 
 @dataclass
@@ -193,6 +215,13 @@ class FilterObjective:
             report=dict(section.get("report") or {}), base_dir=str(base),
         )
 
+    @classmethod
+    def catalog(cls) -> dict[str, list[str]]:
+        """Names ``objective.filter`` accepts (``tuner list filters``)."""
+        from objectives.attitude.filters import filter_names
+
+        return {"filters": filter_names()}
+
     def with_data(self, data: Any) -> FilterObjective:
         """The same objective on other data (``tuner evaluate --data``): all of it is 'train'."""
         train, test = _split_data(data)
@@ -212,6 +241,56 @@ class FilterObjective:
 
         self.__dict__.update(d)
         self._cls = get_filter(self.filter)
+
+    # --- engine hooks (tuner.objective.TunableObjective) ---------------------------------------
+    def default_params(self) -> dict[str, Any]:
+        """The filter's default values with ``fixed`` applied."""
+        return {**self._cls.defaults, **self.fixed}
+
+    def parameter_names(self) -> list[str]:
+        """Every value the filter takes (searched or not)."""
+        return sorted(self._cls.defaults)
+
+    @property
+    def has_test_data(self) -> bool:
+        return bool(self.test_specs)
+
+    def describe(self) -> dict[str, Any]:
+        """Provenance for ``tuner export``: filter, metric and the data specs."""
+        def specs(lst):
+            out = []
+            for spec in lst:
+                if isinstance(spec, tuple):
+                    return {"all": spec[1], "kfold": {"k": spec[2], "fold": spec[3]}}
+                out.append(spec)
+            return out
+
+        data = specs(self.train_specs)
+        if self.test_specs and not isinstance(data, dict):
+            data = {"train": data, "test": specs(self.test_specs)}
+        return {"objective": {"kind": "filter", "filter": self.filter, "metric": self.metric}, "data": data}
+
+    def preflight(self) -> list[str]:
+        """Load every recording once (kept for the run), check ``warmup_s`` against each, warn on units."""
+        warnings: list[str] = []
+        for which, specs in (("train", self.train_specs), ("test", self.test_specs)):
+            key = "objective.data" + (f".{which}" if self.test_specs else "")
+            recs: list[Recording] = list(self._cache.get(which, []))
+            for i, spec in enumerate(specs if which not in self._cache else []):
+                where = "objective.data.all" if isinstance(spec, tuple) else f"{key}[{i}]"
+                try:
+                    recs += self._load([spec])
+                except ValueError as exc:  # RecordingError and the loaders' own checks
+                    raise ValueError(f"{where}: {exc}") from None
+                except (OSError, KeyError, IndexError) as exc:  # unreadable or truncated files
+                    raise ValueError(f"{where}: cannot load ({type(exc).__name__}: {exc})") from None
+            for rec in recs:
+                if self.warmup_s >= rec.duration_s:
+                    raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "
+                                     f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
+                warnings += unit_warnings(rec)
+            self._cache[which] = recs
+        return warnings
 
     # --- search space ------------------------------------------------------------------------
     def default_space(self) -> Space:
@@ -272,15 +351,15 @@ class FilterObjective:
             mask[: int(round(self.warmup_s / rec.dt))] = False
         return mask
 
-    def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False) -> dict[str, Any]:
+    def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False) -> Score:
         """Fitness and per-recording metrics of ``params`` on the train or test recordings.
 
-        Returns ``{"fitness": float, "recordings": {name: {metric: value}}, "failed": str}`` (and
-        ``"outputs": {name: FilterResult}`` with ``keep_outputs``).
+        ``Score.recordings`` is ``{name: {metric: value}}``; with ``keep_outputs`` ``Score.outputs`` is
+        ``{name: FilterResult}``.
         """
         recs = self.recordings(which)
         if not recs:
-            return {"fitness": math.nan, "recordings": {}, "failed": ""}
+            return Score(math.nan)
         flt = self.make_filter(params)
         per: dict[str, dict[str, float]] = {}
         outputs: dict[str, Any] = {}
@@ -307,10 +386,7 @@ class FilterObjective:
             if keep_outputs:
                 outputs[rec.name] = res
         fitness = self._combine(sums, per)
-        out = {"fitness": float(fitness), "recordings": per, "failed": failed}
-        if keep_outputs:
-            out["outputs"] = outputs
-        return out
+        return Score(float(fitness), per, failed, outputs)
 
     @staticmethod
     def _mse_1d(rec: Recording, res: Any, mask: np.ndarray) -> float:
@@ -349,13 +425,13 @@ class FilterObjective:
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
         s = self.score(params, "train")
         metrics = {}
-        recs = s["recordings"]
+        recs = s.recordings
         for name, m in recs.items():
             for k, v in m.items():
                 metrics[f"{name}.{k}" if len(recs) > 1 else k] = v
-        if s["failed"]:
-            return Evaluation.failed(s["failed"], metrics)
-        return Evaluation(s["fitness"], metrics)
+        if s.failed:
+            return Evaluation.failed(s.failed, metrics)
+        return Evaluation(s.fitness, metrics)
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:

@@ -36,29 +36,29 @@ def _safe(name: str) -> str:
     return re.sub(r"[^0-9A-Za-z_.-]", "_", name)[:60]
 
 
-def _rows(scores: dict[str, Any], split: str) -> list[dict[str, Any]]:
+def _rows(scores: Any, split: str) -> list[dict[str, Any]]:
     rows = []
-    for name, m in scores["recordings"].items():
+    for name, m in scores.recordings.items():
         row = {"split": split, "recording": name}
         row.update({k: v for k, v in m.items()})
         rows.append(row)
     return rows
 
 
-def summary_table(filter_name: str, train: dict[str, Any], test: dict[str, Any] | None, metric: str) -> str:
+def summary_table(filter_name: str, train: Any, test: Any, metric: str) -> str:
     """A plain-text table: filter, train and test fitness, mean per-axis RMSE (deg) and BROAD RMSE."""
     def mean_of(scores, key):
-        vals = [m.get(key) for m in scores["recordings"].values() if m.get(key) is not None]
+        vals = [m.get(key) for m in scores.recordings.values() if m.get(key) is not None]
         return float(np.mean(vals)) if vals else math.nan
 
     head = (f"{'filter':10s} {'split':6s} {metric:>18s} {'roll':>7s} {'pitch':>7s} {'yaw':>7s} {'total':>7s}"
             "  (RMSE, deg)")
     lines = [head, "-" * len(head)]
     for split, s in (("train", train), ("test", test)):
-        if not s or not s["recordings"]:
+        if not s or not s.recordings:
             continue
         vals = [mean_of(s, f"{a}_rmse_deg") for a in _AX] + [mean_of(s, "total_rmse_deg")]
-        lines.append(f"{filter_name:10s} {split:6s} {s['fitness']:18.6g} " + " ".join(f"{v:7.3f}" for v in vals))
+        lines.append(f"{filter_name:10s} {split:6s} {s.fitness:18.6g} " + " ".join(f"{v:7.3f}" for v in vals))
     return "\n".join(lines)
 
 
@@ -73,12 +73,12 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
     train = obj.score(best, "train", keep_outputs=True)
     test = obj.score(best, "test", keep_outputs=True) if obj.test_specs else None
     out: dict[str, Any] = {
-        "train_fitness": train["fitness"],
-        "test_fitness": test["fitness"] if test else None,
-        "train": train["recordings"],
+        "train_fitness": train.fitness,
+        "test_fitness": test.fitness if test else None,
+        "train": train.recordings,
     }
     if test:
-        out["test"] = test["recordings"]
+        out["test"] = test.recordings
     table = summary_table(obj.filter, train, test, obj.metric)
     out["summary_table"] = table
     rows = _rows(train, "train") + (_rows(test, "test") if test else [])
@@ -95,9 +95,9 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
     out["tables_md"] = "\n".join(md)
 
     # figures on one recording: the first test recording, else the first train one
-    source = test if test and test.get("outputs") else train
-    if obj.report.get("traces", True) and source.get("outputs"):
-        name, res = next(iter(source["outputs"].items()))
+    source = test if test and test.outputs else train
+    if obj.report.get("traces", True) and source.outputs:
+        name, res = next(iter(source.outputs.items()))
         rec = next(r for r in obj.recordings("test" if source is test else "train") if r.name == name)
         _plot_traces(rec, res, figs, name)
         if "K" in res.diagnostics:
@@ -213,7 +213,7 @@ def per_trial_optimum(obj: Any, best: dict[str, Any], which: str = "test", budge
         single = type(obj)(obj.filter, [], [], dict(obj.fixed), obj.metric, dict(obj.metric_options), obj.q0,
                            obj.warmup_s, {}, obj.base_dir)
         single._cache["train"] = [rec]
-        agnostic = single.score(best)["fitness"]
+        agnostic = single.score(best).fitness
         pop = max(6, min(12, budget // 10))
         opt = PSO(space.dim, np.random.default_rng(i), population=pop, generations=max(1, budget // pop),
                   inertia="linear", c1=1.5, c2=1.5, x0=space.encode({k: best[k] for k in space.free_names}))

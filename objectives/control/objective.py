@@ -172,6 +172,26 @@ class ClosedLoopObjective:
         """Initial parameter values (Table 2.7 / section 2.2.1.2) with ``fixed`` applied."""
         return self._cls.resolve(self.fixed)
 
+    # --- engine hooks (tuner.objective.TunableObjective) -----------------------------------------
+    @classmethod
+    def catalog(cls) -> dict[str, list[str]]:
+        """Names ``objective.controller`` accepts (``tuner list controllers``)."""
+        from objectives.control.controllers import CONTROLLERS
+
+        return {"controllers": sorted(CONTROLLERS)}
+
+    def default_params(self) -> dict[str, Any]:
+        """:attr:`defaults` (the engine's name for the untuned values)."""
+        return self.defaults
+
+    def parameter_names(self) -> list[str]:
+        """Every parameter of the controller (searched or fixed)."""
+        return [p.name for p in self._cls.params]
+
+    def describe(self) -> dict[str, Any]:
+        """Provenance for ``tuner export``: controller and reference profile."""
+        return {"objective": {"kind": "closed_loop", "controller": self.controller}, "data": self.profile}
+
     # --- evaluation -----------------------------------------------------------------------------
     def simulate(self, params: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """Run the closed loop; dict with t, references (N, 2: m/s, rad/s), outputs (N, 5),

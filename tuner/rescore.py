@@ -14,6 +14,8 @@ from typing import Any
 import yaml
 
 from tuner.config import ConfigError, config_from_dict, load_config, read_yaml
+from tuner.objective import hook
+from tuner.registry import build_objective
 
 __all__ = ["evaluate_target"]
 
@@ -21,8 +23,6 @@ __all__ = ["evaluate_target"]
 def evaluate_target(target: str | Path, params_file: str | Path | None = None,
                     data_file: str | Path | None = None) -> dict[str, Any]:
     """``{"fitness": float, "recordings": {name: {metric: value}}, "params": {...}}`` (plus test scores)."""
-    from objectives.registry import build_objective
-
     target = Path(target)
     best_params = None
     if target.is_dir():
@@ -38,6 +38,9 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
     except ValueError as exc:
+        key, _, rest = str(exc).partition(": ")
+        if key.startswith("objective") and rest:
+            raise ConfigError(cfg.source, key, rest) from None
         raise ConfigError(cfg.source, "objective", str(exc)) from None
     space = cfg.space(objective)
     if params_file:
@@ -48,10 +51,10 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     elif best_params is not None:
         params = best_params
     else:
-        defaults = getattr(getattr(objective, "_cls", None), "defaults", None)
-        if defaults is None:
+        default_params = hook(objective, "default_params")
+        if default_params is None:
             raise ConfigError(target, "", "no parameters: give --params (a config has no best)")
-        params = {k: v for k, v in defaults.items() if k in space}
+        params = {k: v for k, v in default_params().items() if k in space}
     full = {**space.fixed, **params}
     missing = [n for n in space.free_names if n not in full]
     if missing:
@@ -59,21 +62,27 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     if data_file:
         doc = read_yaml(data_file, "--data")
         data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
-        if not hasattr(objective, "with_data"):
+        with_data = hook(objective, "with_data")
+        if with_data is None:
             raise ConfigError(data_file, "data", "this objective does not take other data")
         try:
-            objective = objective.with_data(data)
+            objective = with_data(data)
+            preflight = hook(objective, "preflight")
+            if preflight is not None:  # load the new data now: a bad file is an error line, not a traceback
+                preflight()
         except ValueError as exc:
             raise ConfigError(data_file, "data", str(exc)) from None
-    if hasattr(objective, "score"):
-        s = objective.score(full, "train")
-        out = {"fitness": s["fitness"], "recordings": s["recordings"], "params": full}
-        if s.get("failed"):
-            out["failed"] = s["failed"]
-        if not data_file and getattr(objective, "test_specs", None):
-            t = objective.score(full, "test")
-            out["test_fitness"] = t["fitness"]
-            out["test_recordings"] = t["recordings"]
+    score = hook(objective, "score")
+    if score is not None:
+        s = score(full, "train")
+        out = {"fitness": s.fitness, "recordings": _plain(s.recordings), "params": full}
+        if s.failed:
+            out["failed"] = s.failed
+        has_test = hook(objective, "has_test_data")
+        if not data_file and has_test is not None and has_test():
+            t = score(full, "test")
+            out["test_fitness"] = t.fitness
+            out["test_recordings"] = _plain(t.recordings)
         return out
     from tuner.evaluate import evaluate_one
 
@@ -81,3 +90,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     ev = rec.evaluation
     return {"fitness": ev.fitness if ev.status == "ok" else math.nan, "recordings": {"all": dict(ev.metrics)},
             "params": full, **({"failed": ev.error} if ev.status != "ok" else {})}
+
+
+def _plain(recordings: Any) -> dict[str, dict[str, Any]]:
+    return {name: dict(m) for name, m in recordings.items()}

@@ -1,0 +1,131 @@
+"""Checks before the first generation: a run that cannot work stops here with one ``error:`` line.
+
+:func:`preflight` runs in ``tuner run``, ``tuner resume`` and every sweep job (through
+``tuner.run._build``), after the objective is built and before anything is written:
+
+1. every name under ``parameters:`` and ``objective.fixed:`` is one the objective knows
+   (``parameter_names`` hook; a misspelled ``betta:`` names the key, the allowed names and the
+   closest one);
+2. the objective's ``preflight`` hook loads and validates all its data once (bad files, missing
+   columns, NaN rows, ``warmup_s`` longer than a recording...) and returns warnings (units);
+3. with ``parallel.backend: dask`` and a scheduler ``address``, the same hook runs on every worker
+   (a ``kind: python`` callable or a data file missing there is found now);
+4. the default parameters (``default_params`` hook, else the centre of the space) are evaluated
+   once: an objective that raises or exceeds ``objective.timeout_s`` there is an error saying why;
+   one that scores them as failed (a fallen robot) is only a warning, since tuning may fix that.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from tuner.config import ConfigError, RunConfig
+from tuner.objective import hook
+from tuner.space import Space
+
+__all__ = ["preflight", "check_names", "reference_point"]
+
+
+def _key_error(cfg: RunConfig, exc: ValueError, default_key: str = "objective") -> ConfigError:
+    msg = str(exc)
+    key, _, rest = msg.partition(": ")
+    if key.startswith("objective") and rest:
+        return ConfigError(cfg.source, key, rest)
+    return ConfigError(cfg.source, default_key, msg)
+
+
+def check_names(cfg: RunConfig, objective: Any, space: Space) -> None:
+    """Names under ``parameters:`` and ``objective.fixed:`` must be the objective's parameters."""
+    names_fn = hook(objective, "parameter_names")
+    if names_fn is None:
+        return
+    known = sorted(names_fn())
+    fixed = cfg.objective.get("fixed") if isinstance(cfg.objective, dict) else None
+    sections = [("objective.fixed", list(fixed or {}) if isinstance(fixed, dict) else [])]
+    if cfg.parameters is not None:
+        sections.insert(0, ("parameters", list(space.names)))
+    for where, names in sections:
+        for name in names:
+            if name not in known:
+                close = difflib.get_close_matches(name, known, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                raise ConfigError(cfg.source, f"{where}.{name}",
+                                  f"not a parameter of this objective{hint}; allowed: {', '.join(known)}")
+
+
+def reference_point(objective: Any, space: Space) -> dict[str, Any]:
+    """Default parameters restricted to the space (fixed values applied); the centre where none."""
+    defaults_fn = hook(objective, "default_params")
+    defaults = dict(defaults_fn()) if defaults_fn else {}
+    centre = space.decode(np.full(space.dim, 0.5))
+    return {n: (space.fixed[n] if n in space.fixed else defaults.get(n, centre[n])) for n in space.names}
+
+
+def _worker_preflight(objective: Any) -> str:
+    """On a Dask worker: run the objective's preflight hook there; '' when it passes."""
+    fn = hook(objective, "preflight")
+    try:
+        if fn is not None:
+            fn()
+    except Exception as exc:  # reported back to the driver as text, with the worker's address
+        return f"{type(exc).__name__}: {exc}"
+    return ""
+
+
+def _dask_check(cfg: RunConfig, objective: Any) -> None:
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ConfigError(cfg.source, "parallel.backend",
+                          "dask needs the 'distributed' package: pip install 'tuner[cluster]'") from None
+    try:
+        client = Client(cfg.parallel.address, timeout="30s")
+    except OSError as exc:
+        raise ConfigError(cfg.source, "parallel.address", f"cannot reach the scheduler: {exc}") from None
+    try:
+        results = client.run(_worker_preflight, objective)
+    finally:
+        client.close()
+    bad = {w: r for w, r in results.items() if r}
+    if bad:
+        worker, why = next(iter(sorted(bad.items())))
+        raise ConfigError(cfg.source, "objective", f"fails on Dask worker {worker} ({len(bad)} of {len(results)} "
+                                                   f"workers): {why}")
+
+
+def preflight(cfg: RunConfig, objective: Any, space: Space,
+              warn: Callable[[str], None] | None = None, evaluate: bool = True) -> list[str]:
+    """Run the checks of the module docstring; raise :class:`ConfigError`, return the warnings.
+
+    ``evaluate=False`` skips step 4 (used where the defaults were already scored).
+    """
+    from tuner.evaluate import evaluate_one
+
+    check_names(cfg, objective, space)
+    warnings: list[str] = []
+    fn = hook(objective, "preflight")
+    if fn is not None:
+        try:
+            warnings += list(fn() or [])
+        except ValueError as exc:
+            raise _key_error(cfg, exc, "objective.data") from None
+        except OSError as exc:
+            raise ConfigError(cfg.source, "objective.data", f"{exc.filename or ''} {exc.strerror or exc}") from None
+    if cfg.parallel.backend == "dask" and cfg.parallel.address:
+        _dask_check(cfg, objective)
+    if evaluate:
+        point = reference_point(objective, space)
+        rec = evaluate_one(objective, point)
+        if rec.raised:
+            raise ConfigError(cfg.source, "objective", f"evaluating the default parameters failed: "
+                                                       f"{rec.evaluation.error}")
+        if rec.evaluation.status != "ok":
+            warnings.append(f"the default parameters score as failed ({rec.evaluation.error})")
+    for w in warnings:
+        if warn:
+            warn(f"warning: {w}")
+    return warnings

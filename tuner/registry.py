@@ -1,0 +1,172 @@
+"""Objective kinds by YAML name (``objective.kind``), registered by the packages that provide them.
+
+A package adds kinds through the entry-point group ``tuner.objectives`` of its ``pyproject.toml``::
+
+    [project.entry-points."tuner.objectives"]
+    filter = "objectives.attitude.objective:FilterObjective"
+
+(the name is the kind, the value a class or factory with ``from_config(section, base_dir)``). The
+engine itself registers only the generic ``python`` kind. Entry points are loaded on first use, so
+``tuner list optimizers`` imports no domain code. A name registered twice (two packages, or a
+package and the engine) is refused with both sources in the message.
+
+A factory raises ``ValueError`` whose message starts with the key path it complains about
+(``objective.filter: unknown filter 'x'; known: ...``). A kind class may also offer a classmethod
+``catalog() -> {section: [names]}`` (filters, controllers...) listed by ``tuner list``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from pathlib import Path
+from typing import Any
+
+__all__ = ["ENTRY_POINT_GROUP", "ENGINE_KEYS", "RegistryError", "Registry", "REGISTRY", "PythonObjective",
+           "build_objective", "resolve_callable"]
+
+ENTRY_POINT_GROUP = "tuner.objectives"
+#: keys of the ``objective:`` section the engine consumes itself (not passed to the kind's factory)
+ENGINE_KEYS = {"timeout_s": "seconds after which one evaluation is stopped and recorded as failed"}
+
+
+class RegistryError(ValueError):
+    """A kind that cannot be registered or loaded (name collision, broken entry point)."""
+
+
+def resolve_callable(spec: str) -> Any:
+    """``"package.module:attr.sub"`` -> the object (``ImportError``/``AttributeError`` if missing)."""
+    module, _, attr = spec.partition(":")
+    obj = importlib.import_module(module)
+    for part in attr.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+@dataclass(frozen=True)
+class PythonObjective:
+    """A user callable ``module:function`` as an objective; ``options`` are passed as keywords.
+
+    ``kind: python`` imports and runs the named code: a config naming it is code, and must be
+    trusted like code.
+    """
+
+    callable: str
+    options: dict = field(default_factory=dict)
+
+    @classmethod
+    def from_config(cls, section: Mapping[str, Any], base_dir: Path | None = None) -> PythonObjective:
+        if "callable" not in section or ":" not in str(section["callable"]):
+            raise ValueError("objective.callable: expected 'package.module:function'")
+        unknown = sorted(set(section) - {"kind", "callable", "options"})
+        if unknown:
+            raise ValueError(f"objective.{unknown[0]}: unknown key; allowed: callable, options")
+        options = section.get("options") or {}
+        if not isinstance(options, Mapping):
+            raise ValueError(f"objective.options: expected a mapping of keyword arguments, got {options!r}")
+        obj = cls(str(section["callable"]), dict(options))
+        obj.preflight()
+        return obj
+
+    def preflight(self) -> list[str]:
+        """Import the callable (in the process that calls this: the driver, or a Dask worker)."""
+        try:
+            fn = resolve_callable(self.callable)
+        except (ImportError, AttributeError) as exc:
+            raise ValueError(f"objective.callable: cannot import {self.callable!r} ({exc})") from None
+        if not callable(fn):
+            raise ValueError(f"objective.callable: {self.callable!r} is a {type(fn).__name__}, not callable")
+        return []
+
+    def __call__(self, params: dict[str, Any]) -> Any:
+        return resolve_callable(self.callable)(params, **self.options)
+
+
+class Registry:
+    """Kind name -> factory, filled from entry points on first use and by :meth:`register`."""
+
+    def __init__(self, group: str = ENTRY_POINT_GROUP):
+        self.group = group
+        self._specs: dict[str, tuple[Any, str]] = {}  # kind -> (factory or "module:attr", source)
+        self._loaded = False
+
+    def register(self, kind: str, factory: Any, source: str = "") -> None:
+        """Add ``kind``; a name already registered is a :class:`RegistryError` naming both sources."""
+        if not isinstance(kind, str) or not kind.isidentifier():
+            raise RegistryError(f"objective kind names are identifiers, got {kind!r}")
+        source = source or (factory if isinstance(factory, str) else getattr(factory, "__module__", "?"))
+        if kind in self._specs:
+            raise RegistryError(f"objective kind {kind!r} is registered twice: by {self._specs[kind][1]} "
+                                f"and by {source}; uninstall one of them")
+        self._specs[kind] = (factory, source)
+
+    def _load_entry_points(self) -> None:
+        if self._loaded:
+            return
+        self._loaded = True
+        seen: dict[str, str] = {}
+        for ep in entry_points(group=self.group):
+            dist = getattr(getattr(ep, "dist", None), "name", "?")
+            where = f"{dist} ({ep.value})"
+            if ep.name in seen and seen[ep.name] == where:  # one distribution seen on two sys.path entries
+                continue
+            seen[ep.name] = where
+            self.register(ep.name, ep.value, where)
+
+    def kinds(self) -> dict[str, str]:
+        """Registered kinds and where each comes from."""
+        self._load_entry_points()
+        return {k: src for k, (_, src) in sorted(self._specs.items())}
+
+    def get(self, kind: str) -> Any:
+        """The factory of ``kind`` (imported now); unknown kinds list the registered ones."""
+        self._load_entry_points()
+        if kind not in self._specs:
+            known = sorted(self._specs)
+            hint = "" if set(known) - {"python"} else (
+                f"; no domain package registered its kinds (entry-point group {self.group!r}): "
+                "reinstall it, e.g. `python -m pip install -e .`")
+            raise RegistryError(f"objective.kind: unknown kind {kind!r}; allowed: {known}{hint}")
+        factory, source = self._specs[kind]
+        if isinstance(factory, str):
+            try:
+                factory = resolve_callable(factory)
+            except (ImportError, AttributeError) as exc:
+                raise RegistryError(f"objective.kind: {kind!r} is registered by {source} but does not "
+                                    f"import: {exc}") from None
+            self._specs[kind] = (factory, source)
+        return factory
+
+    def catalog(self) -> dict[str, tuple[str, list[str]]]:
+        """``{section: (kind, names)}`` from each kind's optional ``catalog()`` classmethod."""
+        out: dict[str, tuple[str, list[str]]] = {}
+        for kind in self.kinds():
+            fn = getattr(self.get(kind), "catalog", None)
+            if callable(fn):
+                for section, names in dict(fn()).items():
+                    out[section] = (kind, sorted(names))
+        return out
+
+    def build(self, section: Mapping[str, Any], base_dir: Path | None = None) -> Any:
+        """Build the objective of a config's ``objective`` section (validated by its factory).
+
+        Engine keys (:data:`ENGINE_KEYS`) are removed before the factory sees the section.
+        """
+        kind = section.get("kind")
+        if not isinstance(kind, str):
+            raise RegistryError(f"objective.kind: expected a name, got {kind!r}; allowed: {sorted(self.kinds())}")
+        factory = self.get(kind)
+        body = {k: v for k, v in section.items() if k not in ENGINE_KEYS}
+        return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+
+
+#: the process-wide registry (the engine's own ``python`` kind plus every installed entry point)
+REGISTRY = Registry()
+REGISTRY.register("python", PythonObjective, "tuner (built in)")
+
+
+def build_objective(section: Mapping[str, Any], base_dir: Path | None = None) -> Any:
+    """:meth:`Registry.build` on the process-wide :data:`REGISTRY`."""
+    return REGISTRY.build(section, base_dir)
