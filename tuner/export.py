@@ -23,10 +23,11 @@ FORMATS = ("yaml", "json", "python", "c")
 
 
 def provenance(run_dir: Path) -> dict[str, Any]:
-    run_dir = Path(run_dir)
-    best = yaml.safe_load((run_dir / "best.yaml").read_text())
-    meta = json.loads((run_dir / "meta.json").read_text())
-    cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
+    from tuner.rundir import RunDir
+
+    rd = RunDir(run_dir)  # RunError naming the file if best.yaml/meta.json/config.yaml is missing or corrupt
+    run_dir = rd.path
+    best, meta, cfg = rd.best().to_doc(), rd.meta().to_dict(), rd.config()
     obj = cfg.get("objective", {})
     return {
         "run": run_dir.name,
@@ -126,8 +127,9 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True) -> str:
 
 def _objective_tables(run_dir: Path, params: dict[str, Any]) -> dict[str, Any] | None:
     from objectives.registry import build_objective
+    from tuner.rundir import RunDir
 
-    cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
+    cfg = RunDir(run_dir).config()
     try:
         obj = build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
     except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds
