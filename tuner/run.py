@@ -34,7 +34,6 @@ from tuner.evaluate import EvalRecord, Evaluator
 from tuner.loop import Generation, SeededCall, minimize
 from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
-from tuner.optimizers.base import OptionError
 from tuner.rundir import (
     Best,
     Checkpoint,
@@ -364,7 +363,7 @@ def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | Non
         if isinstance(kwargs.get("x0"), dict):
             kwargs["x0"] = space.encode(kwargs["x0"])
         return get_optimizer(o.method)(space.dim, rng, **kwargs)
-    except OptionError as exc:
+    except (ValueError, TypeError) as exc:  # OptionError, or e.g. pycma refusing a population of 1
         raise ConfigError(cfg.source, f"optimizer ({o.method})", str(exc)) from None
 
 
@@ -474,8 +473,11 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
         raise RunError(f"{rd.path}: not a run directory (no such directory)")
     with rd.lock():
         meta: Meta | None = None
-        if rd.is_run() or not rd.file("config.yaml").is_file():
-            meta = rd.meta()
+        if not rd.is_run() and not rd.file("config.yaml").is_file():
+            raise RunError(f"{rd.path}: no meta.json and no config.yaml (killed before the run started, or not a "
+                           f"run directory); start it again with `tuner run CONFIG --run-dir {rd.path}`")
+        if rd.is_run() or rd.file("checkpoint.json").exists() or rd.file("history.csv").exists():
+            meta = rd.meta()  # a run that got that far had a meta.json: its loss is an error, not a restart
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
         ck = rd.checkpoint()
