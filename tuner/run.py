@@ -284,9 +284,11 @@ class Run:
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
+        extra = self._finalize() if self.best is not None else {}
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
-        extra = self._finalize() if self.best is not None else {}
+        if self.best is not None:
+            self._report()  # after meta.json: the report shows the final status
         return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
 
     def _best_doc(self, g: Generation) -> Best | None:
@@ -319,9 +321,7 @@ class Run:
         self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
     def _finalize(self) -> dict[str, Any]:
-        """Objective's report step and ``report.md``; ``meta.json`` already says finished."""
-        from tuner.report import write_run_report
-
+        """The objective's report step; ``best.yaml`` rewritten from the history with its results."""
         assert self.best is not None
         self.rd.write_best(self.best)  # derived from the history, whatever happened before
         extra: dict[str, Any] = {}
@@ -336,12 +336,16 @@ class Run:
         if extra:
             self.best = Best(**{**self.best.__dict__, "evaluation": plain(extra)})
             self.rd.write_best(self.best)
+        return extra
+
+    def _report(self) -> None:
+        from tuner.report import write_run_report
+
         try:
             write_run_report(self.dir)
         except Exception as exc:  # pragma: no cover - figures are a bonus, the results are on disk
             if self.progress:
                 self.progress(f"warning: report not written: {type(exc).__name__}: {exc}")
-        return extra
 
     def _result(self, status: str, n_evals: int, gens: int, reason: str, extra=None) -> RunResult:
         b = self.best
