@@ -12,6 +12,7 @@ run. The run directory is locked (``flock``) for the life of a run or a resume.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import math
 import os
@@ -334,7 +335,7 @@ class Run:
                 if self.progress:
                     self.progress(f"warning: the objective's report step failed: {exc}")
         if extra:
-            self.best = Best(**{**self.best.__dict__, "evaluation": plain(extra)})
+            self.best = dataclasses.replace(self.best, evaluation=plain(extra))
             self.rd.write_best(self.best)
         return extra
 
@@ -446,6 +447,8 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         out = Path(cfg.output)
         run_dir = (out if out.is_absolute() else Path.cwd() / out) / f"{stamp}-{cfg.name}-{secrets.token_hex(3)}"
     rd = RunDir(run_dir)
+    if rd.path.exists() and not rd.path.is_dir():
+        raise RunError(f"{rd.path}: exists and is not a directory")
     with rd.lock():
         rd.remove_tmp()
         present = {p.name for p in rd.path.iterdir()}

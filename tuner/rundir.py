@@ -179,8 +179,8 @@ def _req(doc: dict[str, Any], key: str, types: type | tuple[type, ...], where: P
     if key not in doc:
         raise RunError(f"{where}: {key}: missing")
     v = doc[key]
-    if not isinstance(v, types) or isinstance(v, bool) and bool not in (types if isinstance(types, tuple)
-                                                                         else (types,)):
+    allowed = types if isinstance(types, tuple) else (types,)
+    if not isinstance(v, allowed) or (isinstance(v, bool) and bool not in allowed):  # True is not a count
         raise RunError(f"{where}: {key}: expected {getattr(types, '__name__', types)}, got {v!r}")
     return v
 
