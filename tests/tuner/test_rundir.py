@@ -292,3 +292,22 @@ def test_rundir_typed_records_round_trip(tmp_path):
     h = pd.read_csv(d / "history.csv")
     assert best.fitness == h["fitness"].min() and best.eval == int(h["fitness"].idxmin())
     assert rd.checkpoint().n_evals == 24
+
+
+def test_sweep_job_holds_the_lock_of_its_run_directory(tmp_path):
+    from tuner.sweep import load_sweep, run_sweep
+
+    doc = {"sweep": {"name": "s", "base": {"name": "f", "seed": 0, "objective": {"kind": "function",
+                                                                                  "function": "sphere", "dim": 2},
+                                           "optimizer": {"method": "pso", "population": 4, "generations": 2},
+                                           "parallel": {"backend": "serial"}},
+                     "variants": {"pso": {}}, "seeds": [1]}}
+    p = tmp_path / "sweep.yaml"
+    p.write_text(yaml.safe_dump(doc))
+    job_id = load_sweep(p)["jobs"][0]["id"]
+    job_dir = tmp_path / "out" / "jobs" / job_id
+    with RunDir(job_dir).lock():  # another process running this job (flock conflicts across descriptors)
+        with pytest.raises(RunError, match=f"{job_dir}: in use by pid {os.getpid()}"):
+            run_sweep(p, sweep_dir=tmp_path / "out", quiet=True)
+    res = run_sweep(p, sweep_dir=tmp_path / "out", quiet=True)
+    assert res["ok"] and [r["action"] for r in res["results"]] == ["ran"]
