@@ -66,7 +66,9 @@ class Budget:
 
 
 def _ours(method: str, fn: Budget, dim: int, pop: int, seed: int) -> None:
+    from tuner.loop import minimize
     from tuner.optimizers import get_optimizer
+    from tuner.space import Real, Space
 
     rng = np.random.default_rng(seed)
     opts: dict[str, Any] = {}
@@ -82,12 +84,9 @@ def _ours(method: str, fn: Budget, dim: int, pop: int, seed: int) -> None:
         opt = get_optimizer("cmaes")(dim, rng, max_evals=fn.budget)
     else:
         opt = get_optimizer(name)(dim, rng, population=pop, generations=gens, **opts)
-    while not opt.done:
-        X = opt.ask()
-        f = []
-        for x in X:
-            f.append(fn(x))  # Exhausted ends the run at the budget
-        opt.tell(X, np.asarray(f))
+    # the unit cube as a Space decodes u to itself (0 + u * 1), so fn sees exactly what the optimiser asked
+    space = Space(Real(f"u{i}", 0.0, 1.0) for i in range(dim))
+    minimize(lambda p: fn(np.fromiter(p.values(), float, dim)), space, opt)  # Exhausted ends it at the budget
 
 
 def _pyswarms(fn: Budget, dim: int, pop: int, seed: int) -> None:

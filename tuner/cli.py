@@ -158,9 +158,9 @@ def _cmd_show(a) -> int:
 
         print(show_sweep(path, as_json=a.json))
         return 0
-    if not (path / "meta.json").exists():
+    if not (path / "meta.json").exists() and not (path / "config.yaml").exists():
         raise UsageError(f"{path}: not a run or sweep directory (no meta.json / sweep.yaml)")
-    s = run_summary(path)
+    s = run_summary(path)  # RunError naming the file if meta.json/best.yaml is corrupt
     if a.json:
         print(json.dumps(s, indent=1, default=str))
         return 0
@@ -185,9 +185,7 @@ def _cmd_compare(a) -> int:
 
     cols = {}
     for d in a.run_dirs:
-        if not (Path(d) / "meta.json").exists():
-            raise UsageError(f"{d}: not a run directory")
-        s = run_summary(Path(d))
+        s = run_summary(Path(d))  # RunError naming the file if meta.json/best.yaml is missing or corrupt
         col = {"status": s["status"], "optimizer": s["optimizer"], "seed": s["seed"], "n_evals": s["n_evals"],
                "best_fitness": s["best_fitness"]}
         col.update({f"param.{k}": v for k, v in s["params"].items()})
@@ -273,10 +271,10 @@ def _cmd_report(a) -> int:
         from tuner.sweep import write_sweep_report
 
         print(write_sweep_report(path))
-    elif (path / "meta.json").exists():
+    elif (path / "meta.json").exists() or (path / "config.yaml").exists():
         from tuner.report import write_run_report
 
-        print(write_run_report(path))
+        print(write_run_report(path))  # RunError naming the file if one is corrupt
     else:
         raise UsageError(f"{path}: not a run or sweep directory")
     return 0

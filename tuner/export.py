@@ -30,8 +30,9 @@ FORMATS = ("yaml", "json", "python", "c")
 def _build(run_dir: Path) -> Any:
     """The run's objective, or None when it no longer builds (moved data, removed package...)."""
     from tuner.registry import build_objective
+    from tuner.rundir import RunDir
 
-    cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
+    cfg = RunDir(run_dir).config()
     try:
         return build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
     except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds
@@ -40,10 +41,11 @@ def _build(run_dir: Path) -> Any:
 
 def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
     """Run id, fitness, optimiser, seed, commit, parameters, and what the objective says of itself."""
-    run_dir = Path(run_dir)
-    best = yaml.safe_load((run_dir / "best.yaml").read_text())
-    meta = json.loads((run_dir / "meta.json").read_text())
-    cfg = yaml.safe_load((run_dir / "config.yaml").read_text())
+    from tuner.rundir import RunDir
+
+    rd = RunDir(run_dir)  # RunError naming the file if best.yaml/meta.json/config.yaml is missing or corrupt
+    run_dir = rd.path
+    best, meta, cfg = rd.best().to_doc(), rd.meta().to_dict(), rd.config()
     describe = hook(objective, "describe") if objective is not None else None
     desc = dict(describe()) if describe else {}
     return {

@@ -6,19 +6,30 @@ those land in ``figures/`` and are listed in the report.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
+
+from tuner.rundir import RunDir, RunError
 
 __all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary"]
 
 
 def load_history(run_dir: Path) -> pd.DataFrame:
-    return pd.read_csv(Path(run_dir) / "history.csv", keep_default_na=False, na_values=[""])
+    """``history.csv`` as a frame; a missing or unparsable file raises :class:`tuner.rundir.RunError`."""
+    p = Path(run_dir) / "history.csv"
+    if not p.is_file():
+        raise RunError(f"{p}: missing (nothing evaluated yet?)")
+    try:
+        df = pd.read_csv(p, keep_default_na=False, na_values=[""])
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise RunError(f"{p}: unreadable: {str(exc).strip()}") from None
+    missing = [c for c in ("eval", "stage", "generation", "fitness", "status") if c not in df.columns]
+    if missing:
+        raise RunError(f"{p}: missing columns {missing}")
+    return df
 
 
 def _convergence(hist: pd.DataFrame) -> pd.DataFrame:
@@ -62,18 +73,19 @@ def plot_convergence(run_dir: Path, path: Path | None = None) -> Path:
 
 
 def run_summary(run_dir: Path) -> dict[str, Any]:
-    """Status, best fitness, parameters and counts of a run directory."""
-    run_dir = Path(run_dir)
-    meta = json.loads((run_dir / "meta.json").read_text())
-    best = {}
-    if (run_dir / "best.yaml").exists():
-        best = yaml.safe_load((run_dir / "best.yaml").read_text()) or {}
-    return {"run": run_dir.name, "status": meta.get("status"), "optimizer": meta.get("optimizer"),
-            "seed": meta.get("seed"), "n_evals": meta.get("n_evals"), "n_failed": meta.get("n_failed"),
-            "best_fitness": best.get("fitness"), "params": best.get("params", {}),
-            "metrics": best.get("metrics", {}), "evaluation": best.get("evaluation", {}),
-            "wall_s": meta.get("timing", {}).get("wall_s"), "stop_reason": meta.get("stop_reason", ""),
-            "created": meta.get("created")}
+    """Status, best fitness, parameters and counts of a run directory.
+
+    Raises :class:`tuner.rundir.RunError` (naming the file) if ``meta.json`` or ``best.yaml`` is corrupt.
+    """
+    rd = RunDir(run_dir)
+    meta = rd.meta()
+    best = rd.best() if rd.has_best() else None
+    return {"run": rd.path.name, "status": meta.status, "optimizer": meta.optimizer, "seed": meta.seed,
+            "n_evals": meta.n_evals, "n_failed": meta.n_failed,
+            "best_fitness": best.fitness if best else None, "params": dict(best.params) if best else {},
+            "metrics": dict(best.metrics) if best else {}, "evaluation": dict(best.evaluation) if best else {},
+            "wall_s": meta.timing.wall_s, "stop_reason": meta.stop_reason, "created": meta.created,
+            "notes": list(meta.notes)}
 
 
 def md_table(df: pd.DataFrame, floatfmt: str = ".6g") -> str:
@@ -105,6 +117,7 @@ def write_run_report(run_dir: Path) -> Path:
     lines = [f"# Run {s['run']}", "",
              f"Status **{s['status']}** ({s['stop_reason']}); optimizer `{s['optimizer']}`, seed {s['seed']}, "
              f"{s['n_evals']} evaluations ({s['n_failed']} failed), {s['wall_s']:.1f} s wall.", "",
+             *[f"Note: {n}." for n in s["notes"]], *([""] if s["notes"] else []),
              f"Best fitness: **{s['best_fitness']:.6g}**", "", "## Best parameters", "",
              _md_table(list(s["params"].items()), ("parameter", "value")), ""]
     if s["metrics"]:

@@ -1,31 +1,21 @@
-"""A run directory and its life: create, evaluate generation by generation, checkpoint, resume, finish.
+"""A run's life: create its directory, run the loop generation by generation, record, resume, finish.
 
-Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
-
-``config.yaml``       the resolved config, defaults filled in, as run
-``meta.json``         status (running/finished/interrupted/failed), seed, times, versions, git commit,
-                      host, CPU count, backend, evaluation counts, stop reason
-``history.csv``       one row per evaluation: eval, stage, generation, index, every parameter,
-                      fitness, status, error, seconds, metrics (the record of truth)
-``best.yaml``         best parameters, fitness, metrics, where it was found (updated every generation)
-``checkpoint.pkl``    optimiser state with its RNG, written atomically after each generation
-``report.md``, ``figures/``  written when the run finishes
-
-The loop only asks, evaluates and tells; the optimiser never sees the evaluator. History rows of a
-generation are flushed to disk before the checkpoint that covers them is renamed into place, and a
-resumed run first cuts the history back to what its checkpoint covers, so a run killed at any
-moment resumes to exactly the result of an uninterrupted run.
+The run directory and its files belong to :mod:`tuner.rundir`; the loop (ask, evaluate, tell) to
+:func:`tuner.loop.minimize`. This module connects them: it writes each generation's history rows,
+then ``best.yaml``, then ``checkpoint.json`` (the count of rows that are complete generations), then
+``meta.json``; a resumed run cuts the history back to what the checkpoint covers, recreates the
+optimiser from the run seed and replays ``tell`` with the recorded fitness of those rows (no state
+is unpickled; an edited history is detected because the replayed optimiser asks other points), then
+carries on. A run killed at any moment therefore resumes to exactly the result of an uninterrupted
+run. The run directory is locked (``flock``) for the life of a run or a resume.
 """
 
 from __future__ import annotations
 
-import csv
+import dataclasses
 import datetime as _dt
-import io
-import json
 import math
 import os
-import pickle
 import platform
 import secrets
 import signal
@@ -39,22 +29,28 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from tuner.config import ConfigError, RunConfig, config_from_dict
 from tuner.evaluate import EvalRecord, Evaluator
+from tuner.loop import Generation, SeededCall, minimize
+from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
+from tuner.rundir import (
+    Best,
+    Checkpoint,
+    Meta,
+    RunDir,
+    RunError,
+    Timing,
+    atomic_write,
+    config_hash,
+    fmt_cell,
+    parse_cell,
+    plain,
+)
 from tuner.space import Space
 
 __all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "RunError"]
-
-CHECKPOINT = "checkpoint.pkl"
-FIXED_COLUMNS = ["eval", "stage", "generation", "index"]
-RESULT_COLUMNS = ["fitness", "status", "error", "seconds"]
-
-
-class RunError(RuntimeError):
-    """A run directory that cannot be used as asked (missing, finished, corrupt)."""
 
 
 @dataclass(frozen=True)
@@ -72,58 +68,14 @@ class RunResult:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-# --- small file helpers ------------------------------------------------------------------------
-def atomic_write(path: Path, data: bytes | str) -> None:
-    """Write to a temporary file, fsync, rename: readers see the old or the new file, never half."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    mode = "wb" if isinstance(data, bytes) else "w"
-    with open(tmp, mode) as fh:
-        fh.write(data)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-    try:
-        dfd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(dfd)
-        finally:
-            os.close(dfd)
-    except OSError:  # pragma: no cover - some filesystems refuse directory fsync
-        pass
-
-
-def _plain(v: Any) -> Any:
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_plain(x) for x in v]
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, Path):
-        return str(v)
-    return v
-
-
-def _dump_yaml(d: Any) -> str:
-    return yaml.safe_dump(_plain(d), sort_keys=False, default_flow_style=False, width=100)
-
-
 def read_meta(run_dir: Path) -> dict[str, Any]:
-    p = Path(run_dir) / "meta.json"
-    if not p.exists():
-        raise RunError(f"{run_dir}: not a run directory (no meta.json)")
-    return json.loads(p.read_text())
+    """``meta.json`` of a run directory as a plain dict (typed: :meth:`tuner.rundir.RunDir.meta`)."""
+    return RunDir(run_dir).meta().to_dict()
 
 
 def load_best(run_dir: str | Path) -> dict[str, Any]:
     """The best parameters of a run (from ``best.yaml``) as a plain dict."""
-    p = Path(run_dir) / "best.yaml"
-    if not p.exists():
-        raise RunError(f"{run_dir}: no best.yaml (has the run evaluated anything yet?)")
-    return dict(yaml.safe_load(p.read_text())["params"])
+    return dict(RunDir(run_dir).best().params)
 
 
 def _git_commit() -> str:
@@ -153,174 +105,142 @@ def _now() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
-# --- history -----------------------------------------------------------------------------------
-class History:
-    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear."""
-
-    def __init__(self, path: Path, param_names: list[str], metric_names: list[str] | None = None):
-        self.path = path
-        self.param_names = list(param_names)
-        self.metric_names = list(metric_names or [])
-        if not path.exists():
-            self._rewrite([])
-
-    @property
-    def columns(self) -> list[str]:
-        return FIXED_COLUMNS + self.param_names + RESULT_COLUMNS + self.metric_names
-
-    def _rewrite(self, rows: list[dict[str, Any]]) -> None:
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
-        w.writeheader()
-        for r in rows:
-            w.writerow(r)
-        atomic_write(self.path, buf.getvalue())
-
-    def read_rows(self) -> list[dict[str, str]]:
-        with open(self.path, newline="") as fh:
-            return list(csv.DictReader(fh))
-
-    def truncate(self, n_rows: int) -> None:
-        """Keep the first ``n_rows`` evaluations (what the checkpoint covers)."""
-        rows = self.read_rows()
-        if len(rows) != n_rows:
-            self._rewrite(rows[:n_rows])
-
-    def append(self, rows: list[dict[str, Any]]) -> None:
-        new = sorted({k for r in rows for k in r} - set(self.columns))
-        if new:
-            old = self.read_rows()
-            self.metric_names += new
-            self._rewrite(old)
-        buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
-        for r in rows:
-            w.writerow(r)
-        with open(self.path, "a", newline="") as fh:
-            fh.write(buf.getvalue())
-            fh.flush()
-            os.fsync(fh.fileno())
+def _cell(v: Any) -> str:
+    return "" if v is None else str(fmt_cell(v))
 
 
-def _fmt(v: Any) -> Any:
-    if isinstance(v, float):
-        return repr(v)
-    if isinstance(v, np.floating):
-        return repr(float(v))
-    if isinstance(v, (list, tuple, dict)):
-        return json.dumps(_plain(v))
-    return v
+def _metrics(m: dict[str, Any]) -> dict[str, Any]:
+    """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
+    return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
 
 
-# --- the run -----------------------------------------------------------------------------------
 class _Interrupted(Exception):
     pass
+
+
+class _LiveMap:
+    """``evaluate(fn, items)`` on the configured backend; the pool starts at the first live generation."""
+
+    def __init__(self, cfg: RunConfig, n_jobs: int):
+        self.cfg, self.n_jobs, self.evaluator = cfg, n_jobs, None
+
+    def __call__(self, fn: Callable, items: list) -> list[EvalRecord]:
+        if self.evaluator is None:
+            p = self.cfg.parallel
+            self.evaluator = Evaluator(fn, p.backend, self.n_jobs, p.address)
+        return self.evaluator(items)
+
+    def describe(self) -> str:
+        p = self.cfg.parallel
+        return Evaluator(None, p.backend, self.n_jobs, p.address).describe()
+
+    def close(self) -> None:
+        if self.evaluator is not None:
+            self.evaluator.close()
+
+
+class _Replay:
+    """Hands back the recorded results of the first rows of ``history.csv``, then evaluates live.
+
+    Each replayed candidate is checked against its row: a row whose parameters differ from what
+    the re-created optimiser asks means the history was edited (or the code changed), and is refused.
+    """
+
+    def __init__(self, rows: list[dict[str, str]], names: list[str], metric_names: list[str], live: _LiveMap,
+                 where: Path):
+        self.rows, self.names, self.metric_names, self.live, self.where = rows, names, metric_names, live, where
+        self.pos = 0
+
+    @property
+    def replaying(self) -> bool:
+        return self.pos < len(self.rows)
+
+    def __call__(self, fn: Callable, items: list[tuple[dict[str, Any], int]]) -> list[EvalRecord]:
+        if not self.replaying:
+            return self.live(fn, items)
+        chunk = self.rows[self.pos:self.pos + len(items)]
+        if len(chunk) != len(items):
+            raise RunError(f"{self.where}: rows {self.pos}-{len(self.rows) - 1} are not a complete generation "
+                           f"({len(items)} evaluations)")
+        out = []
+        for (params, _), row in zip(items, chunk):
+            for k in self.names:
+                if _cell(params[k]) != row.get(k):
+                    raise RunError(f"{self.where}: row eval={row.get('eval')}: {k} is {row.get(k)!r} but the "
+                                   f"optimiser re-created from the seed asks {_cell(params[k])!r}; the history "
+                                   "was edited or the code changed, so it cannot be resumed")
+            if row.get("status") not in ("ok", "failed"):
+                raise RunError(f"{self.where}: row eval={row.get('eval')}: status {row.get('status')!r}")
+            try:
+                fit, secs = float(row["fitness"]), float(row["seconds"])
+            except (TypeError, ValueError):
+                raise RunError(f"{self.where}: row eval={row.get('eval')}: fitness/seconds not numbers") from None
+            metrics = {k: parse_cell(row[k]) for k in self.metric_names if row.get(k) not in (None, "")}
+            out.append(EvalRecord(Evaluation(fit, metrics, row["status"], row.get("error") or ""), secs))
+        self.pos += len(items)
+        return out
 
 
 class Run:
     """Drives one run directory. Use :func:`run` and :func:`resume`."""
 
-    def __init__(self, cfg: RunConfig, run_dir: Path, objective: Any, space: Space,
-                 progress: Callable[[str], None] | None):
-        self.cfg = cfg
-        self.dir = run_dir
-        self.objective = objective
-        self.base_space = space
-        self.progress = progress
-        self.meta: dict[str, Any] = {}
-
-    # --- creation -----------------------------------------------------------------------------
-    @classmethod
-    def create(cls, cfg: RunConfig, objective: Any, space: Space, run_dir: Path | None,
-               progress: Callable[[str], None] | None) -> Run:
-        if run_dir is None:
-            stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
-            out = Path(cfg.output)
-            if not out.is_absolute():
-                out = Path.cwd() / out
-            run_dir = out / f"{stamp}-{cfg.name}-{secrets.token_hex(3)}"
-        run_dir = Path(run_dir)
-        if run_dir.exists() and any(run_dir.iterdir()):
-            raise RunError(f"{run_dir}: exists and is not empty; use `tuner resume {run_dir}` or another directory")
-        run_dir.mkdir(parents=True, exist_ok=True)
-        resolved = dict(cfg.raw)
-        resolved["parameters"] = space.to_dict()
-        resolved["source"] = str(cfg.source)
-        resolved["base_dir"] = str(cfg.base_dir)
-        atomic_write(run_dir / "config.yaml", _dump_yaml(resolved))
-        self = cls(cfg, run_dir, objective, space, progress)
-        self.meta = {
-            "status": "created",
-            "name": cfg.name,
-            "seed": cfg.seed,
-            "created": _now(),
-            "config_source": str(cfg.source),
-            "versions": _versions(),
-            "git_commit": _git_commit(),
-            "host": socket.gethostname(),
-            "cpu_count": os.cpu_count(),
-            "backend": cfg.parallel.backend,
-            "n_jobs": cfg.parallel.n_jobs,
-            "optimizer": cfg.optimizer.method,
-            "n_evals": 0,
-            "n_failed": 0,
-            "generations": 0,
-            "stop_reason": "",
-            "timing": {"wall_s": 0.0, "objective_s": 0.0, "sessions": 0},
-        }
-        self._write_meta()
-        return self
-
-    def _write_meta(self) -> None:
-        atomic_write(self.dir / "meta.json", json.dumps(_plain(self.meta), indent=1))
+    def __init__(self, cfg: RunConfig, rd: RunDir, objective: Any, space: Space,
+                 progress: Callable[[str], None] | None, meta: Meta, n_jobs: int):
+        self.cfg, self.rd, self.dir = cfg, rd, rd.path
+        self.objective, self.base_space, self.progress = objective, space, progress
+        self.meta, self.n_jobs = meta, n_jobs
+        self.best: Best | None = None
 
     # --- optimiser of a stage -----------------------------------------------------------------
-    def _stage_space(self, stage: int, best_params: dict[str, Any] | None) -> Space:
-        if stage == 0 or best_params is None:
-            return self.base_space
+    def _stage_space(self, stage: int, best_params: dict[str, Any]) -> Space:
         space = self.base_space
         for _ in range(stage):
             space = space.narrowed(best_params, self.cfg.optimizer.refine.shrink)
         return space
 
     def _new_optimizer(self, stage: int, space: Space, x0: np.ndarray | None):
-        o = self.cfg.optimizer
-        rng = np.random.default_rng(np.random.SeedSequence([self.cfg.seed, stage]))
-        kwargs = dict(o.options)
-        if o.population is not None:
-            kwargs["population"] = o.population
-        kwargs["generations"] = o.generations
-        if x0 is not None:
-            kwargs["x0"] = x0
-        if isinstance(kwargs.get("x0"), dict):
-            kwargs["x0"] = space.encode(kwargs["x0"])
-        return get_optimizer(o.method)(space.dim, rng, **kwargs)
+        return new_optimizer(self.cfg, stage, space, x0)
+
+    def _write_meta(self, **kw: Any) -> None:
+        self.meta = self.meta.replace(**kw)
+        self.rd.write_meta(self.meta)
 
     # --- main loop ----------------------------------------------------------------------------
-    def execute(self, ck: dict[str, Any] | None = None) -> RunResult:
+    def execute(self, replay_rows: list[dict[str, str]] | None = None) -> RunResult:
         stages = self.cfg.optimizer.refine.stages
-        if ck is None:
-            stage, space = 0, self.base_space
-            optimizer = self._new_optimizer(0, space, None)
-            best: dict[str, Any] = {"fitness": math.inf, "params": None, "metrics": {}, "generation": -1,
-                                    "stage": 0, "eval": -1}
-            n_evals, n_failed = 0, 0
-            conv: list[dict[str, Any]] = []
-            history = History(self.dir / "history.csv", self.base_space.names)
-        else:
-            stage = ck["stage"]
-            space = Space.from_dict(ck["space"])
-            optimizer = get_optimizer(self.cfg.optimizer.method).from_state(ck["optimizer"])
-            best, n_evals, n_failed, conv = ck["best"], ck["n_evals"], ck["n_failed"], ck["convergence"]
-            history = History(self.dir / "history.csv", self.base_space.names, ck["metric_names"])
-            history.truncate(n_evals)
+        history = self.rd.history(self.base_space.names)
+        live = _LiveMap(self.cfg, self.n_jobs)
+        replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
+                         history.path)
+        t = self.meta.timing
+        self._write_meta(status="running", started=self.meta.started or _now(), backend_detail=live.describe(),
+                         timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
+        t_session, wall0 = time.perf_counter(), self.meta.timing.wall_s
+        state = {"gens": 0, "t0": time.perf_counter()}
 
-        self.meta.update(status="running", started=self.meta.get("started") or _now())
-        self.meta["timing"]["sessions"] += 1
-        self._write_meta()
-        t_session = time.perf_counter()
-        wall0 = self.meta["timing"]["wall_s"]
-        interrupted = False
+        def on_generation(g: Generation) -> None:
+            state["gens"] += 1
+            best = self._best_doc(g)
+            if g.first_eval < len(replay.rows):  # replayed from the history: nothing new to write
+                if g.stats.n_evals == len(replay.rows):
+                    self.best = best
+                    if best is not None:
+                        self.rd.write_best(best)
+                    if self.progress:
+                        self.progress(f"replayed {g.stats.n_evals} recorded evaluations")
+                return
+            history.append([self._row(g, i) for i in range(len(g.records))])
+            self.best = best
+            if best is not None:
+                self.rd.write_best(best)
+            self.rd.write_checkpoint(Checkpoint(g.stats.n_evals, g.stage, state["gens"]))
+            tm = self.meta.timing
+            self._write_meta(n_evals=g.stats.n_evals, n_failed=g.n_failed, generations=state["gens"],
+                             timing=Timing(wall0 + time.perf_counter() - t_session,
+                                           tm.objective_s + sum(r.seconds for r in g.records), tm.sessions))
+            now = time.perf_counter()
+            self._progress(g, stages, now - state["t0"])
+            state["t0"] = now
 
         def on_term(signum, frame):  # SIGTERM behaves like Ctrl-C
             raise _Interrupted()
@@ -330,143 +250,126 @@ class Run:
             old_handler = signal.signal(signal.SIGTERM, on_term)
         except ValueError:  # not in the main thread
             pass
-        evaluator = Evaluator(self.objective, self.cfg.parallel.backend, self.cfg.parallel.n_jobs,
-                              self.cfg.parallel.address)
-        self.meta["backend_detail"] = evaluator.describe()
+        stage, space, n_evals, n_failed, best, interrupted = 0, self.base_space, 0, 0, None, False
+        optimizer = self._new_optimizer(0, space, None)
         try:
             while True:
-                while not optimizer.done:
-                    t0 = time.perf_counter()
-                    u = optimizer.ask()
-                    params = [space.decode(row) for row in u]
-                    records = evaluator(params)
-                    f = np.array([r.evaluation.fitness for r in records])
-                    optimizer.tell(u, f)
-                    rows = []
-                    for i, (p, r) in enumerate(zip(params, records)):
-                        rows.append(self._row(n_evals + i, stage, optimizer.generation - 1, i, p, r))
-                        ev = r.evaluation
-                        if ev.status == "ok" and ev.fitness < best["fitness"]:
-                            best = {"fitness": float(ev.fitness), "params": _plain(p), "metrics": _plain(ev.metrics),
-                                    "generation": optimizer.generation - 1, "stage": stage, "eval": n_evals + i}
-                        n_failed += ev.status != "ok"
-                    n_evals += len(records)
-                    history.append(rows)
-                    ok = f[[r.evaluation.status == "ok" for r in records]]
-                    conv.append({"stage": stage, "generation": optimizer.generation - 1, "n_evals": n_evals,
-                                 "best": best["fitness"], "gen_best": float(ok.min()) if len(ok) else math.nan,
-                                 "gen_median": float(np.median(ok)) if len(ok) else math.nan})
-                    obj_s = sum(r.seconds for r in records)
-                    self.meta["timing"]["objective_s"] += obj_s
-                    self._checkpoint(stage, space, optimizer, best, n_evals, n_failed, conv, history)
-                    self.meta.update(n_evals=n_evals, n_failed=n_failed, generations=len(conv))
-                    self.meta["timing"]["wall_s"] = wall0 + time.perf_counter() - t_session
-                    self._write_meta()
-                    if best["params"] is not None:
-                        self._write_best(best, space)
-                    self._progress(stage, stages, optimizer, best, len(records), time.perf_counter() - t0,
-                                   n_failed)
-                if stage + 1 >= stages or best["params"] is None:
+                res = minimize(SeededCall(self.objective), space, optimizer, replay, on_generation,
+                               seed=self.cfg.seed, stage=stage, first_eval=n_evals, best=best, n_failed=n_failed)
+                best, n_evals, n_failed = res.best, res.n_evals, res.n_failed
+                if stage + 1 >= stages or best is None:
                     break
                 stage += 1
-                space = self._stage_space(stage, best["params"])
+                space = self._stage_space(stage, best.params)
                 optimizer = self._new_optimizer(stage, space, space.encode(
-                    {k: v for k, v in best["params"].items() if k in space.free_names}))
-                if self.progress:
+                    {k: v for k, v in best.params.items() if k in space.free_names}))
+                if self.progress and not replay.replaying:
                     ranges = ", ".join(f"{p.name} [{p.low:.4g}, {p.high:.4g}]" for p in space.free)
                     self.progress(f"stage {stage + 1}/{stages}: bounds narrowed around the best: {ranges}")
-                self._checkpoint(stage, space, optimizer, best, n_evals, n_failed, conv, history)
         except (KeyboardInterrupt, _Interrupted):
             interrupted = True
         finally:
-            evaluator.close()
+            live.close()
             if old_handler is not None:
                 try:
                     signal.signal(signal.SIGTERM, old_handler)
                 except ValueError:  # pragma: no cover
                     pass
-        self.meta["timing"]["wall_s"] = wall0 + time.perf_counter() - t_session
+        if replay.replaying and not interrupted:
+            raise RunError(f"{history.path}: {len(replay.rows)} rows recorded, but the run ends after "
+                           f"{n_evals}; the history does not belong to this config")
+        tm = self.meta.timing
+        timing = Timing(wall0 + time.perf_counter() - t_session, tm.objective_s, tm.sessions)
         if interrupted:
-            self.meta.update(status="interrupted", interrupted=_now())
-            self._write_meta()
+            self._write_meta(status="interrupted", interrupted=_now(), timing=timing)
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
-            return self._result("interrupted", best, n_evals, len(conv), "interrupted")
-        self.meta.update(status="finished", finished=_now(), stop_reason=optimizer.stop_reason)
-        extra: dict[str, Any] = {}
-        if best["params"] is not None:
-            extra = self._finalize(best, conv)
-        self._write_meta()
-        return self._result("finished", best, n_evals, len(conv), optimizer.stop_reason, extra)
+            return self._result("interrupted", n_evals, state["gens"], "interrupted")
+        extra = self._finalize() if self.best is not None else {}
+        self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
+                         n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
+        if self.best is not None:
+            self._report()  # after meta.json: the report shows the final status
+        return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
 
-    def _row(self, idx: int, stage: int, gen: int, i: int, p: dict[str, Any], r: EvalRecord) -> dict[str, Any]:
-        ev = r.evaluation
-        row = {"eval": idx, "stage": stage, "generation": gen, "index": i}
-        row.update({k: _fmt(v) for k, v in p.items()})
-        row.update(fitness=_fmt(float(ev.fitness)), status=ev.status, error=ev.error.replace("\n", " "),
+    def _best_doc(self, g: Generation) -> Best | None:
+        b = g.best
+        if b is None:
+            return None
+        return Best(plain(b.params), b.fitness, _metrics(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
+
+    def _row(self, g: Generation, i: int) -> dict[str, Any]:
+        r, ev = g.records[i], g.records[i].evaluation
+        row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
+        row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
+        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=ev.error.replace("\n", " "),
                    seconds=f"{r.seconds:.6f}")
-        row.update({k: _fmt(v) for k, v in ev.metrics.items()})
+        row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
         return row
 
-    def _checkpoint(self, stage, space, optimizer, best, n_evals, n_failed, conv, history) -> None:
-        ck = {
-            "version": 1,
-            "stage": stage,
-            "space": space.to_dict(),
-            "optimizer": optimizer.state(),
-            "best": best,
-            "n_evals": n_evals,
-            "n_failed": n_failed,
-            "convergence": conv,
-            "metric_names": history.metric_names,
-        }
-        atomic_write(self.dir / CHECKPOINT, pickle.dumps(ck, protocol=pickle.HIGHEST_PROTOCOL))
-
-    def _write_best(self, best: dict[str, Any], space: Space) -> None:
-        doc = {"params": best["params"], "fitness": best["fitness"], "metrics": best["metrics"],
-               "found": {"stage": best["stage"], "generation": best["generation"], "eval": best["eval"]},
-               "run": self.dir.name}
-        atomic_write(self.dir / "best.yaml", _dump_yaml(doc))
-
-    def _progress(self, stage, stages, optimizer, best, n, secs, n_failed) -> None:
+    def _progress(self, g: Generation, stages: int, secs: float) -> None:
         if not self.progress:
             return
-        g, G = optimizer.generation, optimizer.generations
+        opt = g.optimizer
+        gen, G, n = opt.generation, opt.generations, len(g.records)
         rate = n / secs if secs > 0 else math.inf
         eta = ""
         if G:
-            left = (G - g) + (stages - stage - 1) * G
+            left = (G - gen) + (stages - g.stage - 1) * G
             eta = f"  ETA {_dt.timedelta(seconds=round(left * secs))}"
-        st = f"stage {stage + 1}/{stages} " if stages > 1 else ""
-        fail = f"  failed {n_failed}" if n_failed else ""
-        self.progress(f"{st}gen {g}/{G or '?'}  best {best['fitness']:.6g}  {rate:.1f} eval/s{eta}{fail}")
+        st = f"stage {g.stage + 1}/{stages} " if stages > 1 else ""
+        fail = f"  failed {g.n_failed}" if g.n_failed else ""
+        self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
-    def _finalize(self, best: dict[str, Any], conv: list[dict[str, Any]]) -> dict[str, Any]:
-        from tuner.report import write_run_report
-
+    def _finalize(self) -> dict[str, Any]:
+        """The objective's report step; ``best.yaml`` rewritten from the history with its results."""
+        assert self.best is not None
+        self.rd.write_best(self.best)  # derived from the history, whatever happened before
         extra: dict[str, Any] = {}
         finalize = getattr(self.objective, "finalize", None)
         if callable(finalize):
             try:
-                extra = dict(finalize(self.dir, best["params"]) or {})
+                extra = dict(finalize(self.dir, self.best.params) or {})
             except Exception as exc:  # reporting must not lose a finished run
                 extra = {"finalize_error": f"{type(exc).__name__}: {exc}"}
                 if self.progress:
                     self.progress(f"warning: the objective's report step failed: {exc}")
         if extra:
-            doc = yaml.safe_load((self.dir / "best.yaml").read_text())
-            doc["evaluation"] = _plain(extra)
-            atomic_write(self.dir / "best.yaml", _dump_yaml(doc))
+            self.best = dataclasses.replace(self.best, evaluation=plain(extra))
+            self.rd.write_best(self.best)
+        return extra
+
+    def _report(self) -> None:
+        from tuner.report import write_run_report
+
         try:
             write_run_report(self.dir)
         except Exception as exc:  # pragma: no cover - figures are a bonus, the results are on disk
             if self.progress:
                 self.progress(f"warning: report not written: {type(exc).__name__}: {exc}")
-        return extra
 
-    def _result(self, status, best, n_evals, gens, reason, extra=None) -> RunResult:
-        return RunResult(self.dir, status, dict(best["params"] or {}), float(best["fitness"]),
-                         dict(best["metrics"]), n_evals, gens, reason, dict(extra or {}))
+    def _result(self, status: str, n_evals: int, gens: int, reason: str, extra=None) -> RunResult:
+        b = self.best
+        return RunResult(self.dir, status, dict(b.params) if b else {}, b.fitness if b else math.inf,
+                         dict(b.metrics) if b else {}, n_evals, gens, reason, dict(extra or {}))
+
+
+def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | None):
+    """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``."""
+    o = cfg.optimizer
+    rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, stage]))
+    kwargs = dict(o.options)
+    if o.population is not None:
+        kwargs["population"] = o.population
+    kwargs["generations"] = o.generations
+    if x0 is not None:
+        kwargs["x0"] = x0
+    try:
+        if isinstance(kwargs.get("x0"), dict):
+            kwargs["x0"] = space.encode(kwargs["x0"])
+        return get_optimizer(o.method)(space.dim, rng, **kwargs)
+    except (ValueError, TypeError) as exc:  # OptionError, or e.g. pycma refusing a population of 1
+        raise ConfigError(cfg.source, f"optimizer ({o.method})", str(exc)) from None
 
 
 def _printer(quiet: bool) -> Callable[[str], None] | None:
@@ -501,39 +404,117 @@ def _build(cfg: RunConfig):
     return objective, space
 
 
+def _n_jobs(cfg: RunConfig, population: int) -> tuple[int, list[str]]:
+    """Workers actually used: at most the population and, for local pools, the CPU count."""
+    p = cfg.parallel
+    n, notes = int(p.n_jobs), []
+    if p.backend == "serial":
+        return n, notes
+    cpus = os.cpu_count() or 1
+    if n > population:
+        notes.append(f"n_jobs {n} capped at the population {population} (more workers would idle)")
+        n = population
+    if not p.address and n > cpus:
+        notes.append(f"n_jobs {n} capped at the {cpus} CPUs of this machine")
+        n = cpus
+    return n, notes
+
+
+def _resolved(cfg: RunConfig, space: Space) -> dict[str, Any]:
+    resolved = dict(cfg.raw)
+    resolved["parameters"] = space.to_dict()
+    resolved["source"] = str(cfg.source)
+    resolved["base_dir"] = str(cfg.base_dir)
+    return resolved
+
+
+def _new_meta(cfg: RunConfig, chash: str, n_jobs: int, notes: list[str]) -> Meta:
+    return Meta(status="created", name=cfg.name, seed=cfg.seed, created=_now(), config_source=str(cfg.source),
+                config_hash=chash, versions=_versions(), git_commit=_git_commit(), host=socket.gethostname(),
+                cpu_count=os.cpu_count(), backend=cfg.parallel.backend, n_jobs=n_jobs,
+                n_jobs_requested=cfg.parallel.n_jobs, optimizer=cfg.optimizer.method, notes=tuple(notes))
+
+
+#: files a run directory may hold when it was created but killed before ``meta.json`` existed
+_UNSTARTED = {"config.yaml", ".config.json", ".lock"}
+
+
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         progress: Callable[[str], None] | None = None) -> RunResult:
-    """Create a run directory for ``cfg`` and run it to the end (or until interrupted)."""
+    """Create a run directory for ``cfg`` and run it to the end (or until interrupted).
+
+    Everything that can be refused (objective, parameters, optimiser options) is built before the
+    directory is created, so a bad config leaves nothing behind.
+    """
     objective, space = _build(cfg)
-    r = Run.create(cfg, objective, space, Path(run_dir) if run_dir else None, progress or _printer(quiet))
-    if r.progress:
-        r.progress(f"run {r.dir}  ({cfg.optimizer.method}, {space.dim} parameters, "
-                   f"{cfg.parallel.backend} x {cfg.parallel.n_jobs})")
-    return r.execute()
+    n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
+    printer = progress or _printer(quiet)
+    if run_dir is None:
+        stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
+        out = Path(cfg.output)
+        run_dir = (out if out.is_absolute() else Path.cwd() / out) / f"{stamp}-{cfg.name}-{secrets.token_hex(3)}"
+    rd = RunDir(run_dir)
+    if rd.path.exists() and not rd.path.is_dir():
+        raise RunError(f"{rd.path}: exists and is not a directory")
+    with rd.lock():
+        rd.remove_tmp()
+        present = {p.name for p in rd.path.iterdir()}
+        if present - _UNSTARTED:
+            raise RunError(f"{rd.path}: exists and is not empty; use `tuner resume {rd.path}` or another directory")
+        if present & {"config.yaml", ".config.json"} and printer:
+            printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
+        meta = _new_meta(cfg, rd.write_config(_resolved(cfg, space)), n_jobs, notes)
+        rd.write_meta(meta)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
+        if printer:
+            printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
+                    f"{cfg.parallel.backend} x {n_jobs})")
+            for note in notes:
+                printer(f"note: {note}")
+        return r.execute()
 
 
 def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], None] | None = None) -> RunResult:
-    """Continue an interrupted run from its last checkpoint (a finished run is refused)."""
-    run_dir = Path(run_dir)
-    meta = read_meta(run_dir)
-    if meta.get("status") == "finished":
-        raise RunError(f"{run_dir}: already finished")
-    raw = yaml.safe_load((run_dir / "config.yaml").read_text())
-    source, base_dir = raw.pop("source", str(run_dir / "config.yaml")), Path(raw.pop("base_dir", run_dir))
-    cfg = config_from_dict(raw, source=source, base_dir=base_dir)
-    objective, space = _build(cfg)
-    r = Run(cfg, run_dir, objective, space, progress or _printer(quiet))
-    r.meta = meta
-    ck_path = run_dir / CHECKPOINT
-    ck = None
-    if ck_path.exists():
-        try:
-            ck = pickle.loads(ck_path.read_bytes())
-        except Exception as exc:
-            raise RunError(f"{ck_path}: unreadable checkpoint ({exc})") from None
-    else:  # killed before the first generation completed: start over in place
-        (run_dir / "history.csv").unlink(missing_ok=True)
-    if r.progress:
-        done = ck["n_evals"] if ck else 0
-        r.progress(f"resuming {run_dir} after {done} evaluations")
-    return r.execute(ck)
+    """Continue an interrupted (or killed) run: replay its recorded generations, then go on.
+
+    A finished run, a run in use by another process, a changed ``config.yaml`` and a legacy pickled
+    checkpoint are refused with :class:`RunError`. A directory killed before ``meta.json`` existed is
+    started from the beginning with its ``config.yaml``.
+    """
+    rd = RunDir(run_dir)
+    printer = progress or _printer(quiet)
+    if not rd.path.is_dir():
+        raise RunError(f"{rd.path}: not a run directory (no such directory)")
+    with rd.lock():
+        meta: Meta | None = None
+        if not rd.is_run() and not rd.file("config.yaml").is_file():
+            raise RunError(f"{rd.path}: no meta.json and no config.yaml (killed before the run started, or not a "
+                           f"run directory); start it again with `tuner run CONFIG --run-dir {rd.path}`")
+        if rd.is_run() or rd.file("checkpoint.json").exists() or rd.file("history.csv").exists():
+            meta = rd.meta()  # a run that got that far had a meta.json: its loss is an error, not a restart
+        if meta is not None and meta.status == "finished":
+            raise RunError(f"{rd.path}: already finished")
+        ck = rd.checkpoint()
+        raw = rd.check_config(meta) if meta is not None else rd.config()
+        source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
+        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
+        objective, space = _build(cfg)
+        n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
+        removed = rd.remove_tmp()
+        if printer and removed:
+            printer(f"removed {len(removed)} temporary file(s) left by the kill: {', '.join(sorted(removed))}")
+        if meta is None:
+            if printer:
+                printer(f"{rd.path}: no meta.json (killed before the run started): starting it from the beginning")
+            meta = _new_meta(cfg, config_hash(rd.config()), n_jobs, notes)
+        meta = meta.replace(n_jobs=n_jobs, notes=tuple(dict.fromkeys((*meta.notes, *notes))))
+        if ck is None:  # killed before the first generation completed: start over in place
+            for name in ("history.csv", "best.yaml"):
+                rd.file(name).unlink(missing_ok=True)
+            rows: list[dict[str, str]] = []
+        else:
+            rows = rd.history(space.names).truncate(ck.n_evals)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
+        if printer:
+            printer(f"resuming {rd.path} after {len(rows)} evaluations")
+        return r.execute(rows)

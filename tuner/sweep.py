@@ -34,6 +34,7 @@ from typing import Any
 import yaml
 
 from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
+from tuner.rundir import RunDir
 
 __all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file"]
 
@@ -137,16 +138,12 @@ def load_sweep(path: str | Path) -> dict[str, Any]:
 
 
 def _job_status(run_dir: Path) -> str:
-    meta = run_dir / "meta.json"
-    if not meta.exists():
-        return "new"
-    return json.loads(meta.read_text()).get("status", "new")
+    rd = RunDir(run_dir)
+    return rd.meta().status if rd.is_run() else "new"
 
 
 def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> dict[str, Any]:
     """Run, resume or skip one job (module-level so a process pool can call it)."""
-    import shutil
-
     from tuner.run import resume, run
 
     run_dir = Path(run_dir)
@@ -163,11 +160,9 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> di
     printer = None if quiet else (lambda m: print(f"[{label}] {m}", file=sys.stderr, flush=True))
     if status == "finished":
         return {"id": job["id"], "status": "finished", "action": "skipped"}
-    if status in ("running", "interrupted") and (run_dir / "checkpoint.pkl").exists():
-        res = resume(run_dir, progress=printer, quiet=quiet)
+    if status != "new" or (run_dir / "config.yaml").exists():  # killed or interrupted: resume holds the lock,
+        res = resume(run_dir, progress=printer, quiet=quiet)      # replays the history and goes on
         return {"id": job["id"], "status": res.status, "action": "resumed"}
-    if run_dir.exists():  # created but killed before its first checkpoint
-        shutil.rmtree(run_dir)
     cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
     stamp.write_text(resolved)
     res = run(cfg, run_dir=run_dir, progress=printer, quiet=quiet)
@@ -225,12 +220,12 @@ def collect(sweep_dir: Path) -> Any:
         d = sweep_dir / "jobs" / job["id"]
         row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
                                "status": _job_status(d)}
-        best_p = d / "best.yaml"
-        if best_p.exists():
-            best = yaml.safe_load(best_p.read_text()) or {}
-            meta = json.loads((d / "meta.json").read_text())
-            row["best_fitness"] = best.get("fitness")
-            ev = best.get("evaluation") or {}
+        rd = RunDir(d)
+        if rd.has_best():
+            best = rd.best()
+            meta = rd.meta()
+            row["best_fitness"] = best.fitness
+            ev = best.evaluation
             if ev.get("train_fitness") is not None:
                 row["train_fitness"] = ev["train_fitness"]
             if ev.get("test_fitness") is not None:
@@ -243,9 +238,9 @@ def collect(sweep_dir: Path) -> Any:
                         vals = [m[k] for m in recs.values() if isinstance(m.get(k), (int, float))]
                         if vals:
                             row[f"{split}.{k}"] = sum(vals) / len(vals)
-            row["n_evals"] = meta.get("n_evals")
-            row["wall_s"] = round(float(meta.get("timing", {}).get("wall_s", 0.0)), 1)
-            row.update(_flat("param.", best.get("params", {})))
+            row["n_evals"] = meta.n_evals
+            row["wall_s"] = round(meta.timing.wall_s, 1)
+            row.update(_flat("param.", best.params))
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -304,11 +299,12 @@ def write_sweep_report(sweep_dir: str | Path) -> Path:
     hashes = []
     for job in sw["jobs"]:
         d = jobs_dir / job["id"]
-        if (d / "config.yaml").exists():
-            hashes.append((job["id"], _hash(d / "config.yaml"), job["seed"]))
-            if not versions and (d / "meta.json").exists():
-                meta = json.loads((d / "meta.json").read_text())
-                versions = {**meta.get("versions", {}), "git_commit": meta.get("git_commit", "")}
+        rd = RunDir(d)
+        if rd.is_run():
+            meta = rd.meta()
+            hashes.append((job["id"], meta.config_hash[:16] or _hash(d / "config.yaml"), job["seed"]))
+            if not versions:
+                versions = {**meta.versions, "git_commit": meta.git_commit}
     command = (sweep_dir / "command.txt").read_text().strip() if (sweep_dir / "command.txt").exists() else ""
     fit_cols = ("train_fitness", "test_fitness") if "train_fitness.median" in flat.columns else ("best_fitness",)
     show_cols = [c for c in ["rank", "runs"] if c in flat.columns] + \
@@ -366,17 +362,16 @@ def list_runs(runs_dir: Path) -> str:
     rows = []
     now = _dt.datetime.now(_dt.UTC)
     for meta_p in sorted(Path(runs_dir).rglob("meta.json")):
-        d = meta_p.parent
-        meta = json.loads(meta_p.read_text())
-        best = yaml.safe_load((d / "best.yaml").read_text()) if (d / "best.yaml").exists() else {}
-        created = meta.get("created")
+        rd = RunDir(meta_p.parent)
+        d, meta = rd.path, rd.meta()  # RunError naming the file if one is corrupt
+        best = rd.best() if rd.has_best() else None
+        created = meta.created
         age = ""
         if created:
             dt = now - _dt.datetime.strptime(created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
             age = str(dt).split(".")[0]
-        rows.append({"run": str(d.relative_to(runs_dir)), "status": meta.get("status"),
-                     "optimizer": meta.get("optimizer"), "evals": meta.get("n_evals"),
-                     "best_fitness": (best or {}).get("fitness"), "age": age})
+        rows.append({"run": str(d.relative_to(runs_dir)), "status": meta.status, "optimizer": meta.optimizer,
+                     "evals": meta.n_evals, "best_fitness": best.fitness if best else None, "age": age})
     if not rows:
         return f"no runs under {runs_dir}"
     return pd.DataFrame(rows).to_string(index=False)

@@ -204,6 +204,7 @@ def per_trial_optimum(obj: Any, best: dict[str, Any], which: str = "test", budge
     Shows how much a trial-agnostic parameter set loses against per-trial tuning (BROAD's TAGP vs
     per-trial minimum).
     """
+    from tuner.loop import minimize
     from tuner.optimizers import PSO
 
     space = obj.default_space()
@@ -217,12 +218,10 @@ def per_trial_optimum(obj: Any, best: dict[str, Any], which: str = "test", budge
         pop = max(6, min(12, budget // 10))
         opt = PSO(space.dim, np.random.default_rng(i), population=pop, generations=max(1, budget // pop),
                   inertia="linear", c1=1.5, c2=1.5, x0=space.encode({k: best[k] for k in space.free_names}))
-        while not opt.done:
-            u = opt.ask()
-            f = np.array([single(space.decode(row)).fitness for row in u])
-            opt.tell(u, f)
-        out[rec.name] = {"agnostic": float(agnostic), "own_optimum": float(min(opt.best_f, agnostic)),
-                         "own_params": {k: v for k, v in space.decode(opt.best_x).items() if k in space.free_names}}
+        res = minimize(single, space, opt)  # serial, in this process
+        own = res.best.params if res.best else {k: best[k] for k in space.free_names}
+        out[rec.name] = {"agnostic": float(agnostic), "own_optimum": float(min(res.fitness, agnostic)),
+                         "own_params": {k: v for k, v in own.items() if k in space.free_names}}
     return out
 
 

@@ -1,7 +1,7 @@
 """Runs end to end: reproducibility across backends, kill and resume, failures recorded, refinement."""
 
+import json
 import os
-import pickle
 import signal
 import subprocess
 import sys
@@ -69,7 +69,7 @@ def test_run_directory_contents(tmp_path):
     res = run(job(tmp_path), quiet=True)
     d = res.run_dir
     assert d.parent == tmp_path / "runs" and d.name.split("-")[1] == "t"
-    for f in ("config.yaml", "meta.json", "history.csv", "best.yaml", "checkpoint.pkl", "report.md",
+    for f in ("config.yaml", "meta.json", "history.csv", "best.yaml", "checkpoint.json", "report.md",
               "figures/convergence.png"):
         assert (d / f).exists(), f
     cfg = yaml.safe_load((d / "config.yaml").read_text())
@@ -115,19 +115,19 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
     run_dir = tmp_path / "killed"
     proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    ck = run_dir / "checkpoint.pkl"
+    ck = run_dir / "checkpoint.json"
     deadline = time.time() + 60
     while time.time() < deadline:
         if ck.exists():
             try:
-                if pickle.loads(ck.read_bytes())["optimizer"]["generation"] >= 3:
+                if json.loads(ck.read_text())["generations"] >= 3:
                     break
             except Exception:
                 pass
         time.sleep(0.02)
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
-    done = pickle.loads(ck.read_bytes())["n_evals"]
+    done = json.loads(ck.read_text())["n_evals"]
     assert 0 < done < 72, "the run must have been killed part-way"
     meta = yaml.safe_load((run_dir / "meta.json").read_text())
     assert meta["status"] == "running"  # killed: no chance to say otherwise
@@ -145,7 +145,7 @@ def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     run_dir = tmp_path / "int"
     proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    ck = run_dir / "checkpoint.pkl"
+    ck = run_dir / "checkpoint.json"
     deadline = time.time() + 60
     while not ck.exists() and time.time() < deadline:
         time.sleep(0.02)

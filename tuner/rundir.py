@@ -1,0 +1,510 @@
+"""The one owner of a run directory: its files, their formats, atomic writes and the lock.
+
+Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
+
+``config.yaml``       the resolved config, defaults filled in, as run
+``.config.json``      the same config as canonical JSON (to name what changed if config.yaml is edited)
+``meta.json``         status (running/finished/interrupted/failed), seed, config hash, times, versions,
+                      git commit, host, CPU count, backend, evaluation counts, stop reason, notes
+``history.csv``       one row per evaluation: eval, stage, generation, index, every parameter,
+                      fitness, status, error, seconds, metrics (the record of truth)
+``best.yaml``         best parameters, fitness, metrics and where they were found, derived from the
+                      evaluations of ``history.csv`` (rewritten every generation, on resume and at the end)
+``checkpoint.json``   how many rows of ``history.csv`` are complete generations (data only, no code)
+``.lock``             holds an exclusive ``flock`` while a process runs or resumes the run
+``report.md``, ``report.html``, ``figures/``  written when the run finishes
+
+Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data.
+(A config with ``objective.kind: python`` imports the module it names by design: trust the config.)
+
+Test hook: ``TUNER_FAULT_KILL_AT_WRITE=k`` (optionally ``k:after``) makes the process ``os._exit(137)``
+at its k-th write through this module: by default just before the write takes effect (an atomic write
+has its temporary file written but not renamed; a history append has written half of its bytes), with
+``:after`` just after it. It exists for the fault-injection tests and does nothing when unset.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import errno
+import hashlib
+import io
+import json
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+__all__ = ["RunError", "RunDir", "Meta", "Timing", "Best", "Checkpoint", "History", "atomic_write",
+           "config_hash", "first_difference", "fmt_cell", "parse_cell", "FAULT_ENV"]
+
+FAULT_ENV = "TUNER_FAULT_KILL_AT_WRITE"
+FIXED_COLUMNS = ["eval", "stage", "generation", "index"]
+RESULT_COLUMNS = ["fitness", "status", "error", "seconds"]
+STATUSES = ("created", "running", "finished", "interrupted", "failed")
+LEGACY_CHECKPOINT = "checkpoint.pkl"
+
+
+class RunError(RuntimeError):
+    """A run directory that cannot be used as asked (missing, finished, corrupt, in use)."""
+
+
+# --- writing -----------------------------------------------------------------------------------
+_n_writes = 0
+
+
+def _fault(phase: str) -> None:
+    """The fault-injection hook (see the module docstring); ``phase`` is "before" or "after"."""
+    spec = os.environ.get(FAULT_ENV)
+    if not spec:
+        return
+    k, _, when = spec.partition(":")
+    if _n_writes == int(k) and phase == (when or "before"):
+        os._exit(137)
+
+
+def atomic_write(path: Path, data: bytes | str) -> None:
+    """Write to a temporary file, fsync, rename: readers see the old or the new file, never half."""
+    global _n_writes
+    _n_writes += 1
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    mode = "wb" if isinstance(data, bytes) else "w"
+    with open(tmp, mode) as fh:
+        fh.write(data)
+        fh.flush()
+        os.fsync(fh.fileno())
+    _fault("before")
+    os.replace(tmp, path)
+    try:
+        dfd = os.open(path.parent, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    except OSError:  # pragma: no cover - some filesystems refuse directory fsync
+        pass
+    _fault("after")
+
+
+def _append(path: Path, text: str) -> None:
+    """Append and fsync (a kill can leave a torn last line, which the checkpoint's row count excludes)."""
+    global _n_writes
+    _n_writes += 1
+    with open(path, "a", newline="") as fh:
+        if os.environ.get(FAULT_ENV):
+            fh.write(text[: len(text) // 2])
+            fh.flush()
+            os.fsync(fh.fileno())
+            _fault("before")
+            fh.write(text[len(text) // 2:])
+        else:
+            fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    _fault("after")
+
+
+def plain(v: Any) -> Any:
+    """Numpy scalars/arrays, tuples and paths turned into YAML/JSON-native values."""
+    if isinstance(v, dict):
+        return {str(k): plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [plain(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, Path):
+        return str(v)
+    return v
+
+
+def dump_yaml(d: Any) -> str:
+    return yaml.safe_dump(plain(d), sort_keys=False, default_flow_style=False, width=100)
+
+
+def fmt_cell(v: Any) -> Any:
+    """How a value is written into ``history.csv`` (floats as ``repr``, so they read back exactly)."""
+    if isinstance(v, (bool, np.bool_)):
+        return str(bool(v))
+    if isinstance(v, (float, np.floating)):
+        return repr(float(v))
+    if isinstance(v, (list, tuple, dict)):
+        return json.dumps(plain(v))
+    return v
+
+
+def parse_cell(s: str) -> Any:
+    """Inverse of :func:`fmt_cell` for metric cells: int, float, JSON list/dict, else the string."""
+    for conv in (int, float):
+        try:
+            return conv(s)
+        except ValueError:
+            pass
+    if s[:1] in "[{":
+        try:
+            return json.loads(s)
+        except ValueError:
+            pass
+    return s
+
+
+def config_hash(doc: Any) -> str:
+    """sha256 of the canonical JSON of a resolved config."""
+    return hashlib.sha256(json.dumps(plain(doc), sort_keys=True, default=str).encode()).hexdigest()
+
+
+def first_difference(a: Any, b: Any, prefix: str = "") -> str:
+    """The first dotted key where two config documents differ ('' when they are equal)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b), key=str):
+            if k not in a or k not in b:
+                return f"{prefix}{k}"
+            d = first_difference(a[k], b[k], f"{prefix}{k}.")
+            if d:
+                return d
+        return ""
+    return "" if a == b else prefix.rstrip(".") or "(top level)"
+
+
+# --- typed records -----------------------------------------------------------------------------
+def _req(doc: dict[str, Any], key: str, types: type | tuple[type, ...], where: Path) -> Any:
+    if key not in doc:
+        raise RunError(f"{where}: {key}: missing")
+    v = doc[key]
+    allowed = types if isinstance(types, tuple) else (types,)
+    if not isinstance(v, allowed) or (isinstance(v, bool) and bool not in allowed):  # True is not a count
+        raise RunError(f"{where}: {key}: expected {getattr(types, '__name__', types)}, got {v!r}")
+    return v
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Wall time of all sessions, summed objective time, number of sessions (run + resumes)."""
+
+    wall_s: float = 0.0
+    objective_s: float = 0.0
+    sessions: int = 0
+
+
+@dataclass(frozen=True)
+class Meta:
+    """``meta.json``: what ran, where, how far it got. Unknown keys are kept in ``extra``."""
+
+    status: str
+    name: str
+    seed: int
+    created: str
+    config_source: str = ""
+    config_hash: str = ""
+    versions: dict[str, str] = field(default_factory=dict)
+    git_commit: str = ""
+    host: str = ""
+    cpu_count: int | None = None
+    backend: str = "serial"
+    n_jobs: int = 1
+    n_jobs_requested: int | None = None
+    backend_detail: str = ""
+    optimizer: str = ""
+    n_evals: int = 0
+    n_failed: int = 0
+    generations: int = 0
+    stop_reason: str = ""
+    timing: Timing = field(default_factory=Timing)
+    started: str = ""
+    finished: str = ""
+    interrupted: str = ""
+    notes: tuple[str, ...] = ()
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def replace(self, **kw: Any) -> Meta:
+        return dataclasses.replace(self, **kw)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "extra"}
+        d["timing"] = dataclasses.asdict(self.timing)
+        d["notes"] = list(self.notes)
+        return {**self.extra, **plain(d)}
+
+    @classmethod
+    def from_dict(cls, doc: Any, where: Path) -> Meta:
+        if not isinstance(doc, dict):
+            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
+        status = _req(doc, "status", str, where)
+        if status not in STATUSES:
+            raise RunError(f"{where}: status: expected one of {list(STATUSES)}, got {status!r}")
+        _req(doc, "name", str, where)
+        _req(doc, "seed", int, where)
+        for key in ("n_evals", "n_failed", "generations"):
+            if key in doc:
+                _req(doc, key, int, where)
+        t = doc.get("timing") or {}
+        if not isinstance(t, dict):
+            raise RunError(f"{where}: timing: expected an object, got {t!r}")
+        try:
+            timing = Timing(float(t.get("wall_s", 0.0)), float(t.get("objective_s", 0.0)), int(t.get("sessions", 0)))
+        except (TypeError, ValueError) as exc:
+            raise RunError(f"{where}: timing: {exc}") from None
+        names = {f.name for f in dataclasses.fields(cls)}
+        kw = {k: v for k, v in doc.items() if k in names and k not in ("timing", "extra", "notes")}
+        kw.setdefault("created", "")
+        return cls(**kw, timing=timing, notes=tuple(doc.get("notes") or ()),
+                   extra={k: v for k, v in doc.items() if k not in names})
+
+
+@dataclass(frozen=True)
+class Best:
+    """``best.yaml``: the best successful evaluation of the history and where it was found."""
+
+    params: dict[str, Any]
+    fitness: float
+    metrics: dict[str, Any]
+    stage: int
+    generation: int
+    eval: int
+    run: str = ""
+    evaluation: dict[str, Any] = field(default_factory=dict)
+
+    def to_doc(self) -> dict[str, Any]:
+        doc = {"params": self.params, "fitness": self.fitness, "metrics": self.metrics,
+               "found": {"stage": self.stage, "generation": self.generation, "eval": self.eval}, "run": self.run}
+        if self.evaluation:
+            doc["evaluation"] = self.evaluation
+        return plain(doc)
+
+    @classmethod
+    def from_doc(cls, doc: Any, where: Path) -> Best:
+        if not isinstance(doc, dict):
+            raise RunError(f"{where}: expected a mapping, got {type(doc).__name__}")
+        params = _req(doc, "params", dict, where)
+        fitness = _req(doc, "fitness", (int, float), where)
+        found = doc.get("found") or {}
+        if not isinstance(found, dict):
+            raise RunError(f"{where}: found: expected a mapping, got {found!r}")
+        return cls(dict(params), float(fitness), dict(doc.get("metrics") or {}), int(found.get("stage", 0)),
+                   int(found.get("generation", -1)), int(found.get("eval", -1)), str(doc.get("run", "")),
+                   dict(doc.get("evaluation") or {}))
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """``checkpoint.json``: the first ``n_evals`` rows of ``history.csv`` are complete generations.
+
+    Resuming recreates the optimiser from the run seed and replays ``tell`` with the recorded fitness
+    of those rows: the optimiser state (pycma's included) is rebuilt exactly, no object is stored, and
+    a history edited by hand is detected (the replayed optimiser asks other points than recorded).
+    """
+
+    n_evals: int
+    stage: int
+    generations: int
+    version: int = 2
+
+    @classmethod
+    def from_doc(cls, doc: Any, where: Path) -> Checkpoint:
+        if not isinstance(doc, dict):
+            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
+        if doc.get("version") != 2:
+            raise RunError(f"{where}: version: expected 2, got {doc.get('version')!r}")
+        vals = [_req(doc, k, int, where) for k in ("n_evals", "stage", "generations")]
+        if min(vals) < 0:
+            raise RunError(f"{where}: negative counts {vals}")
+        return cls(*vals)
+
+
+# --- history -----------------------------------------------------------------------------------
+class History:
+    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear."""
+
+    def __init__(self, path: Path, param_names: list[str]):
+        self.path = Path(path)
+        self.param_names = list(param_names)
+        self.metric_names: list[str] = []
+        if self.path.exists():
+            with open(self.path, newline="") as fh:
+                header = next(csv.reader(fh), None)
+            fixed = FIXED_COLUMNS + self.param_names + RESULT_COLUMNS
+            if header is None or header[:len(fixed)] != fixed:
+                raise RunError(f"{self.path}: header {header} does not start with the expected columns {fixed}")
+            self.metric_names = header[len(fixed):]
+        else:
+            self._rewrite([])
+
+    @property
+    def columns(self) -> list[str]:
+        return FIXED_COLUMNS + self.param_names + RESULT_COLUMNS + self.metric_names
+
+    def _rewrite(self, rows: list[dict[str, Any]]) -> None:
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow(r)
+        atomic_write(self.path, buf.getvalue())
+
+    def read_rows(self) -> list[dict[str, str]]:
+        with open(self.path, newline="") as fh:
+            return list(csv.DictReader(fh))
+
+    def truncate(self, n_rows: int) -> list[dict[str, str]]:
+        """Keep the first ``n_rows`` evaluations (what the checkpoint covers) and return them."""
+        rows = self.read_rows()
+        if len(rows) < n_rows:
+            raise RunError(f"{self.path}: {len(rows)} rows, but checkpoint.json says {n_rows} were written")
+        if len(rows) != n_rows:
+            self._rewrite(rows[:n_rows])
+        return rows[:n_rows]
+
+    def append(self, rows: list[dict[str, Any]]) -> None:
+        new = sorted({k for r in rows for k in r} - set(self.columns))
+        if new:
+            old = self.read_rows()
+            self.metric_names += new
+            self._rewrite(old)
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
+        for r in rows:
+            w.writerow(r)
+        _append(self.path, buf.getvalue())
+
+
+# --- the directory -----------------------------------------------------------------------------
+class RunDir:
+    """Every read and write of one run directory goes through here."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+
+    def __repr__(self) -> str:
+        return f"RunDir({str(self.path)!r})"
+
+    def file(self, name: str) -> Path:
+        return self.path / name
+
+    # --- reading ------------------------------------------------------------------------------
+    def _text(self, name: str, what: str) -> str:
+        p = self.path / name
+        if not self.path.is_dir():
+            raise RunError(f"{self.path}: not a run directory (no such directory)")
+        if not p.is_file():
+            raise RunError(f"{p}: missing ({what})")
+        try:
+            return p.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise RunError(f"{p}: unreadable: {exc}") from None
+
+    def _json(self, name: str, what: str) -> Any:
+        try:
+            return json.loads(self._text(name, what))
+        except json.JSONDecodeError as exc:
+            raise RunError(f"{self.path / name}: not valid JSON: {exc}") from None
+
+    def _yaml(self, name: str, what: str) -> Any:
+        try:
+            return yaml.safe_load(self._text(name, what))
+        except yaml.YAMLError as exc:
+            msg = str(exc).replace("\n", " ")
+            raise RunError(f"{self.path / name}: not valid YAML: {msg}") from None
+
+    def is_run(self) -> bool:
+        return (self.path / "meta.json").is_file()
+
+    def meta(self) -> Meta:
+        return Meta.from_dict(self._json("meta.json", "not a run directory, or killed before it started"),
+                              self.path / "meta.json")
+
+    def config(self) -> dict[str, Any]:
+        """The resolved config as written at creation (a mapping)."""
+        doc = self._yaml("config.yaml", "the run's resolved config")
+        if not isinstance(doc, dict):
+            raise RunError(f"{self.path / 'config.yaml'}: expected a mapping, got {type(doc).__name__}")
+        return doc
+
+    def config_snapshot(self) -> dict[str, Any] | None:
+        p = self.path / ".config.json"
+        try:
+            return json.loads(p.read_text()) if p.is_file() else None
+        except (OSError, ValueError):
+            return None
+
+    def has_best(self) -> bool:
+        return (self.path / "best.yaml").is_file()
+
+    def best(self) -> Best:
+        return Best.from_doc(self._yaml("best.yaml", "nothing evaluated yet?"), self.path / "best.yaml")
+
+    def checkpoint(self) -> Checkpoint | None:
+        """The checkpoint, ``None`` if the run never completed a generation; a legacy pickle is refused."""
+        if (self.path / LEGACY_CHECKPOINT).exists():
+            raise RunError(f"{self.path / LEGACY_CHECKPOINT}: a pickled checkpoint from an older tuner; pickles "
+                           "can run arbitrary code, so it is never loaded and this run cannot be resumed "
+                           "(its history.csv and best.yaml stay readable; start the job again)")
+        if not (self.path / "checkpoint.json").exists():
+            return None
+        return Checkpoint.from_doc(self._json("checkpoint.json", "checkpoint"), self.path / "checkpoint.json")
+
+    def history(self, param_names: list[str]) -> History:
+        return History(self.path / "history.csv", param_names)
+
+    # --- writing ------------------------------------------------------------------------------
+    def write_config(self, resolved: dict[str, Any]) -> str:
+        """Write ``config.yaml`` and its canonical snapshot; return the config hash."""
+        atomic_write(self.path / "config.yaml", dump_yaml(resolved))
+        atomic_write(self.path / ".config.json", json.dumps(plain(resolved), sort_keys=True, default=str))
+        return config_hash(resolved)
+
+    def write_meta(self, meta: Meta) -> None:
+        atomic_write(self.path / "meta.json", json.dumps(meta.to_dict(), indent=1))
+
+    def write_best(self, best: Best) -> None:
+        atomic_write(self.path / "best.yaml", dump_yaml(best.to_doc()))
+
+    def write_checkpoint(self, ck: Checkpoint) -> None:
+        atomic_write(self.path / "checkpoint.json", json.dumps(dataclasses.asdict(ck)))
+
+    def remove_tmp(self) -> list[str]:
+        """Delete temporary files a killed writer left behind; return their names."""
+        gone = []
+        for p in self.path.glob(".*.tmp*"):
+            p.unlink(missing_ok=True)
+            gone.append(p.name)
+        return gone
+
+    def check_config(self, meta: Meta) -> dict[str, Any]:
+        """The config, refused if it changed since the run was created (hash in meta.json)."""
+        doc = self.config()
+        if meta.config_hash and config_hash(doc) != meta.config_hash:
+            snap = self.config_snapshot()
+            where = first_difference(snap, json.loads(json.dumps(plain(doc), default=str))) if snap else ""
+            what = f"first difference at `{where}`" if where else "hash differs from meta.json"
+            raise RunError(f"{self.path / 'config.yaml'}: changed since the run started ({what}); a run resumes "
+                           "only with the config it started with: restore it, or start a new run")
+        return doc
+
+    @contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold an exclusive ``flock`` on ``.lock`` (released when the process ends, however it ends)."""
+        import fcntl
+
+        self.path.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    raise
+                pid = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+                raise RunError(f"{self.path}: in use by pid {pid}") from None
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            yield
+        finally:
+            os.close(fd)
