@@ -92,7 +92,7 @@ def bound_warnings(params: Mapping[str, Any], space: Space, tol: float = BOUND_T
             continue
         u = _unit(p, v)
         side, bound, dist = ("low", p.low, u) if u <= 0.5 else ("high", p.high, 1.0 - u)
-        if dist <= tol:
+        if dist <= tol + 1e-12:  # 2 % means 2 % despite rounding (1 - 0.98 > 0.02 in binary)
             where = "log10 range" if p.scale == "log" else "range"
             out.append(ReportWarning(
                 "bound", f"{p.name} = {v:.4g} is {max(dist, 0.0):.1%} of its {where} from the {side} bound "

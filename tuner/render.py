@@ -55,10 +55,11 @@ pre code { background: none; padding: 0; }
 .table-scroll { max-width: 100%; overflow-x: auto; margin: 1em 0; border: 1px solid var(--line);
                 border-radius: 6px; }
 table { border-collapse: collapse; font-size: .85em; font-variant-numeric: tabular-nums; }
-th, td { border-bottom: 1px solid var(--line); padding: 4px 10px; text-align: right; white-space: nowrap;
+th, td { border-bottom: 1px solid var(--line); padding: 4px 10px; text-align: right; vertical-align: top;
          overflow-wrap: normal; }
+th { white-space: nowrap; }
 th { background: var(--head); position: sticky; top: 0; }
-td:first-child, th:first-child { text-align: left; }
+td:first-child, th:first-child { text-align: left; white-space: nowrap; }
 tbody tr:hover { background: #f0f6ff; }
 img { max-width: 100%; height: auto; display: block; margin: .8em auto; }
 .missing-image { color: var(--muted); font-style: italic; }
@@ -144,7 +145,7 @@ def fmt_num(v: Any, digits: int = 6) -> str:
 def md_table(rows: list[list[Any]], head: list[Any], digits: int = 4) -> str:
     """A Markdown table; every cell is escaped, numbers get ``digits`` significant digits.
 
-    Multi-line strings do not belong in a table: they are shown up to their first line break with an
+    Columns of numbers are right-aligned, others left-aligned. Multi-line strings do not belong in a table: they are shown up to their first line break with an
     ellipsis (reports put them in code blocks outside tables).
     """
     def cell(v: Any) -> str:
@@ -153,9 +154,13 @@ def md_table(rows: list[list[Any]], head: list[Any], digits: int = 4) -> str:
             return md_escape(lines[0] + (" ..." if len(lines) > 1 else ""))
         return md_escape(fmt_num(v, digits))
 
+    def numeric(v: Any) -> bool:
+        return v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
     if not rows:
         return "(no rows)"
-    out = ["| " + " | ".join(cell(h) for h in head) + " |", "|" + "---|" * len(head)]
+    align = ["---:" if all(numeric(r[j]) for r in rows) else ":---" for j in range(len(head))]
+    out = ["| " + " | ".join(cell(h) for h in head) + " |", "|" + "|".join(align) + "|"]
     out += ["| " + " | ".join(cell(v) for v in r) + " |" for r in rows]
     return "\n".join(out)
 

@@ -36,10 +36,14 @@ from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 
 __all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary", "md_table", "pivot_metrics",
-           "sweep_figures", "write_html", "convergence_table", "LIVE_REFRESH_S"]
+           "sweep_figures", "write_html", "convergence_table", "write_live_report", "sweep_warnings_md",
+           "LIVE_REFRESH_S"]
 
 #: seconds between reloads of a running run's report page
 LIVE_REFRESH_S = 10.0
+#: least seconds between two live reports of one run (and before the first): short runs write none
+LIVE_MIN_INTERVAL_S = 5.0
+_live_last: dict[str, float] = {}
 _OWN_FIGURES = ("convergence.png", "fitness_vs_params.png", "parallel_coordinates.png")
 
 
@@ -201,6 +205,8 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     cfg = cfg or {}
     space = _run_space(run_dir)
     running = live and s["status"] == "running"
+    if not live:
+        _live_last.pop(str(run_dir.resolve()), None)
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     title = f"Run {s['run']}"
     md = [f"# {md_escape(title)}", ""]
@@ -232,6 +238,44 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     write_text_atomic(path, text)
     write_html(run_dir / "report.html", text, run_dir, title=title, refresh_s=refresh_s if running else None)
     return path
+
+
+def write_live_report(run_dir: Path, meta: dict[str, Any], final: bool = False, min_interval_s: float | None = None,
+                      refresh_s: float = LIVE_REFRESH_S) -> Path | None:
+    """The live view of a running run, called after every generation.
+
+    Rewrites ``report.md``/``report.html`` (the page reloads every ``refresh_s`` s) when ``min_interval_s``
+    (default :data:`LIVE_MIN_INTERVAL_S`) have passed since the previous live report, or since the first
+    call, so short runs write none. ``final=True`` (an interrupted run) rewrites a report that does not
+    reload, if a live one was written. Returns the report path, or ``None`` when nothing was written.
+    """
+    import time
+
+    key = str(Path(run_dir).resolve())
+    now = time.monotonic()
+    if final:
+        if _live_last.pop(key, None) is None or not (Path(run_dir) / "report.html").exists():
+            return None
+        return write_run_report(run_dir, meta=meta, live=False)
+    interval = LIVE_MIN_INTERVAL_S if min_interval_s is None else min_interval_s
+    last = _live_last.setdefault(key, now)
+    if now - last < interval:
+        return None
+    path = write_run_report(run_dir, meta=meta, live=True, refresh_s=refresh_s)
+    _live_last[key] = time.monotonic()
+    return path
+
+
+def sweep_warnings_md(jobs_dir: Path, job_ids: list[str]) -> list[str]:
+    """The ``## Warnings`` section of a sweep report: bound and failure warnings of every job."""
+    from tuner.bounds import run_warnings
+
+    rows = [[job, w.kind, w.message] for job in job_ids if (Path(jobs_dir) / job / "meta.json").exists()
+            for w in run_warnings(Path(jobs_dir) / job)]
+    if not rows:
+        return ["## Warnings", "", "None: no best parameter within 2 % of a search bound, no failed evaluation.", ""]
+    return ["## Warnings", "", "Parameters within 2 % of a search bound (log10 range for log parameters) and "
+            "failed evaluations, per job.", "", _rows_table(rows, ["job", "kind", "warning"]), ""]
 
 
 def _results_md(s: dict[str, Any]) -> list[str]:

@@ -364,6 +364,7 @@ class Run:
                     self._write_meta()
                     if best["params"] is not None:
                         self._write_best(best, space)
+                    self._live_report()
                     self._progress(stage, stages, optimizer, best, len(records), time.perf_counter() - t0,
                                    n_failed)
                 if stage + 1 >= stages or best["params"] is None:
@@ -389,6 +390,7 @@ class Run:
         if interrupted:
             self.meta.update(status="interrupted", interrupted=_now())
             self._write_meta()
+            self._live_report(final=True)
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", best, n_evals, len(conv), "interrupted")
@@ -458,11 +460,21 @@ class Run:
             doc["evaluation"] = _plain(extra)
             atomic_write(self.dir / "best.yaml", _dump_yaml(doc))
         try:
-            write_run_report(self.dir)
+            write_run_report(self.dir, meta=self.meta)
         except Exception as exc:  # pragma: no cover - figures are a bonus, the results are on disk
             if self.progress:
                 self.progress(f"warning: report not written: {type(exc).__name__}: {exc}")
         return extra
+
+    def _live_report(self, final: bool = False) -> None:
+        """report.html of the running run (throttled), or a last non-reloading one when ``final``."""
+        from tuner.report import write_live_report
+
+        try:
+            write_live_report(self.dir, self.meta, final=final)
+        except Exception as exc:  # pragma: no cover - a live view must not stop the run
+            if self.progress:
+                self.progress(f"warning: live report not written: {type(exc).__name__}: {exc}")
 
     def _result(self, status, best, n_evals, gens, reason, extra=None) -> RunResult:
         return RunResult(self.dir, status, dict(best["params"] or {}), float(best["fitness"]),
