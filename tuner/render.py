@@ -145,8 +145,9 @@ def fmt_num(v: Any, digits: int = 6) -> str:
 def md_table(rows: list[list[Any]], head: list[Any], digits: int = 4) -> str:
     """A Markdown table; every cell is escaped, numbers get ``digits`` significant digits.
 
-    Columns of numbers are right-aligned, others left-aligned. Multi-line strings do not belong in a table: they are shown up to their first line break with an
-    ellipsis (reports put them in code blocks outside tables).
+    Columns of numbers are right-aligned, others left-aligned. Multi-line strings do not belong in a
+    table: they are shown up to their first line break with an ellipsis (reports put them in code
+    blocks outside tables).
     """
     def cell(v: Any) -> str:
         if isinstance(v, str):
