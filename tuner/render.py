@@ -150,6 +150,8 @@ def md_table(rows: list[list[Any]], head: list[Any], digits: int = 4) -> str:
     blocks outside tables).
     """
     def cell(v: Any) -> str:
+        if v is None:
+            return ""
         if isinstance(v, str):
             lines = v.splitlines() or [""]
             return md_escape(lines[0] + (" ..." if len(lines) > 1 else ""))

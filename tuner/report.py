@@ -79,15 +79,15 @@ def md_table(df: pd.DataFrame, floatfmt: str = ".6g") -> str:
 
 
 # --- the recording x metric table ---------------------------------------------------------------
-_REC_SLASH = re.compile(r"^rec/(?P<rec>.+)/(?P<metric>[^/]+)$")
+_REC_SLASH = re.compile(r"^rec/(?P<rec>[^/]+)/(?P<metric>.+)$")
 
 
 def pivot_metrics(metrics: dict[str, Any]) -> pd.DataFrame:
     """Flattened metric keys as a table: rows = recordings, columns = metrics.
 
-    Keys ``rec/<recording>/<metric>`` and ``<recording>.<metric>`` (what the filter objective writes
-    for several recordings) are split; keys without a recording (one recording, or a closed-loop
-    objective) form the row ``"-"``. Non-numeric values are left out.
+    Keys ``rec/<recording>/<metric>`` (a recording name holds no ``/``) and ``<recording>.<metric>``
+    (what the filter objective writes for several recordings) are split; keys without a recording
+    (one recording, or a closed-loop objective) form the row ``"-"``. Non-numeric values are left out.
     """
     cells: dict[str, dict[str, float]] = {}
     for k, v in metrics.items():
@@ -121,7 +121,9 @@ def _split_tables(ev: dict[str, Any]) -> pd.DataFrame | None:
 
 
 def _frame_md(df: pd.DataFrame, digits: int = 4) -> str:
-    return _rows_table(df.to_numpy().tolist(), list(df.columns), digits)
+    """A frame as a Markdown table; missing cells (a metric a recording does not have) are empty."""
+    cells = df.astype(object).where(df.notna(), None)
+    return _rows_table(cells.to_numpy().tolist(), list(df.columns), digits)
 
 
 # --- the report ----------------------------------------------------------------------------------
