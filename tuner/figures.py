@@ -43,11 +43,20 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
+def _plain_log_labels(axis) -> None:
+    """``1e-05`` instead of mathtext ``10^{-5}``, no minor ticks: both cost most of a figure's drawing time."""
+    from matplotlib.ticker import FuncFormatter, NullLocator
+
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_locator(NullLocator())  # minor ticks of log axes: hundreds of Tick objects, no information
+
+
 def _log_y_if_wide(ax, values: np.ndarray) -> None:
     v = np.asarray(values, float)
     v = v[np.isfinite(v)]
     if len(v) and v.min() > 0 and v.max() / v.min() > 20:
         ax.set_yscale("log")
+        _plain_log_labels(ax.yaxis)
 
 
 def load_history(run_dir: Path) -> pd.DataFrame:
@@ -90,8 +99,10 @@ def _grid(n: int, ncol_max: int = 3, row_in: float = 3.0):
     plt = _plt()
     ncol = min(ncol_max, max(n, 1))
     nrow = int(np.ceil(n / ncol))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(WIDTH_IN, row_in * nrow + 0.5), squeeze=False,
-                             layout="constrained")
+    h = row_in * nrow + 0.6
+    fig, axes = plt.subplots(nrow, ncol, figsize=(WIDTH_IN, h), squeeze=False)
+    # fixed margins (inches): constrained layout costs seconds per figure with a dozen log axes
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.62 / h, top=1 - 0.45 / h, wspace=0.28, hspace=0.75 / row_in)
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
     return fig, axes.ravel()[:n]
@@ -110,6 +121,7 @@ def fitness_vs_params_figure(hist: pd.DataFrame, space: Space, best: dict[str, A
         sc = ax.scatter(x, fit, c=gen, s=14, cmap="viridis", alpha=0.75, lw=0)
         if p.scale == "log":
             ax.set_xscale("log")
+            _plain_log_labels(ax.xaxis)
         for b in (p.low, p.high):
             ax.axvline(b, color="tab:red", ls="--", lw=1)
         if best and p.name in best:
@@ -129,8 +141,9 @@ def fitness_vs_params_figure(hist: pd.DataFrame, space: Space, best: dict[str, A
         ax.grid(alpha=0.3)
     if len(params):
         axes[0].legend(loc="best")
-        fig.colorbar(sc, ax=list(axes), label="generation (stage x 10000 + generation)" if ok["stage"].max() > 0
-                     else "generation", shrink=0.9, pad=0.01)
+        cax = fig.add_axes((0.92, 0.62 / fig.get_figheight(), 0.012, 1 - 1.07 / fig.get_figheight()))
+        fig.colorbar(sc, cax=cax, label="generation (stage x 10000 + generation)" if ok["stage"].max() > 0
+                     else "generation")
     fig.suptitle(f"fitness against each parameter (dashed: search bounds; {len(ok)} evaluations"
                  + (f", {n_failed} failed not shown)" if n_failed else ")"))
     return fig

@@ -43,7 +43,9 @@ __all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary"
 LIVE_REFRESH_S = 10.0
 #: least seconds between two live reports of one run (and before the first): short runs write none
 LIVE_MIN_INTERVAL_S = 5.0
-_live_last: dict[str, float] = {}
+#: the interval is also at least this many times the time the previous live report took (overhead <= 1/x)
+LIVE_COST_FACTOR = 10.0
+_live_last: dict[str, tuple[float, float]] = {}  # run directory -> (time of the last live report, its cost)
 _OWN_FIGURES = ("convergence.png", "fitness_vs_params.png", "parallel_coordinates.png")
 
 
@@ -248,8 +250,10 @@ def write_live_report(run_dir: Path, meta: dict[str, Any], final: bool = False, 
 
     Rewrites ``report.md``/``report.html`` (the page reloads every ``refresh_s`` s) when ``min_interval_s``
     (default :data:`LIVE_MIN_INTERVAL_S`) have passed since the previous live report, or since the first
-    call, so short runs write none. ``final=True`` (an interrupted run) rewrites a report that does not
-    reload, if a live one was written. Returns the report path, or ``None`` when nothing was written.
+    call, and at least :data:`LIVE_COST_FACTOR` times what the previous one took: short runs write none
+    and a long run spends at most about a tenth of its time on its live view. ``final=True`` (an
+    interrupted run) rewrites a report that does not reload, if a live one was written. Returns the
+    report path, or ``None`` when nothing was written.
     """
     import time
 
@@ -260,11 +264,12 @@ def write_live_report(run_dir: Path, meta: dict[str, Any], final: bool = False, 
             return None
         return write_run_report(run_dir, meta=meta, live=False)
     interval = LIVE_MIN_INTERVAL_S if min_interval_s is None else min_interval_s
-    last = _live_last.setdefault(key, now)
-    if now - last < interval:
+    last, cost = _live_last.setdefault(key, (now, 0.0))
+    if now - last < max(interval, LIVE_COST_FACTOR * cost):
         return None
     path = write_run_report(run_dir, meta=meta, live=True, refresh_s=refresh_s)
-    _live_last[key] = time.monotonic()
+    done = time.monotonic()
+    _live_last[key] = (done, done - now if interval > 0 else 0.0)
     return path
 
 
