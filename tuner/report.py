@@ -36,7 +36,7 @@ from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 
 __all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary", "md_table", "pivot_metrics",
-           "sweep_figures", "write_html", "convergence_table", "write_live_report", "sweep_warnings_md",
+           "sweep_figures", "write_html", "convergence_table", "write_live_report", "throttled", "sweep_warnings_md",
            "LIVE_REFRESH_S"]
 
 #: seconds between reloads of a running run's report page
@@ -255,22 +255,31 @@ def write_live_report(run_dir: Path, meta: dict[str, Any], final: bool = False, 
     interrupted run) rewrites a report that does not reload, if a live one was written. Returns the
     report path, or ``None`` when nothing was written.
     """
-    import time
-
     key = str(Path(run_dir).resolve())
-    now = time.monotonic()
     if final:
         if _live_last.pop(key, None) is None or not (Path(run_dir) / "report.html").exists():
             return None
         return write_run_report(run_dir, meta=meta, live=False)
+    return throttled(key, lambda: write_run_report(run_dir, meta=meta, live=True, refresh_s=refresh_s),
+                     min_interval_s)
+
+
+def throttled(key: str, write: Any, min_interval_s: float | None = None) -> Any:
+    """Call ``write()`` for the live view ``key`` if it is due (see :func:`write_live_report`).
+
+    Returns what ``write()`` returned, or ``None`` when it was not due.
+    """
+    import time
+
+    now = time.monotonic()
     interval = LIVE_MIN_INTERVAL_S if min_interval_s is None else min_interval_s
     last, cost = _live_last.setdefault(key, (now, 0.0))
     if now - last < max(interval, LIVE_COST_FACTOR * cost):
         return None
-    path = write_run_report(run_dir, meta=meta, live=True, refresh_s=refresh_s)
+    out = write()
     done = time.monotonic()
     _live_last[key] = (done, done - now if interval > 0 else 0.0)
-    return path
+    return out
 
 
 def sweep_warnings_md(jobs_dir: Path, job_ids: list[str]) -> list[str]:

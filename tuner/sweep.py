@@ -191,11 +191,13 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
 
         results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
     else:
+        from tuner.report import throttled
+
         results = []
-        for j, d in todo:  # the report is rewritten after every job: a live view of the sweep
+        for j, d in todo:  # the report is rewritten between jobs (throttled): a live view of the sweep
             results.append(_run_job(j, d, False, quiet))
             if len(results) < len(todo):
-                write_sweep_report(out, live=True)
+                throttled(f"sweep:{out.resolve()}", lambda: write_sweep_report(out, live=True))
     report = write_sweep_report(out)
     return {"dir": out, "report": report, "ok": all(r["status"] == "finished" for r in results),
             "results": results}

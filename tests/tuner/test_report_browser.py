@@ -150,6 +150,22 @@ def test_sweep_report_links_html_and_is_inert(sweep_dir):
     assert "http-equiv=\"refresh\"" not in page
 
 
+def test_sweep_live_report_reloads_until_every_job_finished(sweep_dir, tmp_path):
+    from tuner.sweep import write_sweep_report
+
+    copy = tmp_path / "sw"
+    shutil.copytree(sweep_dir, copy)
+    meta_p = copy / "jobs" / "de__seed-2" / "meta.json"
+    meta = json.loads(meta_p.read_text())
+    meta_p.write_text(json.dumps({**meta, "status": "running"}))
+    write_sweep_report(copy, live=True)
+    page = (copy / "report.html").read_text()
+    assert '<meta http-equiv="refresh"' in page and "Live view" in page
+    meta_p.write_text(json.dumps(meta))
+    write_sweep_report(copy, live=True)
+    assert 'http-equiv="refresh"' not in (copy / "report.html").read_text()
+
+
 # --- a real browser ------------------------------------------------------------------------------
 def _chromium():
     for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
