@@ -124,7 +124,7 @@ def fitness_vs_params_figure(hist: pd.DataFrame, space: Space, best: dict[str, A
             _plain_log_labels(ax.xaxis)
         for b in (p.low, p.high):
             ax.axvline(b, color="tab:red", ls="--", lw=1)
-        if best and p.name in best:
+        if best and p.name in best and len(ok):
             bf = float(ok["fitness"].min()) if len(ok) else np.nan
             ax.scatter([float(best[p.name])], [bf], marker="*", s=180, color="tab:red", edgecolor="k", zorder=5,
                        label="best")
@@ -139,7 +139,7 @@ def fitness_vs_params_figure(hist: pd.DataFrame, space: Space, best: dict[str, A
         if i % 3 == 0:
             ax.set_ylabel("fitness")
         ax.grid(alpha=0.3)
-    if len(params):
+    if len(params) and len(ok):
         axes[0].legend(loc="best")
         cax = fig.add_axes((0.92, 0.62 / fig.get_figheight(), 0.012, 1 - 1.07 / fig.get_figheight()))
         fig.colorbar(sc, cax=cax, label="generation (stage x 10000 + generation)" if ok["stage"].max() > 0

@@ -52,8 +52,8 @@ code { background: var(--head); padding: .1em .3em; border-radius: 4px; font-siz
 pre { background: var(--head); padding: .7em 1em; border-radius: 6px; overflow-x: auto; max-width: 100%;
       font-size: .85em; line-height: 1.3; overflow-wrap: normal; }
 pre code { background: none; padding: 0; }
-.table-scroll { max-width: 100%; overflow-x: auto; margin: 1em 0; border: 1px solid var(--line);
-                border-radius: 6px; }
+.table-scroll { display: inline-block; max-width: 100%; overflow-x: auto; margin: .6em 0;
+                border: 1px solid var(--line); border-radius: 6px; vertical-align: top; }
 table { border-collapse: collapse; font-size: .85em; font-variant-numeric: tabular-nums; }
 th, td { border-bottom: 1px solid var(--line); padding: 4px 10px; text-align: right; vertical-align: top;
          overflow-wrap: normal; }

@@ -300,7 +300,8 @@ def _results_md(s: dict[str, Any]) -> list[str]:
     split_df = _split_tables(ev) if ev else None
     blocks = {k: v for k, v in ev.items() if isinstance(v, str) and "\n" in v and k != "tables_md"}
     if split_df is not None or s["metrics"]:
-        md += ["## Scores per recording", ""]
+        one_row = split_df is None and len(pivot_metrics(s["metrics"])) == 1
+        md += ["## Metrics of the best candidate" if one_row else "## Scores per recording", ""]
         for k, v in blocks.items():
             md += [f"{md_escape(k.replace('_', ' '))}:", "", "```", v.replace("```", "'''"), "```", ""]
         if split_df is not None:
