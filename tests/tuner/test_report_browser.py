@@ -115,6 +115,27 @@ def test_live_report_reloads_while_running_and_not_after(tmp_path, monkeypatch):
     assert 'http-equiv="refresh"' not in final and "finished" in final
 
 
+def test_interrupted_run_gets_a_report_that_stops_reloading(evil_run, tmp_path):
+    import sys
+
+    from tuner.report import write_live_report
+
+    d = tmp_path / "copy"
+    shutil.copytree(evil_run, d)
+    meta = json.loads((d / "meta.json").read_text())
+    running = {**meta, "status": "running"}
+    (d / "meta.json").write_text(json.dumps(running))
+    assert write_live_report(d, running, final=True) is None  # no live report yet: nothing to replace
+    assert write_live_report(d, running, min_interval_s=0.0) == d / "report.md"
+    assert 'http-equiv="refresh"' in (d / "report.html").read_text()
+    show = subprocess.run([sys.executable, "-m", "tuner", "show", str(d)], capture_output=True, text=True, timeout=120)
+    assert show.returncode == 0 and "running" in show.stdout  # tuner show works on a running run
+    stopped = {**meta, "status": "interrupted"}
+    assert write_live_report(d, stopped, final=True) == d / "report.md"
+    page = (d / "report.html").read_text()
+    assert 'http-equiv="refresh"' not in page and "interrupted" in page
+
+
 def test_show_prints_warnings(evil_run):
     import sys
 
