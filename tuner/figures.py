@@ -249,6 +249,58 @@ def best_params_unit_figure(sweep_dir: Path, done: pd.DataFrame):
     return fig
 
 
+def responses_figure(sweep_dir: Path, done: pd.DataFrame):
+    """Closed-loop sweeps: the response of each method's best job (lowest fitness) on shared axes.
+
+    Rebuilds each job's objective from its ``config.yaml`` and simulates its best parameters (the
+    objective's ``simulate(params) -> {t, outputs, references}``); ``None`` unless every job is a
+    ``closed_loop`` run.
+    """
+    import yaml
+
+    from objectives.registry import build_objective
+
+    jobs = Path(sweep_dir) / "jobs"
+    cfgs = {}
+    for job in done["job"]:
+        p = jobs / job / "config.yaml"
+        cfg = yaml.safe_load(p.read_text()) if p.exists() else None
+        if not cfg or (cfg.get("objective") or {}).get("kind") != "closed_loop":
+            return None
+        cfgs[job] = cfg
+    plt = _plt()
+    methods = sorted(done["method"].unique())
+    colors = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
+    deg = 180 / np.pi
+    # (output column, label, scale, reference column): the outputs of the WMP simulation
+    panels = [(0, "speed (m/s)", 1.0, 0), (3, "yaw rate (deg/s)", deg, 1), (1, "IB angle theta3 (deg)", deg, None),
+              (4, "avg. current (A)", 1.0, None)]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(WIDTH_IN, 8.5), sharex=True)
+    ref_drawn = False
+    for m in methods:
+        sub = done[done["method"] == m].sort_values("best_fitness")
+        job = sub["job"].iloc[0]
+        best = yaml.safe_load((jobs / job / "best.yaml").read_text()) or {}
+        cfg = cfgs[job]
+        obj = build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", jobs / job)))
+        sim = obj.simulate(best.get("params") or {})
+        t, y, ref = np.asarray(sim["t"]), np.asarray(sim["outputs"]), np.asarray(sim["references"])
+        n, k = min(len(t), len(y)), min(len(t), len(ref))
+        label = f"{m} (F={best.get('fitness', np.nan):.4g})"
+        for ax, (col, name, scale, ref_col) in zip(axes, panels):
+            ax.plot(t[:n], y[:n, col] * scale, color=colors[m], lw=1.1, label=label)
+            if ref_col is not None and not ref_drawn:
+                ax.plot(t[:k], ref[:k, ref_col] * scale, "k:", lw=1.2, label="reference")
+            ax.set_ylabel(name)
+            ax.grid(alpha=0.3)
+        ref_drawn = True
+    axes[0].legend(fontsize=8, ncol=2, loc="lower left", bbox_to_anchor=(0.0, 1.02), borderaxespad=0)
+    axes[-1].set_xlabel("time (s)")
+    fig.suptitle("closed-loop response of the best job of each method", y=0.995)
+    fig.tight_layout()
+    return fig
+
+
 def sweep_figures(sweep_dir: Path, df: pd.DataFrame) -> list[tuple[str, Path]]:
     """Sweep figures: convergence of every job, final fitness per method (box and points), per-axis errors
     per method (filter objectives), best parameters of every job in unit coordinates."""
@@ -313,6 +365,9 @@ def sweep_figures(sweep_dir: Path, df: pd.DataFrame) -> list[tuple[str, Path]]:
         fig.tight_layout()
         out.append((f"{split.capitalize()} errors per axis and method", _save(fig, figs_dir / "errors_by_method.png")))
 
+    fig = responses_figure(Path(sweep_dir), done)
+    if fig is not None:
+        out.append(("Closed-loop responses of each method's best job", _save(fig, figs_dir / "responses.png")))
     fig = best_params_unit_figure(Path(sweep_dir), done)
     if fig is not None:
         out.append(("Best parameters of every job within their bounds", _save(fig, figs_dir / "best_parameters.png")))

@@ -84,3 +84,24 @@ def test_figures_with_only_failures_do_not_raise(fn):
     hist["status"] = "failed"
     fig = fn(hist, SPACE) if fn is parallel_coordinates_figure else fn(hist, SPACE, None)
     plt.close(fig)
+
+
+def test_closed_loop_sweep_compares_responses_on_one_figure(tmp_path):
+    from pathlib import Path
+
+    import yaml
+    from PIL import Image
+
+    from tuner.sweep import run_sweep
+
+    configs = Path(__file__).resolve().parents[2] / "configs"
+    doc = {"sweep": {"name": "ctl", "base": str(configs / "wmp_pid.yaml"),
+                     "variants": {"pid": {}, "lqr": {"base": str(configs / "wmp_lqr.yaml")}},
+                     "grid": {"optimizer.population": [4], "optimizer.generations": [1],
+                              "parallel.backend": ["serial"]}, "seeds": [1]}}
+    (tmp_path / "ctl.yaml").write_text(yaml.safe_dump(doc))
+    res = run_sweep(tmp_path / "ctl.yaml", sweep_dir=tmp_path / "sw", quiet=True)
+    png = tmp_path / "sw" / "figures" / "responses.png"
+    assert res["ok"] and png.exists()
+    assert Image.open(png).size[0] == 1050  # drawn for the page width
+    assert "responses.png" in (tmp_path / "sw" / "report.md").read_text()
