@@ -103,10 +103,15 @@ def _sample_rate(obj: Any) -> dict[str, Any]:
     recs_fn = getattr(obj, "recordings", None)
     if not callable(recs_fn):
         return {"sample_rate_hz": None, "sample_rate_note": "the objective gives no sample rate"}
-    try:
-        rates = sorted({round(1.0 / float(r.dt), 3) for r in recs_fn("train")})
-    except (RecordingError, OSError, ValueError) as exc:
-        return {"sample_rate_hz": None, "sample_rate_note": f"training data not readable: {exc}"}
+    specs = getattr(obj, "train_specs", None) or []
+    if specs and all(isinstance(sp, dict) and set(sp) == {"synthetic"} and "rate_hz" in (sp["synthetic"] or {})
+                     for sp in specs):  # stated in the config: no need to generate the recordings
+        rates = sorted({round(float(sp["synthetic"]["rate_hz"]), 3) for sp in specs})
+    else:
+        try:
+            rates = sorted({round(1.0 / float(r.dt), 3) for r in recs_fn("train")})
+        except (RecordingError, OSError, ValueError) as exc:
+            return {"sample_rate_hz": None, "sample_rate_note": f"training data not readable: {exc}"}
     if not rates:
         return {"sample_rate_hz": None, "sample_rate_note": "no training recording"}
     if max(rates) - min(rates) > 1e-3 * max(rates):

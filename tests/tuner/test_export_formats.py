@@ -177,3 +177,18 @@ def test_compare_prints_significant_digits(ekf_run):
     assert out.returncode == 0, out.stderr
     line = next(ln for ln in out.stdout.splitlines() if ln.startswith("param.q_q"))
     assert line.split()[1] == f"{best['params']['q_q']:.6g}" and "e-0" in line.split()[1]
+
+
+def test_sample_rate_from_the_config_or_from_the_loaded_recordings():
+    from objectives.attitude.objective import FilterObjective
+    from tuner.export import _sample_rate
+
+    stated = FilterObjective("madgwick", [{"synthetic": {"generator": "tilt1d", "duration_s": 2, "rate_hz": 250}}])
+    assert _sample_rate(stated)["sample_rate_hz"] == 250.0
+    loaded = FilterObjective("madgwick", [{"synthetic": {"generator": "tilt1d", "duration_s": 2, "seed": 1}}])
+    assert _sample_rate(loaded)["sample_rate_hz"] == 800.0  # tilt1d's default rate, read from the recording
+    mixed = FilterObjective("madgwick", [{"synthetic": {"generator": "tilt1d", "duration_s": 2, "rate_hz": 250}},
+                                         {"synthetic": {"generator": "tilt1d", "duration_s": 2}}])
+    out = _sample_rate(mixed)
+    assert out["sample_rate_hz"] is None and "250 Hz, 800 Hz" in out["sample_rate_note"]
+    assert _sample_rate(None)["sample_rate_hz"] is None
