@@ -234,9 +234,11 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
                                                               "position in bounds", "unit"], 6), ""]
     md += _results_md(s)
     md += _figures_md(run_dir, s, space, live)
-    md += ["## Files", "", "[history.csv](history.csv) (every evaluation), [best.yaml](best.yaml), "
-           "[config.yaml](config.yaml) (resolved), [meta.json](meta.json).", "",
-           f"Written {now}.", ""]
+    files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
+             ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
+             ("scores.csv", "scores per recording")]
+    md += ["## Files", ""] + [f"- [{n}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
+    md += ["", f"Written {now}.", ""]
     text = "\n".join(md)
     path = run_dir / "report.md"
     write_text_atomic(path, text)
