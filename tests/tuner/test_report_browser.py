@@ -275,3 +275,16 @@ def test_report_in_a_browser_at_1200px(which, evil_run, sweep_dir, tmp_path):
     shot = _screenshot(page, tmp_path)
     arr = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert arr.std() > 5 and (arr < 128).mean() > 0.005, "blank screenshot"
+
+
+@pytest.mark.skipif(_chromium() is None, reason="Chromium not installed (.ci/run installs it)")
+def test_browser_measurement_catches_overflow_and_broken_images(evil_run, tmp_path):
+    """Negative control: the same measurement on a page that does overflow and has a broken image."""
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    page = (evil_run / "report.html").read_text()
+    page = page.replace("<main>", '<main><div style="width:2500px">wide</div>'
+                                  '<img src="data:image/png;base64,AAAA" alt="broken">', 1)
+    (bad / "report.html").write_text(page)
+    res = _measure(bad / "report.html", tmp_path)
+    assert res["scrollWidth"] > 2000 and res["wide"] and res["broken"] == ["broken"] and res["errors"]
