@@ -75,6 +75,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("run_dir")
     p.add_argument("--format", default="yaml", choices=["yaml", "json", "python", "c"])
     p.add_argument("-o", "--output", help="write to this file instead of standard output")
+    p.add_argument("--prefix", help="C identifier prefix, e.g. EKF1 (default: from the run's name); lets two "
+                                    "headers be included in one file")
 
     p = sub.add_parser("evaluate", help="score parameters without tuning (default: a run's best)")
     p.add_argument("target", help="a run directory or a config file")
@@ -160,9 +162,14 @@ def _cmd_show(a) -> int:
         return 0
     if not (path / "meta.json").exists() and not (path / "config.yaml").exists():
         raise UsageError(f"{path}: not a run or sweep directory (no meta.json / sweep.yaml)")
+    from dataclasses import asdict
+
+    from tuner.bounds import run_warnings
+
     s = run_summary(path)  # RunError naming the file if meta.json/best.yaml is corrupt
+    warnings = run_warnings(path)
     if a.json:
-        print(json.dumps(s, indent=1, default=str))
+        print(json.dumps({**s, "warnings": [asdict(w) for w in warnings]}, indent=1, default=str))
         return 0
     print(f"run:        {s['run']}")
     print(f"status:     {s['status']} ({s['stop_reason']})")
@@ -175,6 +182,8 @@ def _cmd_show(a) -> int:
     if s["evaluation"].get("summary_table"):
         print()
         print(s["evaluation"]["summary_table"])
+    for w in warnings:
+        print(f"warning: {w.message}")
     return 0
 
 
@@ -191,7 +200,10 @@ def _cmd_compare(a) -> int:
         col.update({f"param.{k}": v for k, v in s["params"].items()})
         col.update({f"metric.{k}": v for k, v in s["metrics"].items() if not isinstance(v, (dict, list))})
         cols[s["run"]] = col
-    print(pd.DataFrame(cols).to_string())
+    from tuner.render import fmt_num
+
+    table = pd.DataFrame(cols).map(lambda v: "-" if v is None or (isinstance(v, float) and v != v) else fmt_num(v))
+    print(table.to_string())
     return 0
 
 
@@ -232,7 +244,9 @@ def _cmd_export(a) -> int:
     run_dir = Path(a.run_dir)
     if not (run_dir / "best.yaml").exists():
         raise UsageError(f"{run_dir}: no best.yaml (not a run directory, or nothing evaluated yet)")
-    text = export(run_dir, a.format)
+    if a.prefix is not None and (a.format != "c" or not a.prefix.isidentifier() or not a.prefix.isascii()):
+        raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c")
+    text = export(run_dir, a.format, prefix=a.prefix)
     if a.output:
         Path(a.output).write_text(text)
         print(f"wrote {a.output}", file=sys.stderr)

@@ -11,20 +11,13 @@ exports its kind and the parameters only.
 from __future__ import annotations
 
 import datetime as _dt
-import json
-import math
-import re
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-import yaml
-
+from tuner.export_formats import FORMATS, c_prefix, to_c, to_json, to_python, to_yaml
 from tuner.objective import hook
 
 __all__ = ["export", "FORMATS", "provenance"]
-
-FORMATS = ("yaml", "json", "python", "c")
 
 
 def _build(run_dir: Path) -> Any:
@@ -62,85 +55,56 @@ def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
     }
 
 
-def _c_ident(name: str) -> str:
-    s = re.sub(r"[^0-9A-Za-z_]", "_", name).upper()
-    return s if not s[0].isdigit() else f"P_{s}"
+def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix: str | None = None) -> str:
+    """The best parameters of ``run_dir`` in format ``fmt`` (one of :data:`FORMATS`).
 
-
-def _c_number(v: float) -> str:
-    if isinstance(v, bool):
-        return "1" if v else "0"
-    if isinstance(v, int):
-        return str(v)
-    if not math.isfinite(v):
-        raise ValueError(f"cannot write non-finite value {v} into a C header")
-    return repr(float(v))
-
-
-def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | None = None) -> str:
-    guard = f"{prefix}_{_c_ident(doc['run'])}_H"
-    lines = [
-        f"/* Tuned parameters exported by tuner from run {doc['run']}.",
-        f" * fitness {doc['fitness']!r}; optimizer {doc['optimizer']}; seed {doc['seed']};",
-        f" * objective {json.dumps(doc['objective'])};",
-        f" * exported {doc['exported']}; commit {doc['git_commit'] or 'unknown'}. */",
-        f"#ifndef {guard}", f"#define {guard}", "",
-    ]
-    for name, v in doc["params"].items():
-        ident = f"{prefix}_{_c_ident(name)}"
-        if isinstance(v, bool) or isinstance(v, (int, float)):
-            ctype = "int" if isinstance(v, (bool, int)) else "double"
-            lines.append(f"static const {ctype} {ident} = {_c_number(v)};")
-        elif isinstance(v, str):
-            lines.append(f'static const char {ident}[] = {json.dumps(v)};')
-        elif isinstance(v, (list, tuple)) and all(isinstance(x, (int, float)) for x in v):
-            vals = ", ".join(_c_number(float(x)) for x in v)
-            lines.append(f"static const double {ident}[{len(v)}] = {{{vals}}};")
-        else:
-            lines.append(f"/* {name}: {v!r} has no C form */")
-    for name, t in (tables or {}).items():
-        ident = f"{prefix}_{_c_ident(name)}"
-        arr = np.asarray(t["table"], float)
-        ny, nx = arr.shape
-        lines += ["", f"/* look-up table {name}: rows follow y, columns follow x */",
-                  f"#define {ident}_NX {nx}", f"#define {ident}_NY {ny}",
-                  f"static const double {ident}_X_MIN = {_c_number(float(t['x_range'][0]))};",
-                  f"static const double {ident}_X_MAX = {_c_number(float(t['x_range'][1]))};",
-                  f"static const double {ident}_Y_MIN = {_c_number(float(t['y_range'][0]))};",
-                  f"static const double {ident}_Y_MAX = {_c_number(float(t['y_range'][1]))};",
-                  f"static const double {ident}[{ny}][{nx}] = {{"]
-        for row in arr:
-            lines.append("    {" + ", ".join(_c_number(float(x)) for x in row) + "},")
-        lines.append("};")
-    lines += ["", f"#endif /* {guard} */", ""]
-    return "\n".join(lines)
-
-
-def to_python(doc: dict[str, Any]) -> str:
-    lines = [f'"""Tuned parameters from tuner run {doc["run"]} (fitness {doc["fitness"]!r})."""', "",
-             f"PROVENANCE = {doc_repr({k: v for k, v in doc.items() if k != 'params'})}", "",
-             f"PARAMS = {doc_repr(doc['params'])}", ""]
-    return "\n".join(lines)
-
-
-def doc_repr(d: Any) -> str:
-    return repr(json.loads(json.dumps(d)))
-
-
-def export(run_dir: str | Path, fmt: str, objective_tables: bool = True) -> str:
-    """The best parameters of ``run_dir`` in format ``fmt`` (one of :data:`FORMATS`)."""
+    ``prefix`` names the C identifiers (default: from the run's name, see
+    :func:`tuner.export_formats.c_prefix`). With ``objective_tables`` the objective is rebuilt to add
+    units, the sample rate and (C) look-up tables.
+    """
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; allowed: {list(FORMATS)}")
-    objective = _build(Path(run_dir))
-    doc = provenance(Path(run_dir), objective)
+    run_dir = Path(run_dir)
+    objective = _build(run_dir) if objective_tables else None
+    doc = provenance(run_dir, objective)
+    doc.update(units=_units(run_dir, objective, doc["params"]), **_sample_rate(objective))
     if fmt == "yaml":
-        return yaml.safe_dump(doc, sort_keys=False)
+        return to_yaml(doc)
     if fmt == "json":
-        return json.dumps(doc, indent=2)
+        return to_json(doc)
     if fmt == "python":
         return to_python(doc)
     tables = None
-    fn = hook(objective, "export_tables") if objective is not None and objective_tables else None
+    fn = hook(objective, "export_tables") if objective is not None else None
     if fn is not None:
         tables = fn(doc["params"])
-    return to_c(doc, tables=tables)
+    if prefix is None:
+        from tuner.rundir import RunDir
+
+        prefix = c_prefix(RunDir(run_dir).meta().name or run_dir.name)
+    return to_c(doc, prefix=c_prefix(prefix), tables=tables)
+
+
+def _units(run_dir: Path, obj: Any, params: dict[str, Any]) -> dict[str, str]:
+    """Unit of each parameter: the run's resolved space, else the objective's default space."""
+    from tuner.rundir import RunDir
+
+    units: dict[str, str] = {}
+    fn = hook(obj, "default_space") if obj is not None else None
+    if fn is not None:
+        units.update({p.name: p.unit for p in fn().params if p.unit})
+    for name, spec in (RunDir(run_dir).config().get("parameters") or {}).items():
+        if isinstance(spec, dict) and spec.get("unit"):
+            units[name] = spec["unit"]
+    return {k: units[k] for k in params if k in units}
+
+
+def _sample_rate(obj: Any) -> dict[str, Any]:
+    """``sample_rate_hz`` and a note, from the objective's optional ``sample_rate()`` hook."""
+    if obj is None:
+        return {"sample_rate_hz": None, "sample_rate_note": "objective not rebuilt"}
+    fn = hook(obj, "sample_rate")
+    if fn is None:
+        return {"sample_rate_hz": None, "sample_rate_note": "the objective gives no sample rate"}
+    hz, note = fn()
+    return {"sample_rate_hz": hz, "sample_rate_note": note}

@@ -127,6 +127,14 @@ class TunableObjective(Objective, Protocol):
     def describe(self) -> Mapping[str, Any]:
         """Provenance written by ``tuner export``: ``{"objective": {...}, "data": ...}``."""
 
+    def traces(self, params: Mapping[str, Any]) -> Mapping[str, Mapping[str, Any]]:
+        """Time responses of ``params`` for figures comparing methods: ``{panel label: {"t": (N,),
+        "y": (N,), "ref": (N,) or None}}`` (same labels for every parameter set)."""
+
+    def sample_rate(self) -> tuple[float | None, str]:
+        """``(rate in Hz, note)`` that per-sample parameters assume (``None`` with the reason if unknown);
+        ``tuner export`` writes it into every format."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
@@ -134,7 +142,7 @@ class TunableObjective(Objective, Protocol):
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "parameter_names", "preflight", "score", "has_test_data",
-         "with_data", "export_tables", "describe", "finalize")
+         "with_data", "export_tables", "describe", "sample_rate", "traces", "finalize")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

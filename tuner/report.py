@@ -1,306 +1,360 @@
-"""Run reports: ``report.md`` with the result table and a convergence figure.
+"""Run reports: ``report.md`` and a self-contained ``report.html`` (figures embedded).
 
-Objectives can add their own figures (error traces, fuzzy surfaces) through their ``finalize`` hook;
-those land in ``figures/`` and are listed in the report.
+Content: a summary card (status, best fitness, budget and evaluations, failures, wall time, train /
+test / CV scores), warnings (parameters at a search bound, failed evaluations, see
+:mod:`tuner.bounds`), the best parameters within their bounds, a recording x metric table, the
+objective's other results, and figures (convergence, fitness against each parameter, parallel
+coordinates of the best candidates, then the objective's own figures from its ``finalize`` hook).
+
+While a run is going, :func:`write_run_report` with ``live=True`` writes the same report with status
+"running" and a page that reloads itself every ``refresh_s`` seconds; the final report does not
+reload. Markdown becomes HTML in :mod:`tuner.render` (escaped names, sanitised links).
 """
 
 from __future__ import annotations
 
+import datetime as _dt
+import json
+import math
+import re
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
-from tuner.rundir import RunDir, RunError
+from tuner.figures import (
+    convergence_table,
+    load_history,
+    plot_convergence,
+    plot_fitness_vs_params,
+    plot_parallel_coordinates,
+    sweep_figures,
+)
+from tuner.render import fmt_num, md_escape, md_path, write_text_atomic
+from tuner.render import md_table as _rows_table
+from tuner.render import write_html as _write_html
+from tuner.rundir import RunDir
 
-__all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary"]
+__all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary", "md_table", "pivot_metrics",
+           "sweep_figures", "write_html", "convergence_table", "write_live_report", "throttled", "sweep_warnings_md",
+           "LIVE_REFRESH_S"]
 
-
-def load_history(run_dir: Path) -> pd.DataFrame:
-    """``history.csv`` as a frame; a missing or unparsable file raises :class:`tuner.rundir.RunError`."""
-    p = Path(run_dir) / "history.csv"
-    if not p.is_file():
-        raise RunError(f"{p}: missing (nothing evaluated yet?)")
-    try:
-        df = pd.read_csv(p, keep_default_na=False, na_values=[""])
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise RunError(f"{p}: unreadable: {str(exc).strip()}") from None
-    missing = [c for c in ("eval", "stage", "generation", "fitness", "status") if c not in df.columns]
-    if missing:
-        raise RunError(f"{p}: missing columns {missing}")
-    return df
-
-
-def _convergence(hist: pd.DataFrame) -> pd.DataFrame:
-    ok = hist[hist["status"] == "ok"]
-    g = ok.groupby(["stage", "generation"])["fitness"]
-    df = pd.DataFrame({"gen_best": g.min(), "gen_median": g.median()}).reset_index()
-    evals = hist.groupby(["stage", "generation"])["eval"].max().reset_index()
-    df = df.merge(evals, on=["stage", "generation"], how="right").sort_values("eval")
-    df["best"] = df["gen_best"].cummin()
-    df["n_evals"] = df["eval"] + 1
-    return df
+#: seconds between reloads of a running run's report page
+LIVE_REFRESH_S = 10.0
+#: least seconds between two live reports of one run (and before the first): short runs write none
+LIVE_MIN_INTERVAL_S = 5.0
+#: the interval is also at least this many times the time the previous live report took (overhead <= 1/x)
+LIVE_COST_FACTOR = 10.0
+_live_last: dict[str, tuple[float, float]] = {}  # run directory -> (time of the last live report, its cost)
+_OWN_FIGURES = ("convergence.png", "fitness_vs_params.png", "parallel_coordinates.png")
 
 
-def plot_convergence(run_dir: Path, path: Path | None = None) -> Path:
-    import matplotlib
+def write_html(path: Path, markdown: str, base_dir: Path, title: str | None = None,
+               refresh_s: float | None = None) -> Path:
+    """Self-contained HTML page of a Markdown report (see :func:`tuner.render.write_html`)."""
+    return _write_html(path, markdown, base_dir, title=title, refresh_s=refresh_s)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def run_summary(run_dir: Path, meta: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Status, best fitness, parameters and counts of a run directory (``meta`` replaces ``meta.json``)."""
     run_dir = Path(run_dir)
-    conv = _convergence(load_history(run_dir))
-    path = path or run_dir / "figures" / "convergence.png"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig, ax = plt.subplots(figsize=(6.4, 3.8), dpi=110)
-    ax.plot(conv["n_evals"], conv["best"], label="best so far", lw=2)
-    ax.plot(conv["n_evals"], conv["gen_median"], label="generation median", lw=1, alpha=0.7)
-    pos = conv[["best", "gen_median"]].to_numpy()
-    if np.nanmin(pos) > 0 and np.nanmax(pos) / max(np.nanmin(pos), 1e-300) > 20:
-        ax.set_yscale("log")
-    for s in sorted(conv["stage"].unique())[1:]:
-        ax.axvline(conv[conv["stage"] == s]["n_evals"].min(), color="grey", ls=":", lw=1)
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("fitness")
-    ax.set_title(run_dir.name, fontsize=9)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
-
-
-def run_summary(run_dir: Path) -> dict[str, Any]:
-    """Status, best fitness, parameters and counts of a run directory.
-
-    Raises :class:`tuner.rundir.RunError` (naming the file) if ``meta.json`` or ``best.yaml`` is corrupt.
-    """
     rd = RunDir(run_dir)
-    meta = rd.meta()
-    best = rd.best() if rd.has_best() else None
-    return {"run": rd.path.name, "status": meta.status, "optimizer": meta.optimizer, "seed": meta.seed,
-            "n_evals": meta.n_evals, "n_failed": meta.n_failed,
-            "best_fitness": best.fitness if best else None, "params": dict(best.params) if best else {},
-            "metrics": dict(best.metrics) if best else {}, "evaluation": dict(best.evaluation) if best else {},
-            "wall_s": meta.timing.wall_s, "stop_reason": meta.stop_reason, "created": meta.created,
-            "notes": list(meta.notes)}
+    if meta is None:
+        meta = rd.meta().to_dict()  # RunError naming the file if meta.json is corrupt
+    elif not isinstance(meta, dict):
+        meta = meta.to_dict()
+    best = rd.best().to_doc() if rd.has_best() else {}
+    return {"run": rd.path.name, "status": meta.get("status"), "optimizer": meta.get("optimizer"),
+            "seed": meta.get("seed"), "n_evals": meta.get("n_evals"), "n_failed": meta.get("n_failed"),
+            "best_fitness": best.get("fitness"), "params": best.get("params", {}),
+            "metrics": best.get("metrics", {}), "evaluation": best.get("evaluation", {}) or {},
+            "wall_s": (meta.get("timing") or {}).get("wall_s"), "stop_reason": meta.get("stop_reason", ""),
+            "created": meta.get("created"), "found": best.get("found", {}), "name": meta.get("name", ""),
+            "notes": list(meta.get("notes") or [])}
 
 
 def md_table(df: pd.DataFrame, floatfmt: str = ".6g") -> str:
-    """A pandas frame as a Markdown table (no extra dependency)."""
+    """A pandas frame as a Markdown table, every cell escaped (``floatfmt``: ``.<digits>g``)."""
     if df is None or len(df) == 0:
         return "(no rows)"
-    cols = list(df.columns)
-    lines = ["| " + " | ".join(str(c) for c in cols) + " |", "|" + "---|" * len(cols)]
-    for _, r in df.iterrows():
-        cells = [format(v, floatfmt) if isinstance(v, float) else str(v) for v in (r[c] for c in cols)]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    m = re.fullmatch(r"\.(\d+)g", floatfmt)
+    digits = int(m.group(1)) if m else 6
+    return _rows_table(df.to_numpy().tolist(), list(df.columns), digits)
 
 
-def _md_table(rows: list[tuple[str, Any]], head=("name", "value")) -> str:
-    out = [f"| {head[0]} | {head[1]} |", "|---|---|"]
-    for k, v in rows:
-        if isinstance(v, float):
-            v = f"{v:.6g}"
-        out.append(f"| {k} | {v} |")
-    return "\n".join(out)
+# --- the recording x metric table ---------------------------------------------------------------
+_REC_SLASH = re.compile(r"^rec/(?P<rec>[^/]+)/(?P<metric>.+)$")
 
 
-def write_run_report(run_dir: Path) -> Path:
-    """Write ``report.md`` (and ``figures/convergence.png``) for a run directory."""
-    run_dir = Path(run_dir)
-    s = run_summary(run_dir)
-    conv_png = plot_convergence(run_dir)
-    lines = [f"# Run {s['run']}", "",
-             f"Status **{s['status']}** ({s['stop_reason']}); optimizer `{s['optimizer']}`, seed {s['seed']}, "
-             f"{s['n_evals']} evaluations ({s['n_failed']} failed), {s['wall_s']:.1f} s wall.", "",
-             *[f"Note: {n}." for n in s["notes"]], *([""] if s["notes"] else []),
-             f"Best fitness: **{s['best_fitness']:.6g}**", "", "## Best parameters", "",
-             _md_table(list(s["params"].items()), ("parameter", "value")), ""]
-    if s["metrics"]:
-        lines += ["## Metrics of the best candidate (tuning data)", "",
-                  _md_table(list(s["metrics"].items()), ("metric", "value")), ""]
+def pivot_metrics(metrics: dict[str, Any]) -> pd.DataFrame:
+    """Flattened metric keys as a table: rows = recordings, columns = metrics.
+
+    Keys ``rec/<recording>/<metric>`` (a recording name holds no ``/``) and ``<recording>.<metric>``
+    (what the filter objective writes for several recordings) are split; keys without a recording
+    (one recording, or a closed-loop objective) form the row ``"-"``. Non-numeric values are left out.
+    """
+    cells: dict[str, dict[str, float]] = {}
+    for k, v in metrics.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            continue
+        m = _REC_SLASH.match(k)
+        if m:
+            rec, metric = m.group("rec"), m.group("metric")
+        elif "." in k:
+            rec, metric = k.rsplit(".", 1)
+        else:
+            rec, metric = "-", k
+        cells.setdefault(rec, {})[metric] = float(v)
+    df = pd.DataFrame.from_dict(cells, orient="index")
+    df.index.name = "recording"
+    return df
+
+
+def _split_tables(ev: dict[str, Any]) -> pd.DataFrame | None:
+    """Rows (split, recording) x metrics from ``evaluation.train/test/cv`` (``{recording: {metric: v}}``)."""
+    rows = []
+    for split in ("train", "test", "cv"):
+        recs = ev.get(split)
+        if not isinstance(recs, dict):
+            continue
+        for name, m in recs.items():
+            if isinstance(m, dict):
+                rows.append({"split": split, "recording": name,
+                             **{k: v for k, v in m.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}})
+    return pd.DataFrame(rows) if rows else None
+
+
+def _frame_md(df: pd.DataFrame, digits: int = 4) -> str:
+    """A frame as a Markdown table; missing cells (a metric a recording does not have) are empty."""
+    cells = df.astype(object).where(df.notna(), None)
+    return _rows_table(cells.to_numpy().tolist(), list(df.columns), digits)
+
+
+# --- the report ----------------------------------------------------------------------------------
+def _budget(cfg: dict[str, Any]) -> str:
+    o = cfg.get("optimizer") or {}
+    pop, gens = o.get("population"), o.get("generations")
+    stages = (o.get("refine") or {}).get("stages", 1) or 1
+    if isinstance(pop, int) and isinstance(gens, int):
+        return f"{pop * gens * stages} ({pop} x {gens} generations" + (f" x {stages} stages)" if stages > 1 else ")")
+    return f"{gens or '?'} generations of the default population" + (f" x {stages} stages" if stages > 1 else "")
+
+
+def _wall(s: Any) -> str:
+    if not isinstance(s, (int, float)):
+        return "-"
+    return f"{s:.1f} s" if s < 120 else f"{s:.0f} s ({_dt.timedelta(seconds=round(s))})"
+
+
+def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
     ev = s["evaluation"]
-    if ev:
-        tables = ev.get("tables_md")
-        lines += ["## Evaluation", ""]
-        if tables:
-            lines += [tables, ""]
-        flat = [(k, v) for k, v in ev.items() if not isinstance(v, (dict, list)) and k != "tables_md"]
-        if flat:
-            lines += [_md_table(flat, ("metric", "value")), ""]
-    lines += ["## Figures", "", f"![convergence](figures/{conv_png.name})", ""]
-    for png in sorted((run_dir / "figures").glob("*.png")):
-        if png.name != conv_png.name:
-            lines += [f"![{png.stem}](figures/{png.name})", ""]
+    n, nf = s["n_evals"] or 0, s["n_failed"] or 0
+    status = f"{s['status']}" + (f" ({s['stop_reason']})" if s["stop_reason"] else "")
+    rows: list[list[Any]] = [["status", status], ["best fitness", s["best_fitness"] if s["best_fitness"] is not None
+                                                  else "-"]]
+    for key in ("train_fitness", "test_fitness", "cv_fitness", "initial_fitness", "improvement_pct"):
+        if isinstance(ev.get(key), (int, float)):
+            rows.append([key.replace("_", " "), ev[key]])
+    rows += [["evaluations / budget", f"{n} / {_budget(cfg)}"],
+             ["failed evaluations", f"{nf} ({nf / n:.1%})" if n else str(nf)],
+             ["wall time", _wall(s["wall_s"])],
+             ["optimizer, seed", f"{s['optimizer']}, {s['seed']}"]]
+    obj = cfg.get("objective") or {}
+    what = ", ".join(f"{k} {obj[k]}" for k in ("kind", "filter", "controller", "function", "metric") if k in obj)
+    if what:
+        rows.append(["objective", what])
+    if s["found"]:
+        f = s["found"]
+        rows.append(["best found at", f"stage {f.get('stage')}, generation {f.get('generation')}, "
+                                      f"evaluation {f.get('eval')}"])
+    return rows
+
+
+def _params_rows(params: dict[str, Any], space: Any) -> list[list[Any]]:
+    rows = []
+    for k, v in params.items():
+        p = space[k] if space is not None and k in space else None
+        if p is None or p.is_fixed:
+            shown = v if not isinstance(v, (list, dict)) else json.dumps(v)
+            rows.append([k, shown, "fixed", "", "", p.unit if p else ""])
+            continue
+        pos = p.to_unit(float(v)) if isinstance(v, (int, float)) and not isinstance(v, bool) else math.nan
+        rows.append([k, v, f"[{fmt_num(p.low, 4)}, {fmt_num(p.high, 4)}]", p.scale, f"{pos:.1%}", p.unit])
+    return rows
+
+
+def _run_space(run_dir: Path):
+    from tuner.bounds import _run_space
+
+    return _run_space(run_dir)
+
+
+def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bool = False,
+                     refresh_s: float = LIVE_REFRESH_S) -> Path:
+    """Write ``report.md``, ``report.html`` and the report figures of a run directory.
+
+    Parameters
+    ----------
+    run_dir : path
+        The run directory.
+    meta : dict, optional
+        The run's current ``meta.json`` content, when the caller holds a newer one than the file.
+    live : bool
+        A report of a running run: the HTML page reloads itself every ``refresh_s`` seconds while the
+        status is ``running``. Objective figures are not redrawn (they come after the run).
+    """
+    from tuner.bounds import run_warnings
+
+    run_dir = Path(run_dir)
+    s = run_summary(run_dir, meta)
+    cfg = RunDir(run_dir).config() if (run_dir / "config.yaml").exists() else {}
+    space = _run_space(run_dir)
+    running = live and s["status"] == "running"
+    if not live:
+        _live_last.pop(str(run_dir.resolve()), None)
+    now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+    title = f"Run {s['run']}"
+    md = [f"# {md_escape(title)}", ""]
+    if running:
+        md += [f"> Live view: this run is still going; the page reloads every {refresh_s:g} s. "
+               f"Last written {now}.", ""]
+    desc = cfg.get("description")
+    if desc:
+        md += [md_escape(desc), ""]
+    md += ["## Summary", "", _rows_table(_card(s, cfg), ["item", "value"], 6), ""]
+    md += [f"Note: {md_escape(n)}." for n in s["notes"]] + ([""] if s["notes"] else [])
+
+    warnings = run_warnings(run_dir)
+    md += ["## Warnings", ""]
+    md += [f"- **{w.kind}**: {md_escape(w.message)}" for w in warnings] or ["None: no parameter within 2 % of a "
+                                                                              "search bound, no failed evaluation."]
+    md += [""]
+    if s["params"]:
+        md += ["## Best parameters", "", "Position in bounds: 0 % = low bound, 100 % = high bound, measured in "
+               "log10 for log-scaled parameters.", "",
+               _rows_table(_params_rows(s["params"], space), ["parameter", "value", "bounds", "scale",
+                                                              "position in bounds", "unit"], 6), ""]
+    md += _results_md(s)
+    md += _figures_md(run_dir, s, space, live)
+    files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
+             ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
+             ("scores.csv", "scores per recording")]
+    md += ["## Files", ""] + [f"- [{n}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
+    md += ["", f"Written {now}.", ""]
+    text = "\n".join(md)
     path = run_dir / "report.md"
-    text = "\n".join(lines)
-    path.write_text(text)
-    write_html(run_dir / "report.html", text, run_dir)
+    write_text_atomic(path, text)
+    write_html(run_dir / "report.html", text, run_dir, title=title, refresh_s=refresh_s if running else None)
     return path
 
 
-# --- sweep figures and the self-contained HTML report ------------------------------------------
-def sweep_figures(sweep_dir: Path, df: pd.DataFrame) -> list[tuple[str, Path]]:
-    """Convergence of every job, final fitness per method (box plot), best-parameter distributions."""
-    import matplotlib
+def write_live_report(run_dir: Path, meta: dict[str, Any], final: bool = False, min_interval_s: float | None = None,
+                      refresh_s: float = LIVE_REFRESH_S) -> Path | None:
+    """The live view of a running run, called after every generation.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Rewrites ``report.md``/``report.html`` (the page reloads every ``refresh_s`` s) when ``min_interval_s``
+    (default :data:`LIVE_MIN_INTERVAL_S`) have passed since the previous live report, or since the first
+    call, and at least :data:`LIVE_COST_FACTOR` times what the previous one took: short runs write none
+    and a long run spends at most about a tenth of its time on its live view. ``final=True`` (an
+    interrupted run) rewrites a report that does not reload, if a live one was written. Returns the
+    report path, or ``None`` when nothing was written.
+    """
+    key = str(Path(run_dir).resolve())
+    if final:
+        if _live_last.pop(key, None) is None or not (Path(run_dir) / "report.html").exists():
+            return None
+        return write_run_report(run_dir, meta=meta, live=False)
+    return throttled(key, lambda: write_run_report(run_dir, meta=meta, live=True, refresh_s=refresh_s),
+                     min_interval_s)
 
-    figs_dir = Path(sweep_dir) / "figures"
-    figs_dir.mkdir(parents=True, exist_ok=True)
-    out: list[tuple[str, Path]] = []
-    done = df[df["status"] == "finished"] if len(df) else df
-    if len(done) == 0:
-        return out
-    methods = sorted(done["method"].unique())
-    colors = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
 
-    fig, ax = plt.subplots(figsize=(7, 4), dpi=110)
-    for _, r in done.iterrows():
-        h = load_history(Path(sweep_dir) / "jobs" / r["job"])
-        c = _convergence(h)
-        ax.plot(c["n_evals"], c["best"], color=colors[r["method"]], alpha=0.8, lw=1.2,
-                label=r["method"])
-    handles, labels = ax.get_legend_handles_labels()
-    uniq = dict(zip(labels, handles))
-    ax.legend(uniq.values(), uniq.keys(), fontsize=8)
-    vals = done["best_fitness"].astype(float)
-    if vals.min() > 0 and vals.max() / vals.min() > 20:
-        ax.set_yscale("log")
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("best fitness so far")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    p = figs_dir / "convergence_all.png"
-    fig.savefig(p)
-    plt.close(fig)
-    out.append(("Convergence of every job", p))
+def throttled(key: str, write: Any, min_interval_s: float | None = None) -> Any:
+    """Call ``write()`` for the live view ``key`` if it is due (see :func:`write_live_report`).
 
-    col = "test_fitness" if "test_fitness" in done and done["test_fitness"].notna().any() else "best_fitness"
-    fig, ax = plt.subplots(figsize=(max(4.5, 1.1 * len(methods) + 2), 3.8), dpi=110)
-    data = [done[done["method"] == m][col].astype(float).dropna().to_numpy() for m in methods]
-    ax.boxplot(data, tick_labels=methods, showmeans=True)
-    for i, d in enumerate(data):
-        ax.scatter(np.full(len(d), i + 1), d, s=12, color="k", alpha=0.6, zorder=3)
-    ax.set_ylabel(col.replace("_", " "))
-    ax.tick_params(axis="x", labelrotation=20, labelsize=8)
-    ax.grid(alpha=0.3, axis="y")
-    fig.tight_layout()
-    p = figs_dir / "final_fitness_box.png"
-    fig.savefig(p)
-    plt.close(fig)
-    out.append((f"Final {col.replace('_', ' ')} per method over seeds", p))
+    Returns what ``write()`` returned, or ``None`` when it was not due.
+    """
+    import time
 
-    pcols = [c for c in done.columns if c.startswith("param.") and done[c].notna().any()
-             and done[c].astype(float).nunique() > 1]
-    if pcols:
-        pcols = pcols[:12]
-        ncol = min(4, len(pcols))
-        nrow = int(np.ceil(len(pcols) / ncol))
-        fig, axes = plt.subplots(nrow, ncol, figsize=(3 * ncol, 2.4 * nrow), dpi=100, squeeze=False)
-        for ax, c in zip(axes.ravel(), pcols):
-            for i, m in enumerate(methods):
-                v = done[done["method"] == m][c].astype(float).dropna()
-                ax.scatter(v, np.full(len(v), i), color=colors[m], s=18)
-            v = done[c].astype(float).dropna()
-            if (v > 0).all() and v.max() / v.min() > 100:
-                ax.set_xscale("log")
-            ax.set_yticks(range(len(methods)), methods, fontsize=7)
-            ax.set_title(c[6:], fontsize=8)
-            ax.grid(alpha=0.3)
-        for ax in axes.ravel()[len(pcols):]:
-            ax.set_visible(False)
-        fig.tight_layout()
-        p = figs_dir / "best_parameters.png"
-        fig.savefig(p)
-        plt.close(fig)
-        out.append(("Best parameters of every job", p))
+    now = time.monotonic()
+    interval = LIVE_MIN_INTERVAL_S if min_interval_s is None else min_interval_s
+    last, cost = _live_last.setdefault(key, (now, 0.0))
+    if now - last < max(interval, LIVE_COST_FACTOR * cost):
+        return None
+    out = write()
+    done = time.monotonic()
+    _live_last[key] = (done, done - now if interval > 0 else 0.0)
     return out
 
 
-def _md_to_html(md: str) -> str:
-    """A small Markdown subset (headings, tables, code blocks, images, links, paragraphs) to HTML."""
-    import html
-    import re
+def sweep_warnings_md(jobs_dir: Path, job_ids: list[str]) -> list[str]:
+    """The ``## Warnings`` section of a sweep report: bound and failure warnings of every job."""
+    from tuner.bounds import run_warnings
 
-    out, lines, i = [], md.splitlines(), 0
-    inline_link = re.compile(r"\[([^\]]+)\]\(([^)]+)\)")
+    rows = [[job, w.kind, w.message] for job in job_ids if (Path(jobs_dir) / job / "meta.json").exists()
+            for w in run_warnings(Path(jobs_dir) / job)]
+    if not rows:
+        return ["## Warnings", "", "None: no best parameter within 2 % of a search bound, no failed evaluation.", ""]
+    return ["## Warnings", "", "Parameters within 2 % of a search bound (log10 range for log parameters) and "
+            "failed evaluations, per job.", "", _rows_table(rows, ["job", "kind", "warning"]), ""]
 
-    def inline(s: str) -> str:
-        s = html.escape(s)
-        s = re.sub(r"\*\*([^*]+)\*\*", r"<b>\1</b>", s)
-        s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
-        return inline_link.sub(r'<a href="\2">\1</a>', s)
 
-    while i < len(lines):
-        ln = lines[i]
-        if ln.startswith("```"):
-            j = i + 1
-            while j < len(lines) and not lines[j].startswith("```"):
-                j += 1
-            out.append("<pre>" + html.escape("\n".join(lines[i + 1:j])) + "</pre>")
-            i = j + 1
-            continue
-        m = re.match(r"^(#{1,4}) (.*)", ln)
-        if m:
-            n = len(m.group(1))
-            out.append(f"<h{n}>{inline(m.group(2))}</h{n}>")
-        elif ln.startswith("|"):
-            rows = []
-            while i < len(lines) and lines[i].startswith("|"):
-                rows.append([c.strip() for c in lines[i].strip().strip("|").split("|")])
-                i += 1
-            body = [r for r in rows if not all(set(c) <= set("-: ") for c in r)]
-            t = ["<table>", "<tr>" + "".join(f"<th>{inline(c)}</th>" for c in body[0]) + "</tr>"]
-            t += ["<tr>" + "".join(f"<td>{inline(c)}</td>" for c in r) + "</tr>" for r in body[1:]]
-            out.append("\n".join(t + ["</table>"]))
-            continue
+def _results_md(s: dict[str, Any]) -> list[str]:
+    ev = s["evaluation"]
+    md: list[str] = []
+    split_df = _split_tables(ev) if ev else None
+    blocks = {k: v for k, v in ev.items() if isinstance(v, str) and "\n" in v and k != "tables_md"}
+    if split_df is not None or s["metrics"]:
+        one_row = split_df is None and len(pivot_metrics(s["metrics"])) == 1
+        md += ["## Metrics of the best candidate" if one_row else "## Scores per recording", ""]
+        for k, v in blocks.items():
+            md += [f"{md_escape(k.replace('_', ' '))}:", "", "```", v.replace("```", "'''"), "```", ""]
+        if split_df is not None:
+            md += ["Metrics of the best parameters on each recording (test recordings were not used for tuning).",
+                   "", _frame_md(split_df), ""]
         else:
-            m = re.match(r"^!\[([^\]]*)\]\(([^)]+)\)$", ln.strip())
-            if m:
-                out.append(f'<figure><img alt="{html.escape(m.group(1))}" src="{m.group(2)}">'
-                           f"<figcaption>{html.escape(m.group(1))}</figcaption></figure>")
-            elif ln.startswith("- "):
-                out.append(f"<li>{inline(ln[2:])}</li>")
-            elif ln.strip():
-                out.append(f"<p>{inline(ln)}</p>")
-        i += 1
-    return "\n".join(out)
+            piv = pivot_metrics(s["metrics"])
+            if len(piv) == 1:  # one recording (or none): metric per row reads better than one wide row
+                md += ["Metrics of the best candidate.", "",
+                       _rows_table([[k, v] for k, v in piv.iloc[0].items()], ["metric", "value"], 4), ""]
+            elif len(piv):
+                md += ["Metrics of the best candidate on each recording.", "",
+                       _frame_md(piv.reset_index()), ""]
+    scalars = [[k, v] for k, v in ev.items() if not isinstance(v, (dict, list)) and k != "tables_md"
+               and not (isinstance(v, str) and "\n" in v)
+               and k not in ("train_fitness", "test_fitness", "cv_fitness")]
+    nested = {k: v for k, v in ev.items() if k not in ("train", "test", "cv") and isinstance(v, dict) and v
+              and all(isinstance(x, dict) for x in v.values())}
+    if scalars or nested:
+        md += ["## Other results", ""]
+        if scalars:
+            md += [_rows_table(scalars, ["result", "value"], 6), ""]
+        for k, v in nested.items():
+            rows = [[name] + [x if not isinstance(x, (dict, list)) else json.dumps(x) for x in d.values()]
+                    for name, d in v.items()]
+            head = ["name"] + list(next(iter(v.values())).keys())
+            md += [f"{md_escape(k.replace('_', ' '))}:", "", _rows_table(rows, head, 4), ""]
+    return md
 
 
-def write_html(path: Path, markdown: str, base_dir: Path) -> Path:
-    """A self-contained HTML page of a Markdown report: every PNG embedded as base64."""
-    import base64
-    import re
-
-    body = _md_to_html(markdown)
-
-    def embed(m: re.Match) -> str:
-        src = m.group(1)
-        p = Path(base_dir) / src
-        if p.suffix.lower() == ".png" and p.exists():
-            data = base64.b64encode(p.read_bytes()).decode("ascii")
-            return f'src="data:image/png;base64,{data}"'
-        return m.group(0)
-
-    body = re.sub(r'src="([^"]+)"', embed, body)
-    page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>{path.parent.name} report</title>
-<style>
-body {{ font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; padding: 0 1em; color: #222; }}
-table {{ border-collapse: collapse; margin: 1em 0; font-size: 0.85em; }}
-th, td {{ border: 1px solid #ccc; padding: 3px 8px; text-align: right; }}
-th {{ background: #f2f2f2; }} td:first-child, th:first-child {{ text-align: left; }}
-img {{ max-width: 100%; }} figure {{ margin: 1em 0; }} figcaption {{ font-size: 0.8em; color: #555; }}
-pre {{ background: #f6f6f6; padding: 0.6em; overflow-x: auto; }}
-</style></head><body>
-{body}
-</body></html>
-"""
-    Path(path).write_text(page)
-    return Path(path)
+def _figures_md(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> list[str]:
+    figs = run_dir / "figures"
+    md = ["## Figures", ""]
+    if not (run_dir / "history.csv").exists():
+        return md + ["(no evaluation yet)", ""]
+    hist = load_history(run_dir)
+    if len(hist) == 0:
+        return md + ["(no evaluation yet)", ""]
+    own = [("Convergence", plot_convergence(run_dir, figs / "convergence.png"))]
+    if space is not None and space.dim:
+        own.append(("Fitness against each parameter",
+                    plot_fitness_vs_params(hist, space, s["params"], figs / "fitness_vs_params.png")))
+        own.append(("Parallel coordinates of the best candidates",
+                     plot_parallel_coordinates(hist, space, figs / "parallel_coordinates.png")))
+    for title, p in own:
+        md += [f"### {title}", "", f"![{title}]({md_path('figures/' + p.name)})", ""]
+    if not live or s["status"] != "running":
+        for png in sorted(figs.glob("*.png")):
+            if png.name not in _OWN_FIGURES:
+                name = png.stem.replace("_", " ")
+                md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
+    return md

@@ -11,11 +11,10 @@ import math
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from tuner.config import ConfigError, config_from_dict, load_config, read_yaml
 from tuner.objective import hook
 from tuner.registry import build_objective
+from tuner.rundir import RunDir
 
 __all__ = ["evaluate_target"]
 
@@ -26,13 +25,14 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     target = Path(target)
     best_params = None
     if target.is_dir():
-        if not (target / "config.yaml").exists():
+        rd = RunDir(target)
+        if not rd.file("config.yaml").exists():
             raise ConfigError(target, "", "not a run directory (no config.yaml)")
-        raw = yaml.safe_load((target / "config.yaml").read_text())
+        raw = dict(rd.config())
         source, base_dir = raw.pop("source", str(target / "config.yaml")), Path(raw.pop("base_dir", target))
         cfg = config_from_dict(raw, source=source, base_dir=base_dir)
-        if (target / "best.yaml").exists():
-            best_params = yaml.safe_load((target / "best.yaml").read_text())["params"]
+        if rd.has_best():
+            best_params = dict(rd.best().params)
     else:
         cfg = load_config(target)
     try:

@@ -238,6 +238,8 @@ class Run:
             self._write_meta(n_evals=g.stats.n_evals, n_failed=g.n_failed, generations=state["gens"],
                              timing=Timing(wall0 + time.perf_counter() - t_session,
                                            tm.objective_s + sum(r.seconds for r in g.records), tm.sessions))
+            if not replay.replaying:
+                self._live_report()
             now = time.perf_counter()
             self._progress(g, stages, now - state["t0"])
             state["t0"] = now
@@ -282,6 +284,7 @@ class Run:
         timing = Timing(wall0 + time.perf_counter() - t_session, tm.objective_s, tm.sessions)
         if interrupted:
             self._write_meta(status="interrupted", interrupted=_now(), timing=timing)
+            self._live_report(final=True)
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
@@ -343,10 +346,20 @@ class Run:
         from tuner.report import write_run_report
 
         try:
-            write_run_report(self.dir)
+            write_run_report(self.dir, meta=self.meta.to_dict())
         except Exception as exc:  # pragma: no cover - figures are a bonus, the results are on disk
             if self.progress:
                 self.progress(f"warning: report not written: {type(exc).__name__}: {exc}")
+
+    def _live_report(self, final: bool = False) -> None:
+        """report.html of the running run (throttled), or a last non-reloading one when ``final``."""
+        from tuner.report import write_live_report
+
+        try:
+            write_live_report(self.dir, self.meta.to_dict(), final=final)
+        except Exception as exc:  # pragma: no cover - a live view must not stop the run
+            if self.progress:
+                self.progress(f"warning: live report not written: {type(exc).__name__}: {exc}")
 
     def _result(self, status: str, n_evals: int, gens: int, reason: str, extra=None) -> RunResult:
         b = self.best

@@ -453,6 +453,17 @@ class RunDir:
     def history(self, param_names: list[str]) -> History:
         return History(self.path / "history.csv", param_names)
 
+    def history_rows(self) -> list[dict[str, str]]:
+        """The rows of ``history.csv`` as strings (empty when nothing was evaluated yet)."""
+        p = self.path / "history.csv"
+        if not p.is_file():
+            return []
+        try:
+            with open(p, newline="") as fh:
+                return list(csv.DictReader(fh))
+        except (OSError, UnicodeDecodeError, csv.Error) as exc:
+            raise RunError(f"{p}: unreadable ({exc})") from None
+
     # --- writing ------------------------------------------------------------------------------
     def write_config(self, resolved: dict[str, Any]) -> str:
         """Write ``config.yaml`` and its canonical snapshot; return the config hash."""

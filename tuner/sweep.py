@@ -194,7 +194,13 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
 
         results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
     else:
-        results = [_run_job(j, d, False, quiet) for j, d in todo]
+        from tuner.report import throttled
+
+        results = []
+        for j, d in todo:  # the report is rewritten between jobs (throttled): a live view of the sweep
+            results.append(_run_job(j, d, False, quiet))
+            if len(results) < len(todo):
+                throttled(f"sweep:{out.resolve()}", lambda: write_sweep_report(out, live=True))
     report = write_sweep_report(out)
     return {"dir": out, "report": report, "ok": all(r["status"] == "finished" for r in results),
             "results": results}
@@ -281,9 +287,13 @@ def _hash(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
 
 
-def write_sweep_report(sweep_dir: str | Path) -> Path:
-    """``report.md``, ``report.html`` (figures embedded), ``results.csv``, ``summary.csv`` and figures."""
-    from tuner.report import sweep_figures, write_html
+def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
+    """``report.md``, ``report.html`` (figures embedded), ``results.csv``, ``summary.csv`` and figures.
+
+    ``live``: the sweep is still going; the HTML page reloads itself until every job has finished.
+    """
+    from tuner.render import md_escape
+    from tuner.report import LIVE_REFRESH_S, sweep_figures, sweep_warnings_md, write_html
 
     sweep_dir = Path(sweep_dir)
     sw = load_sweep_from_dir(sweep_dir)
@@ -314,11 +324,13 @@ def write_sweep_report(sweep_dir: str | Path) -> Path:
         ranking = ranking[["rank", "method"] + [c for c in ranking.columns if c not in ("rank", "method")]]
     main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
                              "n_evals", "wall_s"] if c in df.columns]
-    md = [f"# Sweep {sw['name']}", "", sw.get("description") or "", "",
+    running = live and not (len(df) and (df["status"] == "finished").all())
+    md = [f"# Sweep {md_escape(sw['name'])}", "", md_escape(sw.get("description") or ""), "",
           f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
           f"Written {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}.", "",
           "## Ranking (over seeds)", "", _md(ranking), "",
           "## Every job", "", _md(df[main_cols]), "",
+          *sweep_warnings_md(jobs_dir, [j["id"] for j in sw["jobs"]]),
           "Full tables: [results.csv](results.csv) (one row per job, all metrics and parameters), "
           "[summary.csv](summary.csv) (mean, median, std, min over seeds).", ""]
     test_cols = [c for c in df.columns if c.startswith("test.")]
@@ -336,7 +348,10 @@ def write_sweep_report(sweep_dir: str | Path) -> Path:
           [f"| {i} | `{h}` | {s} |" for i, h, s in hashes] + [""]
     text = "\n".join(md)
     (sweep_dir / "report.md").write_text(text)
-    write_html(sweep_dir / "report.html", text, sweep_dir)
+    if running:
+        text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
+    write_html(sweep_dir / "report.html", text, sweep_dir, title=f"Sweep {sw['name']}",
+               refresh_s=LIVE_REFRESH_S if running else None)
     return sweep_dir / "report.md"
 
 

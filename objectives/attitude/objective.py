@@ -255,6 +255,23 @@ class FilterObjective:
     def has_test_data(self) -> bool:
         return bool(self.test_specs)
 
+    def sample_rate(self) -> tuple[float | None, str]:
+        """Rate of the training recordings (stated by synthetic specs, else read from the recordings)."""
+        specs = self.train_specs or []
+        if specs and all(isinstance(sp, dict) and set(sp) == {"synthetic"} and "rate_hz" in (sp["synthetic"] or {})
+                         for sp in specs):  # stated in the config: no need to generate the recordings
+            rates = sorted({round(float(sp["synthetic"]["rate_hz"]), 3) for sp in specs})
+        else:
+            try:
+                rates = sorted({round(1.0 / float(r.dt), 3) for r in self.recordings("train")})
+            except (RecordingError, OSError, ValueError) as exc:
+                return None, f"training data not readable: {exc}"
+        if not rates:
+            return None, "no training recording"
+        if max(rates) - min(rates) > 1e-3 * max(rates):
+            return None, "training recordings differ: " + ", ".join(f"{r:g} Hz" for r in rates)
+        return rates[0], "rate of the training recordings; per-sample parameters must be rescaled for another rate"
+
     def describe(self) -> dict[str, Any]:
         """Provenance for ``tuner export``: filter, metric and the data specs."""
         def specs(lst):

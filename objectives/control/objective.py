@@ -188,11 +188,26 @@ class ClosedLoopObjective:
         """Every parameter of the controller (searched or fixed)."""
         return [p.name for p in self._cls.params]
 
+    def sample_rate(self) -> tuple[float | None, str]:
+        """The controller's sampling rate (1 / Ts_s of the sensor parameters)."""
+        return 1.0 / float(self._sensors.Ts_s), "controller period Ts_s"
+
     def describe(self) -> dict[str, Any]:
         """Provenance for ``tuner export``: controller and reference profile."""
         return {"objective": {"kind": "closed_loop", "controller": self.controller}, "data": self.profile}
 
     # --- evaluation -----------------------------------------------------------------------------
+    def traces(self, params: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+        """Speed, yaw rate, IB angle and average current of ``params`` against the references
+        (the engine's method-comparison figure)."""
+        sim = self.simulate(params)
+        t, y, ref = np.asarray(sim["t"]), np.asarray(sim["outputs"]), np.asarray(sim["references"])
+        deg = 180.0 / np.pi
+        return {"speed (m/s)": {"t": t, "y": y[:, 0], "ref": ref[:, 0]},
+                "yaw rate (deg/s)": {"t": t, "y": y[:, 3] * deg, "ref": ref[:, 1] * deg},
+                "IB angle theta3 (deg)": {"t": t, "y": y[:, 1] * deg, "ref": None},
+                "avg. current (A)": {"t": t, "y": y[:, 4], "ref": None}}
+
     def simulate(self, params: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """Run the closed loop; dict with t, references (N, 2: m/s, rad/s), outputs (N, 5),
         measurements (N, 5), voltages (N, 2), currents (N, 2), state (N, 8), status, n_done."""

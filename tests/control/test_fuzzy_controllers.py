@@ -180,7 +180,7 @@ def test_c_header_with_tables_compiles_and_holds_the_python_values(short_run, tm
         pytest.skip("no C compiler")
     from tuner.export import export
 
-    header = export(short_run.run_dir, "c")
+    header = export(short_run.run_dir, "c", prefix="TUNER")
     (tmp_path / "tuned.h").write_text(header)
     (tmp_path / "main.c").write_text(
         '#include <stdio.h>\n#include "tuned.h"\n'

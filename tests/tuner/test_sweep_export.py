@@ -176,7 +176,7 @@ def test_export_yaml_json_python_round_trip(run_dir):
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
 def test_c_header_compiles_and_prints_the_same_values(run_dir, tmp_path):
     header = tmp_path / "tuned.h"
-    header.write_text(export(run_dir, "c"))
+    header.write_text(export(run_dir, "c", prefix="TUNER"))
     best = yaml.safe_load((run_dir / "best.yaml").read_text())["params"]
     prog = tmp_path / "main.c"
     prog.write_text('#include <stdio.h>\n#include "tuned.h"\n'
