@@ -95,9 +95,15 @@ def evaluate_one(objective: Any, params: dict[str, Any]) -> EvalRecord:
 
     A :class:`TimedObjective` runs the call in a child process that is killed after its timeout.
     """
+    from tuner.loop import SeededCall
+
     t0 = time.perf_counter()
     if isinstance(objective, TimedObjective) and objective.timeout_s:
         ev, raised = objective.call_with_timeout(params)
+    elif isinstance(objective, SeededCall) and isinstance(objective.objective, TimedObjective) \
+            and objective.objective.timeout_s:  # (params, seed) items of the run loop
+        timed = objective.objective
+        ev, raised = timed.call_with_timeout(params, call=SeededCall(timed.objective))
     else:
         ev, raised = _call(objective, params)
     if ev.status == "ok" and not math.isfinite(ev.fitness):  # pragma: no cover - as_evaluation handles
@@ -136,7 +142,8 @@ class TimedObjective:
     def __call__(self, params: dict[str, Any]) -> Any:
         return self.objective(params)
 
-    def call_with_timeout(self, params: dict[str, Any]) -> tuple[Evaluation, bool]:
+    def call_with_timeout(self, params: Any, call: Any = None) -> tuple[Evaluation, bool]:
+        """Evaluate ``(call or self.objective)(params)`` in a forked child killed after ``timeout_s``."""
         import multiprocessing as mp
 
         if not self._prepared:  # load data once in this process, so every child inherits it
@@ -149,7 +156,7 @@ class TimedObjective:
                     pass
         ctx = mp.get_context("fork")
         recv, send = ctx.Pipe(duplex=False)
-        child = ctx.Process(target=_child, args=(self.objective, params, send), daemon=True)
+        child = ctx.Process(target=_child, args=(call or self.objective, params, send), daemon=True)
         child.start()
         send.close()
         try:

@@ -122,14 +122,21 @@ def test_filter_objective_score_is_typed_and_matches_call():
 def test_export_takes_provenance_and_tables_from_the_objective(tmp_path):
     from tuner.export import export
 
-    run = tmp_path / "r"
-    run.mkdir()
-    (run / "best.yaml").write_text(yaml.safe_dump({"params": {"x0": 0.5, "x1": -1.0}, "fitness": 1.25}))
-    (run / "meta.json").write_text(json.dumps({"optimizer": "pso", "seed": 3, "n_evals": 10}))
-    (run / "config.yaml").write_text(yaml.safe_dump({"objective": {"kind": "function", "function": "ackley",
-                                                                   "dim": 2}, "base_dir": str(tmp_path)}))
+    from tuner.config import config_from_dict
+    from tuner.run import run as run_job
+
+    cfg = config_from_dict({"name": "exp", "seed": 3, "objective": {"kind": "function", "function": "ackley",
+                                                                      "dim": 2},
+                            "optimizer": {"method": "random", "population": 5, "generations": 2},
+                            "parallel": {"backend": "serial", "n_jobs": 1}},
+                           source=str(tmp_path / "job.yaml"), base_dir=tmp_path)
+    res = run_job(cfg, run_dir=tmp_path / "r", quiet=True)
+    run = res.run_dir
     doc = json.loads(export(run, "json"))
     assert doc["objective"] == {"kind": "function", "function": "ackley"} and doc["data"] is None
-    (run / "config.yaml").write_text(yaml.safe_dump({"objective": {"kind": "python", "callable": "nomod:f"}}))
+    assert doc["params"] == res.best_params and doc["fitness"] == res.best_fitness
+    cfg_doc = yaml.safe_load((run / "config.yaml").read_text())
+    cfg_doc["objective"] = {"kind": "python", "callable": "nomod:f"}
+    (run / "config.yaml").write_text(yaml.safe_dump(cfg_doc))
     doc = json.loads(export(run, "json"))  # no longer builds: kind and parameters only
-    assert doc["objective"] == {"kind": "python"} and doc["params"] == {"x0": 0.5, "x1": -1.0}
+    assert doc["objective"] == {"kind": "python"} and doc["params"] == res.best_params

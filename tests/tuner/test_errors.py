@@ -89,11 +89,11 @@ def test_run_dir_that_cannot_be_created(tmp_path):
 
 def test_full_disk_is_one_error_line_and_the_run_resumes(tmp_path, monkeypatch, capsys):
     """ENOSPC at the k-th write: one error line naming the file; what was written stays, resume finishes."""
-    from tuner import cli, run
+    from tuner import cli, rundir
 
     p = tmp_path / "job.yaml"
     p.write_text(yaml.safe_dump({**BASE, "optimizer": {"method": "pso", "population": 4, "generations": 4}}))
-    real, calls = run.atomic_write, []
+    real, calls = rundir.atomic_write, []
 
     def failing(path, data):
         calls.append(path)
@@ -101,14 +101,14 @@ def test_full_disk_is_one_error_line_and_the_run_resumes(tmp_path, monkeypatch, 
             raise OSError(errno.ENOSPC, "No space left on device", str(path))
         return real(path, data)
 
-    monkeypatch.setattr(run, "atomic_write", failing)
+    monkeypatch.setattr(rundir, "atomic_write", failing)
     rd = tmp_path / "run"
     assert cli.main(["run", str(p), "--run-dir", str(rd), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"error: {calls[-1]}: No space left on device"), err
     rows_before = len(list(csv.DictReader(open(rd / "history.csv"))))
     assert rows_before >= 4
-    monkeypatch.setattr(run, "atomic_write", real)
+    monkeypatch.setattr(rundir, "atomic_write", real)
     assert cli.main(["resume", str(rd), "-q"]) == 0
     ref = tmp_path / "ref"
     assert cli.main(["run", str(p), "--run-dir", str(ref), "-q"]) == 0

@@ -189,7 +189,7 @@ def test_report_shows_final_status_and_notes_capped_workers(tmp_path):
     res = run(job(tmp_path, optimizer={"population": 3, "generations": 2},
                   parallel={"backend": "loky", "n_jobs": 64}), run_dir=tmp_path / "r", quiet=True)
     text = (res.run_dir / "report.md").read_text()
-    assert "Status **finished**" in text
+    assert "| status | finished" in text
     meta = json.loads((res.run_dir / "meta.json").read_text())
     assert meta["n_jobs_requested"] == 64 and meta["n_jobs"] == min(3, os.cpu_count())
     assert any("capped at the population 3" in n for n in meta["notes"])
