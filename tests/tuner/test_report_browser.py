@@ -107,6 +107,8 @@ def test_live_report_reloads_while_running_and_not_after(tmp_path, monkeypatch):
     raw = _raw("live", {"run_dir": str(d), "log": str(log)}, generations=3)
     run(config_from_dict(raw, base_dir=tmp_path), run_dir=d, quiet=True)
     seen = [json.loads(ln) for ln in log.read_text().splitlines()]
+    assert len(seen) == 25 and seen[0] is None  # the preflight evaluates the defaults once before the run
+    seen = seen[1:]
     # generation 1 (8 evaluations) sees no page, generations 2 and 3 the live page written after 1 and 2
     assert seen[:8] == [None] * 8 and len(seen) == 24
     live_pages = seen[8:]
