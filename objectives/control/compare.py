@@ -32,7 +32,8 @@ class ControllerResult:
     ----------
     job : run directory name inside ``jobs/``.
     controller : controller name (``pid``, ``protective_fuzzy``, ...).
-    fitness, initial_fitness : F of eq. 2.39 at the tuned and the initial parameters.
+    fitness, initial_fitness : F of eq. 2.39 at the tuned and the initial parameters (NaN when the
+        initial parameters fail, e.g. violate a tracking requirement: see ``initial_error``).
     peak_theta3_deg, peak_current_A : peak |IB angle| (deg) and peak |average current| (A), tuned.
     rise_time_nu_s, rise_time_xi_s : 0-90 % rise times of the first speed and yaw steps (s), tuned.
     response : path of ``response_best.npz`` (``None`` if the run has none).
@@ -47,6 +48,7 @@ class ControllerResult:
     rise_time_nu_s: float
     rise_time_xi_s: float
     response: pathlib.Path | None
+    initial_error: str = ""
 
 
 def collect_runs(sweep_dir: str | pathlib.Path) -> list[ControllerResult]:
@@ -69,12 +71,15 @@ def collect_runs(sweep_dir: str | pathlib.Path) -> list[ControllerResult]:
                 job=d.name,
                 controller=str(controller),
                 fitness=float(doc.get("fitness", math.nan)),
-                initial_fitness=float(ev.get("initial_fitness", math.nan)),
+                initial_fitness=float(ev.get("initial_fitness", math.nan))
+                if ev.get("initial_status", "ok") == "ok"
+                else math.nan,
                 peak_theta3_deg=float(m.get("peak_theta3_deg", math.nan)),
                 peak_current_A=float(m.get("peak_current_A", math.nan)),
                 rise_time_nu_s=float(m.get("rise_time_nu_s", math.nan)),
                 rise_time_xi_s=float(m.get("rise_time_xi_s", math.nan)),
                 response=npz if npz.exists() else None,
+                initial_error=str(ev.get("initial_error", "")),
             )
         )
     return out
@@ -88,9 +93,12 @@ def comparison_table(results: list[ControllerResult]) -> str:
     )
     rows = []
     for r in sorted(results, key=lambda r: r.fitness):
-        imp = 100 * (r.initial_fitness - r.fitness) / r.initial_fitness if r.initial_fitness > 0 else math.nan
+        if r.initial_fitness > 0:
+            init = f"{r.initial_fitness:.4f} | {100 * (r.initial_fitness - r.fitness) / r.initial_fitness:.1f}"
+        else:
+            init = f"failed: {r.initial_error or 'see the run'} | -"
         rows.append(
-            f"| {r.controller} | {r.fitness:.4f} | {r.initial_fitness:.4f} | {imp:.1f} | {r.peak_theta3_deg:.1f} "
+            f"| {r.controller} | {r.fitness:.4f} | {init} | {r.peak_theta3_deg:.1f} "
             f"| {r.peak_current_A:.3f} | {r.rise_time_nu_s:.2f} | {r.rise_time_xi_s:.2f} |"
         )
     return "\n".join([head, *rows])

@@ -8,7 +8,7 @@ YAML section (``objective:``)::
     fixed: {yaw_gain_V: 0.15}    # controller parameters held fixed (override its defaults)
     plant_params: {m_b_kg: 0.40} # WMPParams overrides (robustness studies)
     sensors: {gyro_noise_dps: 0.3}   # SensorParams overrides
-    profile: thesis              # or {duration_s, steps: [{t, v, yaw_rate_deg_s}, ...]}
+    profile: thesis_2s           # a name (thesis, thesis_2s) or {duration_s, steps: [{t, v, yaw_rate_deg_s}, ...]}
     cost: {alpha1: 1.4, alpha2: 0.85, beta: 1.6, gamma: 0.4}
     noise_seed: 0                # the same params always see the same sensor noise
     duration_s: 10.0             # optional: truncate or override the profile's duration
@@ -21,8 +21,8 @@ YAML section (``objective:``)::
     max_mae_xi_deg_s: 5.0        # yaw-rate MAE (deg/s)
 
 Tracking requirements. Eq. 2.39 is a product, so a controller that barely moves drives the
-oscillation and current factors, and F, towards 0 (a standing robot scores F = 0.03 on the 2 s
-profile, better than every tuned controller); a run that violates a requirement is a failure
+oscillation and current factors, and F, towards 0 (a robot that stands still scores F = 0: no
+oscillation, no current); a run that violates a requirement is a failure
 (``Evaluation.failed`` with the measured value in the message and every metric). The thesis's
 requirements (section 2.3.4): the tuned controllers reach the references "in less than 0.7 sec"
 (speed "achieved in 0.68 sec" by both tuned fuzzy and PID), and tuning improved, not traded away,
@@ -334,6 +334,7 @@ class ClosedLoopObjective:
         out: dict[str, Any] = {
             "initial_fitness": ev0.fitness,
             "initial_status": ev0.status,
+            "initial_error": ev0.error,
             "initial_peak_theta3_deg": ev0.metrics.get("peak_theta3_deg", math.nan),
             "initial_peak_current_A": ev0.metrics.get("peak_current_A", math.nan),
             "best_fitness": ev1.fitness,
