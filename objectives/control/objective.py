@@ -63,6 +63,7 @@ __all__ = ["ClosedLoopObjective", "THESIS_REQUIREMENTS"]
 #: section 2.3.4: references reached in < 0.7 s; tracking no worse than the initial design (module doc)
 THESIS_REQUIREMENTS = {"max_rise_time_s": 0.7, "max_mae_nu": 0.09, "max_mae_xi_deg_s": 5.0}
 _REQUIREMENT_KEYS = tuple(THESIS_REQUIREMENTS)
+_COMPARED = ("peak_theta3_deg", "peak_current_A", "rise_time_nu_s", "rise_time_xi_s", "mae_nu", "mae_xi")
 
 _KEYS = {
     "kind",
@@ -322,9 +323,12 @@ class ClosedLoopObjective:
 
         Writes ``figures/response.png`` (initial vs tuned closed loop, Figs. 2.16-2.17) and, for
         controllers with ``surfaces`` (the fuzzy ones), ``figures/surface_<flc>.png`` (initial vs
-        tuned action surfaces, Figs. 2.19-2.20), and ``response_best.npz`` (:meth:`save_response`).
+        tuned action surfaces, Figs. 2.19-2.20), ``response_best.npz`` (:meth:`save_response`) and,
+        for a sweep job (``.../jobs/<id>``), ``figures/controllers.png``: the tuned responses of every
+        job of the sweep finished so far (the last job's figure has them all).
         Returns ``initial_fitness``, the initial and best peak IB angle, peak current and rise times,
-        and ``improvement_pct`` = 100 (F_init - F_opt) / F_init.
+        ``improvement_pct`` = 100 (F_init - F_opt) / F_init, and ``train`` = {profile: {F, peaks, rise
+        times, MAEs}} of the best parameters, which the sweep tables collect as ``train.*`` columns.
         """
         run_dir = pathlib.Path(run_dir)
         fig_dir = run_dir / "figures"
@@ -346,8 +350,18 @@ class ClosedLoopObjective:
         }
         if ev0.status == "ok" and ev1.status == "ok" and ev0.fitness > 0:
             out["improvement_pct"] = 100.0 * (ev0.fitness - ev1.fitness) / ev0.fitness
+        # the comparison quantities in the per-scenario form the generic sweep tables collect
+        # (results.csv / summary.csv columns train.F, train.peak_theta3_deg, ...)
+        scenario = self.profile if isinstance(self.profile, str) else "profile"
+        out["train"] = {
+            scenario: {"F": ev1.fitness, **{k: ev1.metrics.get(k, math.nan) for k in _COMPARED}},
+        }
         self.plot_response(init, best, fig_dir / "response.png")
         self.save_response(best, run_dir / "response_best.npz")
+        if run_dir.parent.name == "jobs":  # a sweep job: every finished sibling's response on one figure
+            from objectives.control.compare import collect_runs, plot_responses
+
+            plot_responses(collect_runs(run_dir.parent.parent), fig_dir / "controllers.png")
         if callable(getattr(self._ctrl, "surfaces", None)):
             from objectives.control.report import plot_surfaces
 

@@ -125,6 +125,12 @@ def test_short_pso_improves_f_under_the_requirements(pid_run):
     assert pid_run.best_metrics["rise_time_nu_s"] <= 0.7 and pid_run.best_metrics["mae_nu"] <= 0.09
     assert ev["best_peak_current_A"] == pytest.approx(pid_run.best_metrics["peak_current_A"])
     assert (pid_run.run_dir / "response_best.npz").exists()
+    # the per-scenario block the sweep tables collect as train.* columns, and the sweep-wide figure
+    row = ev["train"]["thesis_2s"]
+    assert row["F"] == pytest.approx(pid_run.best_fitness)
+    assert row["peak_theta3_deg"] == pytest.approx(pid_run.best_metrics["peak_theta3_deg"])
+    assert row["rise_time_nu_s"] == pytest.approx(pid_run.best_metrics["rise_time_nu_s"])
+    assert (pid_run.run_dir / "figures" / "controllers.png").exists()
 
 
 def test_comparison_table_and_figure_from_runs(pid_run):
