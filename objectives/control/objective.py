@@ -5,7 +5,7 @@ YAML section (``objective:``)::
     kind: closed_loop
     plant: wmp
     controller: pid              # a name of objectives.control.controllers.CONTROLLERS
-    fixed: {yaw_gain_V: 0.15}    # controller parameters held fixed (override its defaults)
+    fixed: {yaw_gain_V: 0.015}   # controller parameters held fixed (override its defaults)
     plant_params: {m_b_kg: 0.40} # WMPParams overrides (robustness studies)
     sensors: {gyro_noise_dps: 0.3}   # SensorParams overrides
     profile: thesis_2s           # a name (thesis, thesis_2s) or {duration_s, steps: [{t, v, yaw_rate_deg_s}, ...]}
