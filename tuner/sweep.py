@@ -337,6 +337,9 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     if test_cols:
         md += ["## Held-out recordings (mean over test recordings)", "",
                _md(df[["job"] + [c for c in df.columns if c.startswith("train.")] + test_cols]), ""]
+    elif any(c.startswith("train.") for c in df.columns):  # e.g. closed loop: F, peaks, rise times
+        md += ["## Scores of the best parameters (objective's evaluation)", "",
+               _md(df[["job"] + [c for c in df.columns if c.startswith("train.")]]), ""]
     md += ["## Figures", ""]
     for title, p in figs:
         md += [f"### {title}", "", f"![{title}]({p.relative_to(sweep_dir).as_posix()})", ""]

@@ -2,11 +2,25 @@
 
 - SAE, SSE (eq. 2.34) and STAE, STSE (eq. 2.35, discrete time-weighted with t_k = k Ts, k = 1..N);
 - the overall value of a measure as log10 of the product over the errors (eq. 2.36);
-- the MAE-weighted cost F of eq. 2.39.
+- the MAE-weighted cost F of eq. 2.39, in SI units;
+- the rise time of a step response (Table 2.4's T_rise, the "reference achieved in less than 0.7 s"
+  of section 2.3.4).
 
-Units used for the errors (a reconstruction: the thesis does not state them, but these make the
-magnitudes of its Table 2.5 and F_init = 0.1049 consistent): e_nu in m/s, e_xi in rad/s, e_omega3 in
-deg/s, I_A in A.
+Units. The thesis states none for eqs. 2.34-2.39; two different sets are consistent with its numbers.
+
+* Eq. 2.39 (F) takes every signal in SI: e_nu in m/s, e_xi and e_omega3 in rad/s, I_A in A. F is a
+  product of powers of dimensional means, so its value depends on the units: with the Table 2.7
+  initial parameters on our model, SI gives F = 0.112 on the thesis profile of 2 s steps (thesis
+  0.1049; see docs/control-cost.md), while e_omega3 in deg/s multiplies F by
+  (180/pi)^(1.6/4) = 5.07 and e_xi in deg/s by (180/pi)^(0.85/4) = 2.37, far from the thesis. SI
+  is also the only choice that needs no unit conversion inside the simulation, where the thesis's
+  model (eq. 2.12) is written.
+* The error integrals of eqs. 2.34-2.36 are reported as in Table 2.5: e_nu in m/s, e_xi in rad/s
+  and e_omega3 in deg/s. There SAE(e_omega3) = 4.27e3 over ~800 samples is a mean of ~5 deg/s, a
+  plausible IB rate, whereas in rad/s it would be 5 rad/s = 290 deg/s on average; SAE(e_xi) = 128.7
+  for the 0.5 / -1.2 rad/s yaw steps of section 2.2.3.1 is a lag of 0.38 s in rad/s, of 7 ms in
+  deg/s (faster than the 0.9 s rise time of Table 2.4). These integrals are metrics only; they do
+  not enter F.
 """
 
 from __future__ import annotations
@@ -24,6 +38,7 @@ __all__ = [
     "mae_weighted_cost",
     "DEFAULT_COST_WEIGHTS",
     "error_integrals",
+    "rise_time_s",
 ]
 
 #: alpha1 (speed), alpha2 (yaw rate), beta (IB rate), gamma (current) of eq. 2.39
@@ -92,11 +107,23 @@ def error_integrals(errors: Mapping[str, np.ndarray], Ts: float) -> dict[str, fl
 
 
 def mae_weighted_cost(e_nu, e_xi, e_omega3, i_avg, weights: Mapping[str, float] | None = None) -> float:
-    """F of eq. 2.39: the fourth root of the weighted product of mean absolute errors.
+    """F of eq. 2.39: the fourth root of the weighted product of four mean absolute errors.
 
     F = (MAE(e_nu)^alpha1 MAE(e_xi)^alpha2 MAE(e_omega3)^beta mean(I_A^2)^gamma)^(1/4), each mean over
-    the N samples (the thesis's "L" is the measurement length). Signals (N,) in the units of the
-    module docstring; weights default to :data:`DEFAULT_COST_WEIGHTS`.
+    the N samples (the thesis's "L" is the measurement length N: the sums run over j = 1..N).
+
+    Parameters
+    ----------
+    e_nu : (N,) speed error nu_d - nu, m/s.
+    e_xi : (N,) yaw-rate error xi_d - xi, rad/s.
+    e_omega3 : (N,) IB-rate error -omega3, rad/s.
+    i_avg : (N,) average motor current I_A = (I1 + I2) / 2, A.
+    weights : overrides of :data:`DEFAULT_COST_WEIGHTS` (alpha1, alpha2, beta, gamma).
+
+    Notes
+    -----
+    The value depends on the units (module docstring): with these SI units F at Table 2.7's initial
+    parameters is 0.112 on our model with the thesis profile of 2 s steps (thesis: 0.1049).
     """
     w = dict(DEFAULT_COST_WEIGHTS)
     if weights:
@@ -111,3 +138,41 @@ def mae_weighted_cost(e_nu, e_xi, e_omega3, i_avg, weights: Mapping[str, float] 
     terms = [np.mean(np.abs(sig[0])), np.mean(np.abs(sig[1])), np.mean(np.abs(sig[2])), np.mean(sig[3] ** 2)]
     expo = [w["alpha1"], w["alpha2"], w["beta"], w["gamma"]]
     return float(np.prod([t**a for t, a in zip(terms, expo)]) ** 0.25)
+
+
+def rise_time_s(y, ref, Ts: float, k0: int, frac: float = 0.9) -> float:
+    """Time from the reference step at sample ``k0`` until ``y`` first covers ``frac`` of the step.
+
+    The step goes from ``ref[k0 - 1]`` (0 when ``k0 == 0``) to ``ref[k0]``; the search window ends
+    where the reference changes again (or at the end). With ``frac = 0.9`` and a start at rest this
+    is the 0-90 % rise time of the thesis's "the desired linear speed is achieved in 0.68 sec"
+    (section 2.3.4). A first-order lag with time constant tau gives tau ln 10.
+
+    Parameters
+    ----------
+    y, ref : (N,) response and reference, same units.
+    Ts : sample period, s.
+    k0 : index of the step (ref[k0] != ref[k0 - 1]).
+    frac : fraction of the step to cover, in (0, 1].
+
+    Returns
+    -------
+    (k - k0) Ts for the first k >= k0 in the window with (y_k - r0) / (r1 - r0) >= frac, or ``inf``
+    if the response never gets there within the window.
+    """
+    y, ref = _e(y), _e(ref)
+    if y.size != ref.size:
+        raise ValueError(f"y and ref must have equal length, got {y.size} and {ref.size}")
+    if not (0 <= k0 < ref.size):
+        raise ValueError(f"k0 must index the signals (0..{ref.size - 1}), got {k0}")
+    if not (0.0 < frac <= 1.0) or not Ts > 0:
+        raise ValueError(f"need 0 < frac <= 1 and Ts > 0, got frac={frac}, Ts={Ts}")
+    r0 = float(ref[k0 - 1]) if k0 > 0 else 0.0
+    r1 = float(ref[k0])
+    if r1 == r0:
+        raise ValueError(f"no reference step at sample {k0} (ref = {r1} before and after)")
+    change = np.flatnonzero(ref[k0:] != r1)
+    end = k0 + (int(change[0]) if change.size else ref.size - k0)
+    progress = (y[k0:end] - r0) / (r1 - r0)
+    hit = np.flatnonzero(progress >= frac)
+    return float(hit[0]) * Ts if hit.size else float("inf")

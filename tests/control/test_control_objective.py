@@ -28,7 +28,9 @@ def test_configs_build_picklable_deterministic_objectives(cfg):
     assert set(doc["parameters"]) <= set(space.names)
     clone = pickle.loads(pickle.dumps(obj))
     a, b = obj(obj.defaults), clone(obj.defaults)
-    assert a.status == "ok" and a.fitness == b.fitness and a.metrics == b.metrics
+    # LQR's initial weights rise in 0.71 s and fail the 0.7 s requirement: still a scored, recorded run
+    assert a.status == b.status and a.fitness == b.fitness and a.metrics == b.metrics
+    assert a.status == "ok" or "rise time" in a.error
     assert {"sae_nu", "stse_omega3", "sae_log10_prod", "peak_theta3_deg", "peak_current_A"} <= set(a.metrics)
 
 

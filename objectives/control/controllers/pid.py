@@ -10,9 +10,12 @@ then *reduce* the voltage (section 2.2.2.2), so the oscillation error fed to PID
 The yaw loop (FLC3 in the thesis) is "not replaced nor optimised"; we use the exact linear
 equivalent of FLC3's structure (N/Z/P triangles uniformly covering +-30 deg/s with singletons
 -g, 0, g and weighted-average defuzzification is linear interpolation), so eq. 2.30 becomes
-u_xi,k = u_xi,k-1 + g * clip(e_xi / 30 deg/s, -1, 1). With Table 2.7's g = 1.5 V this loop is unstable
-on our model (linearised yaw dynamics dxi/dt = -58 xi + 153 u_xi: the discrete closed-loop pole lies at
-z = -1.31), so the default is g = 0.15 V (poles inside the unit circle, yaw rate settles in < 0.1 s).
+u_xi,k = u_xi,k-1 + g * clip(e_xi / 30 deg/s, -1, 1). The thesis keeps FLC3 in this scheme ("not
+replaced nor optimized", 2.3.2), so g is FLC3's Table 2.7 gain u3 = 1.5 under the time-integrator
+reading of eq. 2.30 used by the fuzzy controllers (u3 in V/s, see :mod:`.fuzzy`): g = u3 Ts = 0.015 V
+per 10 ms period, the same yaw loop as the fuzzy scheme's initial FLC3 (yaw rate 90 % in 0.27 s).
+(Read per sample, 1.5 V is unstable on our model: linearised yaw dynamics dxi/dt = -58 xi + 153 u_xi
+put the discrete closed-loop pole at z = -1.31. The earlier default 0.15 V was 10x FLC3.)
 The voltages are combined by eq. 2.31: u1 = u_nu + u_theta3 - u_xi, u2 = u_nu + u_theta3 + u_xi
 (u2 > u1 turns left, xi = r (dtheta2 - dtheta1) / d > 0).
 
@@ -22,7 +25,7 @@ times the error step; with the initial K_D2 = 3e-5 V s/deg this is ~1.4 V, which
 K_D2 (5.12e-7) is small.
 
 With these choices the thesis's optimised gains (K_P1 = 8.80, K_I1 = 19.07, K_P2 = 0.054,
-K_D2 = 5.12e-7) give a peak IB angle of 51 deg and a peak current of 0.57 A on the thesis profile,
+K_D2 = 5.12e-7) give a peak IB angle of 51 deg and a peak current of 0.56 A on the thesis profile,
 against 56.8 deg and 0.54 A reported in section 2.3.4.
 
 Default bounds and initial values: Table 2.7 (K_P1 in [1, 24], K_I1 in [5, 35], K_P2 in
@@ -56,7 +59,8 @@ class PID(Controller):
         Param("ki2", 0.0, unit="V/(deg s)", doc="PID2 integral gain", eq="eq. 2.38"),
         Param("kd2", 3e-5, (7e-8, 5e-5), "log", unit="V s/deg", doc="PID2 derivative gain",
               eq="eq. 2.38, Table 2.7"),
-        Param("yaw_gain_V", 0.15, unit="V", doc="yaw loop voltage step per period at full error", eq="eq. 2.30"),
+        Param("yaw_gain_V", 0.015, unit="V", doc="yaw loop voltage step per period at full error",
+              eq="eq. 2.30; FLC3 of Table 2.7 (u3 = 1.5 V/s times Ts), section 2.3.2"),
         Param("yaw_range_deg_s", 30.0, unit="deg/s", doc="yaw error at which the step saturates", eq="eq. 2.30",
               allowed=POSITIVE),
     ))

@@ -1,0 +1,144 @@
+"""Eq. 2.39 in SI units against the thesis's numbers, rise times against Table 2.4, the shared
+tracking requirements, a short PSO under them, and the controller comparison of a sweep."""
+
+import math
+import pathlib
+
+import numpy as np
+import pytest
+import yaml
+
+from objectives.control.compare import collect_runs, comparison_table, write_comparison
+from objectives.control.controllers.fuzzy import THESIS_OPTIMISED
+from objectives.control.metrics import mae_weighted_cost, rise_time_s
+from objectives.control.objective import THESIS_REQUIREMENTS, ClosedLoopObjective
+
+CONFIGS = pathlib.Path(__file__).parents[2] / "configs"
+WMP_CONFIGS = ["wmp_fuzzy_protective.yaml", "wmp_pid.yaml", "wmp_lqr.yaml", "wmp_lqg.yaml"]
+
+
+def _objective(name, **over):
+    section = yaml.safe_load((CONFIGS / name).read_text())["objective"]
+    section.update(over)
+    return ClosedLoopObjective.from_config(section, CONFIGS)
+
+
+@pytest.fixture(scope="module")
+def fuzzy():
+    return _objective("wmp_fuzzy_protective.yaml")
+
+
+def test_f_at_table_2_7_initial_values_is_near_the_thesis(fuzzy):
+    # thesis 2.3.4: F_init = 0.1049. Ours, SI units on the 2 s step profile: 0.1122 (+7 %); the 5 %
+    # target is not met (docs/control-cost.md: 2.0 s steps from Table 2.5, F = 0.105 needs 2.2 s).
+    ev = fuzzy(fuzzy.defaults)
+    assert ev.status == "ok"
+    assert ev.fitness == pytest.approx(0.1049, rel=0.08)
+    # the old mixed units (IB rate in deg/s) were 4.6x off: (180/pi)^(1.6/4) = 5.07 times the SI value
+    m = ev.metrics
+    mixed = mae_weighted_cost(
+        np.full(3, m["mae_nu"]), np.full(3, m["mae_xi"]), np.full(3, math.degrees(m["mae_omega3"])),
+        np.full(3, math.sqrt(m["ms_current"])),
+    )  # fmt: skip
+    assert mixed / ev.fitness == pytest.approx((180 / math.pi) ** 0.4, rel=1e-9)
+
+
+def test_thesis_tuned_values_improve_f_by_about_the_thesis_ratio(fuzzy):
+    # thesis: 0.1049 -> 0.0558 (-46.8 %) with the Table 2.7 optimised column; ours -40 %
+    f0 = fuzzy(fuzzy.defaults).fitness
+    tuned = dict(fuzzy.defaults, **{k: v for k, v in THESIS_OPTIMISED.items() if k != "p13"})
+    ev = fuzzy(tuned)
+    assert ev.status == "ok"  # the thesis's tuned controller meets the thesis's requirements
+    assert 0.30 < 1 - ev.fitness / f0 < 0.55
+
+
+def test_rise_time_closed_form_first_order_lag():
+    ts, tau = 0.01, 0.2
+    t = np.arange(300) * ts
+    ref = np.where(t < 2.0, 0.4, 0.0)
+    y = 0.4 * (1 - np.exp(-t / tau))
+    expected = math.ceil(tau * math.log(10) / ts - 1e-9) * ts  # first sample at or past tau ln 10
+    assert rise_time_s(y, ref, ts, 0) == pytest.approx(expected)
+    # a downward step from 0.4 to 0 at 2 s, mirrored response
+    y2 = np.where(t < 2.0, 0.4, 0.4 * np.exp(-(t - 2.0) / tau))
+    assert rise_time_s(y2, ref, ts, 200) == pytest.approx(expected)
+    assert rise_time_s(0.5 * y, ref, ts, 0) == math.inf  # never reaches 90 % before the next step
+    with pytest.raises(ValueError, match="no reference step"):
+        rise_time_s(y, ref, ts, 5)
+
+
+@pytest.mark.parametrize("controller, thesis_rise_s", [("flc", 0.9), ("lqg", 0.73)])
+def test_initial_rise_times_match_table_2_4(controller, thesis_rise_s):
+    # Table 2.4 (simulation): T_rise 0.73 s linear, 0.9 s fuzzy, section 2.2's initial designs
+    obj = ClosedLoopObjective(controller=controller, profile="thesis_2s")
+    assert obj(obj.defaults).metrics["rise_time_nu_s"] == pytest.approx(thesis_rise_s, abs=0.1)
+
+
+@pytest.mark.parametrize("name", WMP_CONFIGS)
+def test_every_wmp_config_shares_the_thesis_requirements(name):
+    obj = _objective(name)
+    assert obj.max_rise_time_s == THESIS_REQUIREMENTS["max_rise_time_s"] == 0.7
+    assert obj.max_mae_nu == THESIS_REQUIREMENTS["max_mae_nu"]
+    assert obj.max_mae_xi_deg_s == THESIS_REQUIREMENTS["max_mae_xi_deg_s"]
+    assert obj.profile == "thesis_2s" and obj.cost == {"alpha1": 1.4, "alpha2": 0.85, "beta": 1.6, "gamma": 0.4}
+    ev = obj(obj.defaults)
+    assert {"rise_time_nu_s", "rise_time_xi_s", "peak_theta3_deg", "peak_current_A"} <= set(ev.metrics)
+
+
+def test_requirements_are_enforced_with_the_measured_value_in_the_message():
+    pid = _objective("wmp_pid.yaml")
+    slow = dict(pid.defaults, kp1=1.0, ki1=5.0)  # a sluggish speed loop
+    ev = pid(slow)
+    assert ev.status == "failed" and "max_mae_nu" in ev.error
+    assert ev.metrics["mae_nu"] > 0.09
+    free = _objective("wmp_pid.yaml", requirements={})  # the same run without requirements scores
+    assert free(slow).status == "ok"
+    rise_only = _objective("wmp_pid.yaml", requirements={"max_rise_time_s": 0.7})
+    ev = rise_only(slow)
+    assert ev.status == "failed" and "rise time" in ev.error and ev.metrics["rise_time_nu_s"] > 0.7
+    over = _objective("wmp_pid.yaml", max_mae_nu=1.0, max_rise_time_s=10.0)  # top-level keys override
+    assert over.max_mae_nu == 1.0 and over.max_rise_time_s == 10.0 and over.max_mae_xi_deg_s == 5.0
+
+
+def test_bad_requirements_name_the_key():
+    with pytest.raises(ValueError, match="requirements"):
+        _objective("wmp_pid.yaml", requirements={"max_rise": 1.0})
+    with pytest.raises(ValueError, match="requirements"):
+        _objective("wmp_pid.yaml", requirements="paper")
+    with pytest.raises(ValueError, match="max_rise_time_s"):
+        _objective("wmp_pid.yaml", max_rise_time_s=-1.0)
+
+
+@pytest.fixture(scope="module")
+def pid_run(tmp_path_factory):
+    from tuner.config import load_config
+    from tuner.run import run
+
+    cfg = load_config(CONFIGS / "wmp_pid.yaml", ["optimizer.population=8", "optimizer.generations=5"], n_jobs=1)
+    return run(cfg, tmp_path_factory.mktemp("pid") / "jobs" / "pid", quiet=True)
+
+
+def test_short_pso_improves_f_under_the_requirements(pid_run):
+    ev = pid_run.extra
+    assert pid_run.n_evals == 40
+    assert pid_run.best_fitness < ev["initial_fitness"] and ev["improvement_pct"] > 0
+    assert pid_run.best_metrics["rise_time_nu_s"] <= 0.7 and pid_run.best_metrics["mae_nu"] <= 0.09
+    assert ev["best_peak_current_A"] == pytest.approx(pid_run.best_metrics["peak_current_A"])
+    assert (pid_run.run_dir / "response_best.npz").exists()
+    # the per-scenario block the sweep tables collect as train.* columns, and the sweep-wide figure
+    row = ev["train"]["thesis_2s"]
+    assert row["F"] == pytest.approx(pid_run.best_fitness)
+    assert row["peak_theta3_deg"] == pytest.approx(pid_run.best_metrics["peak_theta3_deg"])
+    assert row["rise_time_nu_s"] == pytest.approx(pid_run.best_metrics["rise_time_nu_s"])
+    assert (pid_run.run_dir / "figures" / "controllers.png").exists()
+
+
+def test_comparison_table_and_figure_from_runs(pid_run):
+    sweep_dir = pid_run.run_dir.parents[1]
+    (res,) = collect_runs(sweep_dir)
+    assert res.controller == "pid" and res.fitness == pytest.approx(pid_run.best_fitness)
+    assert res.peak_current_A == pytest.approx(pid_run.best_metrics["peak_current_A"])
+    table = comparison_table([res])
+    assert "| pid |" in table and "peak current" in table
+    out = write_comparison(sweep_dir)
+    assert out.exists() and (sweep_dir / "figures" / "responses.png").read_bytes()[:4] == b"\x89PNG"
