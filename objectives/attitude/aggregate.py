@@ -143,7 +143,8 @@ def prior_distance(params: Mapping[str, Any], space: Space, center: Mapping[str,
     """RMS distance of ``params`` from ``center`` in ``space``'s unit cube (0 = same point, <= 1).
 
     Only free (searched) parameters count; a center value outside the bounds is clipped onto the
-    cube's face (as :meth:`tuner.space.Real.to_unit`). A space without free parameters gives 0.
+    cube's face (as :meth:`tuner.space.Real.to_unit`), a center value <= 0 of a log-scaled parameter
+    (e.g. an integral gain that defaults to 0) onto its lower bound. A space without free parameters gives 0.
     """
     if space.dim == 0:
         return 0.0
@@ -152,7 +153,8 @@ def prior_distance(params: Mapping[str, Any], space: Space, center: Mapping[str,
     if missing:
         raise ValueError(f"prior: center has no value for searched parameter(s) {missing}")
     u = space.encode({n: params[n] for n in free})
-    u0 = space.encode({n: center[n] for n in free})
+    u0 = space.encode({p.name: (p.low if p.scale == "log" and float(center[p.name]) <= 0 else center[p.name])
+                       for p in space.free})
     return float(np.sqrt(np.mean((u - u0) ** 2)))
 
 

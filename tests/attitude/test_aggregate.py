@@ -85,5 +85,7 @@ def test_prior_distance_in_log_unit_cube():
     assert prior_penalty({"tau": 10.0, "g": 2.0}, space, center, 0.0) == 0.0
     with pytest.raises(ValueError, match="strength"):
         prior_penalty(center, space, center, -1.0)
+    # a log-scaled parameter whose center is 0 (off) is measured from its lower bound
+    assert prior_distance({"tau": 0.1, "g": 2.0}, space, {"tau": 0.0, "g": 2.0}) == 0.0
     with pytest.raises(ValueError, match="no value for searched"):
         prior_distance(center, space, {"tau": 1.0})
