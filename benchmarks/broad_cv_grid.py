@@ -27,7 +27,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from objectives.attitude.aggregate import aggregate, group_weights, prior_penalty  # noqa: E402
-from objectives.attitude.cv import broad_trial_groups, logo_folds, score_trials, search_space  # noqa: E402
+from objectives.attitude.cv import (  # noqa: E402
+    broad_trial_groups,
+    filter_class,
+    logo_folds,
+    score_trials,
+    search_space,
+)
 
 #: (label, aggregation, options, group_balanced, prior strength in deg)
 SETUPS = [
@@ -94,9 +100,7 @@ def main(argv: list[str] | None = None) -> int:
         if cache:
             np.savez(cache, S=S)
     secs = time.perf_counter() - t0
-    from objectives.attitude.filters import get_filter
-
-    center = {**get_filter(a.filter).defaults, **fixed}
+    center = {**filter_class(a.filter).defaults, **fixed}
     d_scores = score_trials(a.filter, center, [paths[n] for n in names], a.init)
     prior_u = np.array([prior_penalty(p, space, center, 1.0) for p in points])
 

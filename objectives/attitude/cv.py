@@ -38,7 +38,7 @@ from objectives.attitude.aggregate import aggregate, group_weights, prior_penalt
 from tuner.space import Real, Space
 
 __all__ = ["Fold", "TuneOptions", "FoldResult", "CVResult", "broad_trial_groups", "logo_folds", "kfold_folds",
-           "search_space", "score_trials", "cross_validate"]
+           "search_space", "filter_class", "score_trials", "cross_validate"]
 
 
 @dataclass(frozen=True)
@@ -109,6 +109,21 @@ def kfold_folds(names: Sequence[str], k: int) -> list[Fold]:
                  tuple(n for i, n in enumerate(names) if i % k == f)) for f in range(int(k))]
 
 
+def filter_class(name: str):
+    """A registered filter name (``objectives.attitude.filters.FILTERS``) or ``"module:Class"``."""
+    from objectives.attitude.filters import get_filter
+
+    if ":" not in name:
+        return get_filter(name)
+    import importlib
+
+    module, cls = name.split(":", 1)
+    try:
+        return getattr(importlib.import_module(module), cls)
+    except (ImportError, AttributeError) as exc:
+        raise ValueError(f"filter {name!r}: cannot import ({exc})") from None
+
+
 def search_space(filter_name: str, search: Mapping[str, Any] | None = None,
                  fixed: Mapping[str, Any] | None = None) -> Space:
     """The filter's space with ``fixed`` values pinned; with ``search``, only those are searched.
@@ -117,9 +132,7 @@ def search_space(filter_name: str, search: Mapping[str, Any] | None = None,
     to ``None`` (keep the filter's own bounds); every other parameter is fixed at ``fixed`` or the
     filter's default.
     """
-    from objectives.attitude.filters import get_filter
-
-    cls = get_filter(filter_name)
+    cls = filter_class(filter_name)
     fixed = dict(fixed or {})
     unknown = sorted((set(search or {}) | set(fixed)) - set(cls.defaults))
     if unknown:
@@ -159,11 +172,10 @@ def score_trials(filter_name: str, values: Mapping[str, Any], paths: Sequence[st
     (:func:`objectives.attitude.init_broad.broad_start`). A run with non-finite output scores
     ``failure_deg``.
     """
-    from objectives.attitude.filters import get_filter
     from objectives.attitude.init_broad import broad_start
     from objectives.attitude.scoring import error_sums
 
-    cls = get_filter(filter_name)
+    cls = filter_class(filter_name)
     flt = cls(**{k: v for k, v in values.items() if k in cls.defaults})
     out = np.empty(len(paths))
     for i, p in enumerate(paths):
@@ -318,10 +330,9 @@ def _evaluator(n_jobs: int) -> Callable[[Callable, list], list]:
 
 def _tune(filter_name: str, space: Space, names: Sequence[str], paths: Mapping[str, str],
           groups: Mapping[str, str], opts: TuneOptions, seed: int, run_map) -> tuple[dict, float, np.ndarray, int]:
-    from objectives.attitude.filters import get_filter
     from tuner.optimizers import get_optimizer
 
-    cls = get_filter(filter_name)
+    cls = filter_class(filter_name)
     center = dict(opts.prior_center) if opts.prior_center is not None else {
         **cls.defaults, **{p.name: p.fixed for p in space.params if p.is_fixed}}
     w = group_weights(names, groups) if opts.group_balanced else None
