@@ -248,7 +248,8 @@ class CVResult:
     """Cross-validation of one filter and tuning setup (see :meth:`to_markdown` for the table).
 
     full : tuning on every recording (the tuning score users see), or ``None`` if not run;
-    defaults_deg : per-trial RMSE of the filter's defaults (with ``fixed``).
+    defaults_deg : per-trial RMSE of the filter's defaults (with ``fixed``);
+    fixed : the space's fixed values that differ from the filter's defaults; free : searched names.
     """
 
     filter: str
@@ -381,6 +382,8 @@ def cross_validate(filter_name: str, paths: Mapping[str, str | Path], folds: Seq
     if sorted(held) != sorted(set(held)) or set(held) - set(paths):
         raise ValueError(f"cross_validate: each recording must be held out once and have a path; held out {held}")
     fixed = {p.name: p.fixed for p in space.params if p.is_fixed}
+    cls_defaults = filter_class(filter_name).defaults
+    changed = {k: v for k, v in fixed.items() if k not in cls_defaults or v != cls_defaults[k]}
     run_map = _evaluator(options.n_jobs)
     say = progress or (lambda _m: None)
     names = list(dict.fromkeys(held))
@@ -403,4 +406,4 @@ def cross_validate(filter_name: str, paths: Mapping[str, str | Path], folds: Seq
             full_res = r
         else:
             results.append(r)
-    return CVResult(filter_name, options, dict(groups), results, defaults, full_res, fixed, tuple(space.free_names))
+    return CVResult(filter_name, options, dict(groups), results, defaults, full_res, changed, tuple(space.free_names))
