@@ -25,6 +25,9 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+#: ../shared/data/broad of the checkout (or of its parent, for a worktree one level deeper)
+_CANDIDATES = [base / "shared" / "data" / "broad" for base in (ROOT.parent, ROOT.parent.parent)]
+BROAD_DIR = next((d for d in _CANDIDATES if d.is_dir()), _CANDIDATES[0])
 
 from objectives.attitude.aggregate import AGGREGATIONS  # noqa: E402
 from objectives.attitude.cv import (  # noqa: E402
@@ -53,7 +56,7 @@ def _pairs(items: list[str], what: str) -> dict:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("filter")
-    ap.add_argument("--data", default=str(ROOT.parent.parent / "shared" / "data" / "broad"),
+    ap.add_argument("--data", default=str(BROAD_DIR),
                     help="BROAD directory with the .mat files and trials.json")
     ap.add_argument("--search", nargs="*", default=None,
                     help="parameters to search (filter's bounds, or NAME=LOW:HIGH[:log]); default: the filter's space")

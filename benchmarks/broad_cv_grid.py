@@ -25,6 +25,9 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+#: ../shared/data/broad of the checkout (or of its parent, for a worktree one level deeper)
+_CANDIDATES = [base / "shared" / "data" / "broad" for base in (ROOT.parent, ROOT.parent.parent)]
+BROAD_DIR = next((d for d in _CANDIDATES if d.is_dir()), _CANDIDATES[0])
 
 from objectives.attitude.aggregate import aggregate, group_weights, prior_penalty  # noqa: E402
 from objectives.attitude.cv import (  # noqa: E402
@@ -61,7 +64,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("filter")
     ap.add_argument("grid", nargs="+", help="NAME=LOW:HIGH:N (log-spaced)")
     ap.add_argument("--fixed", nargs="*", default=[])
-    ap.add_argument("--data", default=str(ROOT.parent.parent / "shared" / "data" / "broad"))
+    ap.add_argument("--data", default=str(BROAD_DIR))
     ap.add_argument("--init", default="accmag")
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--cache", default="")
