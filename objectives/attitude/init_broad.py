@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-__all__ = ["broad_quat_from_acc_mag", "broad_start"]
+__all__ = ["broad_quat_from_acc_mag", "broad_start", "broad_initial_quaternion"]
 
 
 def _sign_copy_quat(R: np.ndarray) -> np.ndarray:
@@ -90,3 +90,19 @@ def broad_start(acc0: np.ndarray, mag0: np.ndarray, frame: str = "NWU") -> np.nd
 
     q = broad_quat_from_acc_mag(acc0, mag0)
     return to_frame(q, "NWU", frame)
+
+
+def broad_initial_quaternion(rec, frame: str) -> np.ndarray:
+    """:func:`broad_start` of a recording's first accelerometer and magnetometer sample, in ``frame``.
+
+    The hook for a filter option ``init: broad`` (``q0 == "broad"`` in
+    :func:`objectives.attitude.filters.base.initial_quaternion`).
+
+    Raises
+    ------
+    ValueError
+        The recording has no magnetometer (BROAD's start needs one), or its first samples are degenerate.
+    """
+    if rec.mag is None:
+        raise ValueError(f"{rec.name}: init broad needs a magnetometer; the recording has none")
+    return broad_start(rec.acc[0], rec.mag[0], frame)

@@ -17,7 +17,7 @@ import pytest
 
 from objectives.attitude.data.broad import load_broad
 from objectives.attitude.filters.mahony import Mahony
-from objectives.attitude.init_broad import broad_quat_from_acc_mag, broad_start
+from objectives.attitude.init_broad import broad_initial_quaternion, broad_quat_from_acc_mag, broad_start
 from objectives.attitude.metrics import broad_errors
 from objectives.attitude.quaternion import qmul, to_frame
 
@@ -53,6 +53,17 @@ def test_frames_are_the_same_rotation():
     q_nwu = broad_start(acc, mag, "NWU")
     assert np.allclose(q_nwu, broad_quat_from_acc_mag(acc, mag))
     assert np.allclose(broad_start(acc, mag, "ENU"), to_frame(q_nwu, "NWU", "ENU"))
+
+
+def test_recording_hook():
+    from objectives.attitude.data.recording import Recording
+
+    n = 5
+    acc, mag = np.tile([0.3, -0.2, 9.7], (n, 1)), np.tile([20.0, 5.0, -40.0], (n, 1))
+    rec = Recording(name="r", gyr=np.zeros((n, 3)), acc=acc, mag=mag, dt=0.01)
+    assert np.allclose(broad_initial_quaternion(rec, "ENU"), broad_start(acc[0], mag[0], "ENU"))
+    with pytest.raises(ValueError, match="needs a magnetometer"):
+        broad_initial_quaternion(Recording(name="r", gyr=np.zeros((n, 3)), acc=acc, mag=None, dt=0.01), "NWU")
 
 
 @pytest.mark.parametrize("acc, mag, what", [
