@@ -215,6 +215,23 @@ class TuneOptions:
     n_jobs: int = 1
     failure_deg: float = 180.0
 
+    def __post_init__(self) -> None:
+        from objectives.attitude.aggregate import AGGREGATIONS
+
+        if self.aggregation not in AGGREGATIONS:
+            raise ValueError(f"cv: aggregation must be one of {list(AGGREGATIONS)}, got {self.aggregation!r}")
+        if self.aggregation == "worst_k" and (self.k is None or self.k < 1):
+            raise ValueError(f"cv: aggregation worst_k needs k >= 1, got k={self.k!r}")
+        if self.aggregation == "cvar" and (self.alpha is None or not 0 < self.alpha <= 1):
+            raise ValueError(f"cv: aggregation cvar needs 0 < alpha <= 1, got alpha={self.alpha!r}")
+        if self.init not in ("accmag", "truth", "broad"):
+            raise ValueError(f"cv: init must be accmag, truth or broad, got {self.init!r}")
+        if self.population < 1 or self.generations < 1 or self.n_jobs < 1:
+            raise ValueError(f"cv: population, generations and n_jobs must be >= 1, got {self.population}, "
+                             f"{self.generations}, {self.n_jobs}")
+        if not (np.isfinite(self.prior_strength) and self.prior_strength >= 0):
+            raise ValueError(f"cv: prior_strength must be a finite number >= 0, got {self.prior_strength!r}")
+
     def label(self) -> str:
         agg = self.aggregation + (f"(k={self.k})" if self.k else "") + (f"(alpha={self.alpha})" if self.alpha else "")
         parts = [f"{self.method} {self.population}x{self.generations}", agg]

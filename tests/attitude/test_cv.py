@@ -102,3 +102,13 @@ def test_cross_validate_bookkeeping_and_defaults(tmp_path):
     # same seed, same result (serial)
     again = cross_validate("mahony", paths, folds, groups, space, opts)
     assert again.cv_deg == res.cv_deg
+
+
+@pytest.mark.parametrize("kw, msg", [
+    ({"aggregation": "max"}, "aggregation must be"), ({"aggregation": "worst_k"}, "k >= 1"),
+    ({"aggregation": "cvar", "alpha": 0.0}, "alpha"), ({"init": "first"}, "init must be"),
+    ({"population": 0}, ">= 1"), ({"prior_strength": -1.0}, "prior_strength"),
+])
+def test_tune_options_refuse_bad_values(kw, msg):
+    with pytest.raises(ValueError, match=msg):
+        TuneOptions(**kw)
