@@ -34,10 +34,8 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, run_bias_kernel
 from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_unit, rotate_sensor_to_earth
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
@@ -185,13 +183,7 @@ def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
 def _run_arrays(v: dict, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, dt: float, q0: np.ndarray,
                 with_bias: bool):
     """Kernel call on checked contiguous arrays and validated values."""
-    n = gyr.shape[0]
-    state = np.zeros(7)
-    state[:4] = q0
-    out = np.empty((n, 4))
-    bias = np.empty((n if with_bias else 0, 3))
-    _madgwick_kernel(gyr, acc, mag, _coef(v, dt, mag.shape[0] > 0), state, out, bias)
-    return (out, bias) if with_bias else out
+    return run_bias_kernel(_madgwick_kernel, _coef(v, dt, mag.shape[0] > 0), gyr, acc, mag, q0, with_bias)
 
 
 def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float = 0.0,
@@ -223,7 +215,7 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
     return _run_arrays(v, gyr, acc, mag, dt, unit_quaternion("madgwick", "q0", q0), with_bias)
 
 
-class Madgwick(AttitudeFilter):
+class Madgwick(BiasKernelFilter):
     """Madgwick's gradient-descent filter; output sensor-to-earth in the recording's frame.
 
     Parameters
@@ -243,34 +235,7 @@ class Madgwick(AttitudeFilter):
     """
 
     name = "madgwick"
-    working_frame = "NWU"
-    needs_mag = True
     decl = DECL
-
-    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
-        v = self.values
-        gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if v["use_mag"] else None)
-        zeta = v["zeta"]
-        res = _run_arrays(v, gyr, acc, mag, rec.dt, q0, with_bias=zeta > 0)
-        if zeta > 0:
-            return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
-        return FilterResult(res, self.working_frame)
-
-    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0=None, frame: str = "ENU"):
-        return _MadgwickStream(self, rate_hz, dt, q0, frame)
-
-
-class _MadgwickStream(StateStream):
-    """O(1) per-sample Madgwick: the kernel on one sample with quaternion and bias carried in ``state``."""
-
-    def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        self._coefs = {m: _coef(self.filter.values, self.dt, m) for m in (False, True)}
-        self._out = np.empty((1, 4))
-        self._bias = np.empty((0, 3))
-        state = np.zeros(7)
-        state[:4] = q0
-        return state
-
-    def _step(self, state, gyr, acc, mag):
-        _madgwick_kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._bias)
-        return self._out[0]
+    kernel = staticmethod(_madgwick_kernel)
+    coef = staticmethod(_coef)
+    bias_param = "zeta"

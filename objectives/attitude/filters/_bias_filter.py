@@ -1,0 +1,74 @@
+"""What Madgwick and Mahony share: a kernel ``kernel(gyr, acc, mag, coef, state, out, bias_out)`` whose
+state is the quaternion and a gyro bias (``state`` (7,): q (4,), bias (3,)), called on whole arrays by
+``run`` and on one sample at a time by ``stream``. Each filter supplies its kernel, the function that
+builds its coefficient array, and the name of the parameter that switches the bias estimate on.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.stream import StateStream
+from objectives.params import imu_arrays
+
+__all__ = ["BiasKernelFilter", "run_bias_kernel"]
+
+
+def run_bias_kernel(kernel: Any, coef: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,
+                    q0: np.ndarray, with_bias: bool):
+    """One kernel call on checked contiguous arrays: (N, 4) quaternions, and the (N, 3) bias if asked."""
+    n = gyr.shape[0]
+    state = np.zeros(7)
+    state[:4] = q0
+    out = np.empty((n, 4))
+    bias = np.empty((n if with_bias else 0, 3))
+    kernel(gyr, acc, mag, coef, state, out, bias)
+    return (out, bias) if with_bias else out
+
+
+class BiasKernelFilter(AttitudeFilter):
+    """Base of Madgwick and Mahony (NWU working frame, ``gyr_bias`` diagnostic when the bias is on).
+
+    Subclasses set ``kernel`` and ``coef`` (as staticmethods: ``coef(values, dt, has_mag) -> array``)
+    and ``bias_param``, the parameter whose positive value turns the bias estimate on.
+    """
+
+    working_frame = "NWU"
+    needs_mag = True
+    kernel: ClassVar[Any]
+    coef: ClassVar[Any]
+    bias_param: ClassVar[str]
+
+    def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
+        v = self.values
+        gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if v["use_mag"] else None)
+        with_bias = v[self.bias_param] > 0
+        res = run_bias_kernel(self.kernel, self.coef(v, rec.dt, mag.shape[0] > 0), gyr, acc, mag, q0, with_bias)
+        if with_bias:
+            return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
+        return FilterResult(res, self.working_frame)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0=None, frame: str = "ENU"):
+        return _BiasKernelStream(self, rate_hz, dt, q0, frame)
+
+
+class _BiasKernelStream(StateStream):
+    """O(1) per-sample stream: the kernel on one sample with quaternion and bias carried in ``state``."""
+
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        flt = self.filter
+        self._kernel = flt.kernel
+        self._coefs = {m: flt.coef(flt.values, self.dt, m) for m in (False, True)}
+        self._out = np.empty((1, 4))
+        self._bias = np.empty((0, 3))
+        state = np.zeros(7)
+        state[:4] = q0
+        return state
+
+    def _step(self, state, gyr, acc, mag):
+        self._kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._bias)
+        return self._out[0]
