@@ -206,6 +206,16 @@ _FLC23 = (
 class _FuzzyBase(Controller):
     state_size = FLC_STATE_SIZE
 
+    def _build(self, v):
+        return self._direct(v)
+
+    def _flc1_speed_sets(self, v) -> np.ndarray:
+        """A fresh parameter array holding the sample time and FLC1's speed-error sets (Fig. 2.6)."""
+        p = np.zeros(FUZZY_PARAM_SIZE)
+        p[_TS] = self.sensors.Ts_s
+        p[_F1_MF : _F1_MF + 12] = nzp_sets(v["p11"], v["p12"], v["p13"]).ravel()
+        return p
+
     def fis(self, values: dict[str, Any] | None = None) -> dict[str, SugenoFIS]:
         """The controller's fuzzy systems as :class:`objectives.fuzzy.SugenoFIS` (for surfaces/tables).
 
@@ -254,14 +264,9 @@ class FLC(_FuzzyBase):
         _p("u1", 3.0, (0.1, 15.0), "V/s", "FLC1 output gain (integrated)", "Fig. 2.6"),
     ) + _FLC23)
 
-    def _build(self, v):
-        return self._direct(v)
-
     def _direct(self, v):
         """The parameter array of the direct (fuzzy-inference) step."""
-        p = np.zeros(FUZZY_PARAM_SIZE)
-        p[_TS] = self.sensors.Ts_s
-        p[_F1_MF : _F1_MF + 12] = nzp_sets(v["p11"], v["p12"], v["p13"]).ravel()
+        p = self._flc1_speed_sets(v)
         p[_F1_C : _F1_C + 3] = np.array([-1.0, 0.0, 1.0]) * v["u1"]
         _flc2_flc3(v, p)
         return p
@@ -291,14 +296,9 @@ class ProtectiveFuzzy(_FuzzyBase):
         _p("u13", 1.5, (0.1, 15.0), "V/s", "integral tag gain", "Table 2.6, Table 2.7"),
     ) + _FLC23)
 
-    def _build(self, v):
-        return self._direct(v)
-
     def _direct(self, v):
         """The parameter array of the direct (fuzzy-inference) step."""
-        p = np.zeros(FUZZY_PARAM_SIZE)
-        p[_TS] = self.sensors.Ts_s
-        p[_F1_MF : _F1_MF + 12] = nzp_sets(v["p11"], v["p12"], v["p13"]).ravel()
+        p = self._flc1_speed_sets(v)
         p[_F1_MF + 12 : _F1_MF + 24] = current_sets(v["d11"], v["d12"], v["d13"]).ravel()
         p[_F1_C : _F1_C + 6] = (
             np.array([0.0, 1.0, -1.0, 0.0, 0.0, 0.0]) * v["u11"] + np.array([0.0, 0.0, 0.0, 0.0, 1.0, -1.0]) * v["u12"]
