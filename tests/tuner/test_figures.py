@@ -98,6 +98,7 @@ def test_closed_loop_sweep_compares_responses_on_one_figure(tmp_path):
     doc = {"sweep": {"name": "ctl", "base": str(configs / "wmp_pid.yaml"),
                      "variants": {"pid": {}, "lqr": {"base": str(configs / "wmp_lqr.yaml")}},
                      "grid": {"optimizer.population": [4], "optimizer.generations": [1],
+                              "objective.requirements": [{}],  # a 4-candidate run need not meet them
                               "parallel.backend": ["serial"]}, "seeds": [1]}}
     (tmp_path / "ctl.yaml").write_text(yaml.safe_dump(doc))
     res = run_sweep(tmp_path / "ctl.yaml", sweep_dir=tmp_path / "sw", quiet=True)
