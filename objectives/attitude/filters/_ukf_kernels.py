@@ -55,6 +55,7 @@ from objectives.attitude.filters._ukf_scalar import (
     _qm,
     _r2q,
     _sorted_update,
+    _store_sym3,
 )
 
 __all__ = ["N_STATE_FIXED", "WORK_SIZE", "new_state", "new_work", "ukf_chunk"]
@@ -201,12 +202,7 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
         Y[j, 2] = y
         Y[j, 3] = z
     y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D)
-    R[0, 0] = cxx
-    R[0, 1] = R[1, 0] = cxy
-    R[0, 2] = R[2, 0] = cxz
-    R[1, 1] = cyy
-    R[1, 2] = R[2, 1] = cyz
-    R[2, 2] = czz
+    _store_sym3(R, cxx, cxy, cxz, cyy, cyz, czz)
     return True, y0, y1, y2, y3
 
 
@@ -303,12 +299,7 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
                 e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D)
                 # eq. 14: attitude block from the mean; the bias mean is unchanged (symmetric
                 # points) and the bias block is L_b L_b^T = P_bb, so only the cross block is summed
-                P[0, 0] = cxx
-                P[0, 1] = P[1, 0] = cxy
-                P[0, 2] = P[2, 0] = cxz
-                P[1, 1] = cyy
-                P[1, 2] = P[2, 1] = cyz
-                P[2, 2] = czz
+                _store_sym3(P, cxx, cxy, cxz, cyy, cyz, czz)
                 for r in range(3):
                     for c in range(3):
                         s = 0.0
