@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 
@@ -38,7 +38,7 @@ from tuner.space import Real, Space
 
 __all__ = [
     "Interval", "Param", "ParamSet", "ANY_REAL", "NONNEG", "POSITIVE", "UNIT_OPEN", "UNIT_CLOSED",
-    "check_number", "check_bool", "check_choice", "as_columns", "imu_arrays", "unit_quaternion",
+    "check_number", "check_bool", "check_choice", "as_columns", "imu_arrays", "unit_quaternion", "Declared",
 ]
 
 
@@ -319,3 +319,35 @@ def unit_quaternion(owner: str, key: str, q: Any) -> np.ndarray:
     if arr.shape != (4,) or not np.all(np.isfinite(arr)) or np.linalg.norm(arr) == 0:
         raise ValueError(f"{owner}: {key} must be a finite non-zero (4,) quaternion, got {q!r}")
     return arr / np.linalg.norm(arr)
+
+
+class Declared:
+    """Mixin of filters and controllers: ``declaration()`` and ``describe()`` from the class's ``decl``.
+
+    Classes without a ``decl`` (defined outside the package) are described from their hand-written
+    ``params`` (a tuple of :class:`tuner.space.Real`) and ``defaults``.
+    """
+
+    name: ClassVar[str] = ""
+    decl: ClassVar[ParamSet | None] = None
+    params: ClassVar[tuple[Real, ...]] = ()
+    defaults: ClassVar[dict[str, Any]] = {}
+
+    @classmethod
+    def declaration(cls) -> ParamSet:
+        """The parameter declaration (built from ``params``/``defaults`` when there is no ``decl``)."""
+        if cls.decl is not None:
+            return cls.decl
+        return ParamSet.from_space(cls.name, cls.params, cls.defaults)
+
+    @classmethod
+    def _describe_extra(cls) -> dict[str, Any]:
+        return {}
+
+    @classmethod
+    def describe(cls) -> dict[str, Any]:
+        """Structured description: name, class, summary and every parameter with default, bounds,
+        scale, unit, allowed values, doc and the seed's equation or table (plus class-specific facts)."""
+        doc = (cls.__doc__ or "").strip().splitlines()
+        return {"name": cls.name, "class": f"{cls.__module__}.{cls.__qualname__}",
+                "summary": doc[0] if doc else "", **cls._describe_extra(), "params": cls.declaration().describe()}

@@ -29,7 +29,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from objectives.attitude.data.recording import Recording
-from objectives.params import ParamSet
+from objectives.params import Declared, ParamSet
 from tuner.space import Real, Space
 
 __all__ = ["AttitudeFilter", "FilterResult", "quat_from_rotmat", "quat_from_acc_mag", "initial_quaternion"]
@@ -123,7 +123,7 @@ def initial_quaternion(rec: Recording, frame: str, q0: Any = None, use_mag: bool
     return q / np.linalg.norm(q)
 
 
-class AttitudeFilter:
+class AttitudeFilter(Declared):
     """Base class of all attitude filters (see module docstring)."""
 
     name: ClassVar[str] = ""
@@ -158,20 +158,8 @@ class AttitudeFilter:
 
     # --- declaration ------------------------------------------------------------------------
     @classmethod
-    def declaration(cls) -> ParamSet:
-        """The parameter declaration (built from ``params``/``defaults`` for unconverted filters)."""
-        if cls.decl is not None:
-            return cls.decl
-        return ParamSet.from_space(cls.name, cls.params, cls.defaults)
-
-    @classmethod
-    def describe(cls) -> dict[str, Any]:
-        """Structured description: name, class, summary, working frame and every parameter with
-        default, bounds, scale, unit, allowed values, doc and the seed paper's equation."""
-        doc = (cls.__doc__ or "").strip().splitlines()
-        return {"name": cls.name, "class": f"{cls.__module__}.{cls.__qualname__}",
-                "summary": doc[0] if doc else "", "working_frame": cls.working_frame,
-                "needs_mag": cls.needs_mag, "params": cls.declaration().describe()}
+    def _describe_extra(cls) -> dict[str, Any]:
+        return {"working_frame": cls.working_frame, "needs_mag": cls.needs_mag}
 
     # --- search space -----------------------------------------------------------------------
     @classmethod

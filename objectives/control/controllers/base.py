@@ -23,13 +23,13 @@ from typing import Any, ClassVar
 import numpy as np
 
 from objectives.control.wmp import SensorParams, WMPParams
-from objectives.params import ParamSet
+from objectives.params import Declared, ParamSet
 from tuner.space import Real, Space
 
 __all__ = ["Controller"]
 
 
-class Controller:
+class Controller(Declared):
     """Base class; instances are cheap and picklable (plain dataclass-like attributes).
 
     Parameters
@@ -59,21 +59,6 @@ class Controller:
     @classmethod
     def default_space(cls) -> Space:
         return Space(cls.params)
-
-    @classmethod
-    def declaration(cls) -> ParamSet:
-        """The parameter declaration (built from ``params``/``defaults`` for undeclared controllers)."""
-        if cls.decl is not None:
-            return cls.decl
-        return ParamSet.from_space(cls.name, cls.params, cls.defaults)
-
-    @classmethod
-    def describe(cls) -> dict[str, Any]:
-        """Structured description: name, class, summary and every parameter with default, bounds,
-        scale, unit, allowed values, doc and the thesis's equation or table."""
-        doc = (cls.__doc__ or "").strip().splitlines()
-        return {"name": cls.name, "class": f"{cls.__module__}.{cls.__qualname__}",
-                "summary": doc[0] if doc else "", "params": cls.declaration().describe()}
 
     @classmethod
     def resolve(cls, values: Mapping[str, Any] | None = None) -> dict[str, Any]:
