@@ -77,3 +77,22 @@ def rotate_sensor_to_earth(q0, q1, q2, q3, x, y, z):
     hz = (2.0 * x * (q1 * q3 - q0 * q2) + 2.0 * y * (q2 * q3 + q0 * q1)
           + z * (1.0 - 2.0 * (q1 * q1 + q2 * q2)))
     return hx, hy, hz
+
+
+@njit(cache=True, inline="always")
+def normalized_q(n0, n1, n2, n3):
+    """``n / |n|`` of a quaternion given by its components (no check: callers keep ``n`` away from 0)."""
+    r = 1.0 / math.sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3)
+    return n0 * r, n1 * r, n2 * r, n3 * r
+
+
+@njit(cache=True, inline="always")
+def store_q_bias(a, q0, q1, q2, q3, b0, b1, b2):
+    """Write a quaternion and a 3-vector into ``a[:7]`` (the quaternion-and-bias state of a kernel)."""
+    a[0] = q0
+    a[1] = q1
+    a[2] = q2
+    a[3] = q3
+    a[4] = b0
+    a[5] = b1
+    a[6] = b2

@@ -35,7 +35,14 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters._bias_filter import BiasKernelFilter, run_bias_kernel
-from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_unit, rotate_sensor_to_earth
+from objectives.attitude.filters._scalar import (
+    FASTMATH,
+    normalized_q,
+    read_rate,
+    read_unit,
+    rotate_sensor_to_earth,
+    store_q_bias,
+)
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
@@ -146,22 +153,12 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
         n1 = q1 + qd1 * dt
         n2 = q2 + qd2 * dt
         n3 = q3 + qd3 * dt
-        r = 1.0 / math.sqrt(n0 * n0 + n1 * n1 + n2 * n2 + n3 * n3)
-        q0_ = n0 * r
-        q1 = n1 * r
-        q2 = n2 * r
-        q3 = n3 * r
+        q0_, q1, q2, q3 = normalized_q(n0, n1, n2, n3)
         out[i, 0] = q0_
         out[i, 1] = q1
         out[i, 2] = q2
         out[i, 3] = q3
-    state[0] = q0_
-    state[1] = q1
-    state[2] = q2
-    state[3] = q3
-    state[4] = bx_
-    state[5] = by_
-    state[6] = bz_
+    store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
 
 
 #: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)
