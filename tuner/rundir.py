@@ -41,6 +41,8 @@ from typing import Any
 import numpy as np
 import yaml
 
+from tuner.loop import BestPoint
+
 __all__ = ["RunError", "RunDir", "Meta", "Timing", "Best", "Checkpoint", "History", "atomic_write",
            "config_hash", "first_difference", "fmt_cell", "parse_cell", "FAULT_ENV"]
 
@@ -260,15 +262,10 @@ class Meta:
 
 
 @dataclass(frozen=True)
-class Best:
-    """``best.yaml``: the best successful evaluation of the history and where it was found."""
+class Best(BestPoint):
+    """``best.yaml``: the best successful evaluation of the history (a :class:`tuner.loop.BestPoint`),
+    the run it belongs to, and the objective's held-out scores after the run (``evaluation``)."""
 
-    params: dict[str, Any]
-    fitness: float
-    metrics: dict[str, Any]
-    stage: int
-    generation: int
-    eval: int
     run: str = ""
     evaluation: dict[str, Any] = field(default_factory=dict)
 

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from objectives.control.objective import save_figure
+
 __all__ = ["ControllerResult", "collect_runs", "comparison_table", "plot_responses", "write_comparison"]
 
 
@@ -134,12 +136,7 @@ def plot_responses(results: list[ControllerResult], path: str | pathlib.Path) ->
     ax[0].legend(loc="upper right", fontsize=8)
     ax[-1].set_xlabel("time (s)")
     ax[0].set_title("Tuned controllers on the WMP (thesis Fig. 2.18)")
-    fig.tight_layout()
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def write_comparison(sweep_dir: str | pathlib.Path) -> pathlib.Path:

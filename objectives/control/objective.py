@@ -465,9 +465,16 @@ class ClosedLoopObjective:
         ax[0].legend(loc="upper right")
         ax[-1].set_xlabel("time (s)")
         ax[0].set_title(f"WMP closed loop, controller {self.controller}")
-        fig.tight_layout()
-        path = pathlib.Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        return path
+        return save_figure(fig, path)
+
+
+def save_figure(fig, path: str | pathlib.Path) -> pathlib.Path:
+    """Lay out ``fig``, write it as a PNG at 110 dpi (creating the folder) and close it."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
