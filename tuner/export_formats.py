@@ -30,24 +30,14 @@ from typing import Any
 import numpy as np
 import yaml
 
+from tuner.rundir import plain as _plain
+
 __all__ = ["to_yaml", "to_json", "json_load", "to_python", "to_c", "c_prefix", "NONFINITE_NOTE", "FORMATS"]
 
 FORMATS = ("yaml", "json", "python", "c")
 
 NONFINITE_NOTE = ("strict JSON (RFC 8259) has no Infinity or NaN: non-finite numbers are written as the strings "
                   "\"inf\", \"-inf\" and \"nan\"; nonfinite_paths lists where (JSON pointers)")
-
-
-def _plain(v: Any) -> Any:
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_plain(x) for x in v]
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return _plain(v.tolist())
-    return v
 
 
 # --- YAML ----------------------------------------------------------------------------------------
