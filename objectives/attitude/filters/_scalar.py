@@ -96,3 +96,17 @@ def store_q_bias(a, q0, q1, q2, q3, b0, b1, b2):
     a[4] = b0
     a[5] = b1
     a[6] = b2
+
+
+@njit(cache=True, inline="always")
+def load_q_bias(a):
+    """The quaternion and the 3-vector stored by :func:`store_q_bias`."""
+    return a[0], a[1], a[2], a[3], a[4], a[5], a[6]
+
+
+@njit(cache=True, inline="always")
+def write_vec(a, i, x, y, z):
+    """``a[i, :3] = (x, y, z)``."""
+    a[i, 0] = x
+    a[i, 1] = y
+    a[i, 2] = z

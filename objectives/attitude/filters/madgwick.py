@@ -37,11 +37,13 @@ from numba import njit
 from objectives.attitude.filters._bias_filter import BiasKernelFilter, run_bias_kernel
 from objectives.attitude.filters._scalar import (
     FASTMATH,
+    load_q_bias,
     normalized_q,
     read_rate,
     read_unit,
     rotate_sensor_to_earth,
     store_q_bias,
+    write_vec,
 )
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
@@ -77,16 +79,11 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     k = coef[3]
     use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
     write_bias = bias_out.shape[0] == gyr.shape[0]
-    q0_, q1, q2, q3 = state[0], state[1], state[2], state[3]
-    bx_ = state[4]
-    by_ = state[5]
-    bz_ = state[6]
+    q0_, q1, q2, q3, bx_, by_, bz_ = load_q_bias(state)
     for i in range(gyr.shape[0]):
         gx, gy, gz = read_rate(gyr, i)
         if write_bias:
-            bias_out[i, 0] = bx_
-            bias_out[i, 1] = by_
-            bias_out[i, 2] = bz_
+            write_vec(bias_out, i, bx_, by_, bz_)
         # eq. 49: bias-compensated rate
         gx -= bx_
         gy -= by_

@@ -37,11 +37,13 @@ from numba import njit
 from objectives.attitude.filters._bias_filter import BiasKernelFilter, run_bias_kernel
 from objectives.attitude.filters._scalar import (
     FASTMATH,
+    load_q_bias,
     normalized_q,
     read_rate,
     read_unit,
     rotate_sensor_to_earth,
     store_q_bias,
+    write_vec,
 )
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
@@ -71,10 +73,7 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     ki = coef[2]
     use_mag = coef[3] != 0.0 and mag.shape[0] == gyr.shape[0]
     write_bias = bias_out.shape[0] == gyr.shape[0]
-    q0_, q1, q2, q3 = state[0], state[1], state[2], state[3]
-    ix = state[4]
-    iy = state[5]
-    iz = state[6]
+    q0_, q1, q2, q3, ix, iy, iz = load_q_bias(state)
     for i in range(gyr.shape[0]):
         gx, gy, gz = read_rate(gyr, i)
         ax, ay, az, acc_ok = read_unit(acc, i)
@@ -116,9 +115,7 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
             gy += kp * ey
             gz += kp * ez
         if write_bias:
-            bias_out[i, 0] = -ix
-            bias_out[i, 1] = -iy
-            bias_out[i, 2] = -iz
+            write_vec(bias_out, i, -ix, -iy, -iz)
         gx += ix
         gy += iy
         gz += iz
