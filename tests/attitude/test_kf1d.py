@@ -164,13 +164,11 @@ def test_initial_angle_from_accelerometer_and_defaults():
     assert Madgwick1D.defaults["beta"] == 0.1
 
 
-def test_validation():
-    with pytest.raises(ValueError, match="rho"):
-        KF1D(rho=0.0)
-    with pytest.raises(ValueError, match="fft_length"):
-        AKF1D(window=600)
-    with pytest.raises(ValueError, match="Ki"):
-        Mahony1D(Ki=-1.0)
+@pytest.mark.parametrize("cls, values, key", [(KF1D, {"rho": 0.0}, "rho"), (AKF1D, {"window": 600}, "fft_length"),
+                                              (Mahony1D, {"Ki": -1.0}, "Ki")])
+def test_validation(cls, values, key):
+    with pytest.raises(ValueError, match=key):
+        cls(**values)
     with pytest.raises(ValueError, match="unknown"):
         Madgwick1D(gain=0.1)
     with pytest.raises(ValueError):

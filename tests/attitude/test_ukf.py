@@ -218,13 +218,15 @@ def test_degenerate_samples_are_skipped_not_propagated(robust):
     assert np.flatnonzero(res.diagnostics["skipped"]).tolist() == [50]
 
 
+@pytest.mark.parametrize("cls, values, match", [(QRAUKF, {"window": 1}, "window"),
+                                                (QUKF, {"sigma_acc": 0.0}, "sigma_acc"),
+                                                (QUKF, {"window": 20}, "unknown parameter")])
+def test_bad_values_name_the_key(cls, values, match):
+    with pytest.raises(ValueError, match=match):
+        cls(**values)
+
+
 def test_validation_errors():
-    with pytest.raises(ValueError, match="window"):
-        QRAUKF(window=1)
-    with pytest.raises(ValueError, match="sigma_acc"):
-        QUKF(sigma_acc=0.0)
-    with pytest.raises(ValueError, match="unknown parameter"):
-        QUKF(window=20)
     with pytest.raises(ValueError, match="q0"):
         run_ukf(np.zeros((5, 3)), np.ones((5, 3)), np.ones((5, 3)), 0.01, [1, 1, 0, 0], **PARAMS)
     rec = simulate_imu(_trajectory(50, 0.01), 0.01, frame="ENU").without_mag()

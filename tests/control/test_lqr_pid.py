@@ -1,7 +1,5 @@
 """LQR/LQG design and PID discretisation against independent references; closed-loop stability."""
 
-import importlib.util
-import pathlib
 
 import numpy as np
 import pytest
@@ -12,12 +10,8 @@ from objectives.control.controllers.kernels import _tustin_pid
 from objectives.control.controllers.lqr import LQR, linearize, lq_design, reduced_model
 from objectives.control.objective import ClosedLoopObjective
 from objectives.control.wmp import WMPParams
+from tests.reference import wmp_reference as ref
 
-_spec = importlib.util.spec_from_file_location(
-    "wmp_reference_lq", pathlib.Path(__file__).parents[1] / "reference" / "wmp_reference.py"
-)
-ref = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ref)
 P = WMPParams()
 
 

@@ -1,7 +1,5 @@
 """The WMP plant kernel against a Lagrangian reference, Radau, closed forms and invariants."""
 
-import importlib.util
-import pathlib
 
 import numpy as np
 import pytest
@@ -15,12 +13,7 @@ from objectives.control.wmp import (
     simulate_closed_loop,
     simulate_open_loop,
 )
-
-_spec = importlib.util.spec_from_file_location(
-    "wmp_reference", pathlib.Path(__file__).parents[1] / "reference" / "wmp_reference.py"
-)
-ref = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ref)
+from tests.reference import wmp_reference as ref
 
 P = WMPParams()
 

@@ -13,19 +13,14 @@ import pandas as pd
 import pytest
 import yaml
 
+from tests.tuner.jobs import rastrigin_job
 from tuner.config import config_from_dict
 from tuner.objective import PENALTY
 from tuner.run import resume, run
 
 
 def job(tmp_path, **over):
-    raw = {"name": "t", "seed": 3,
-           "objective": {"kind": "function", "function": "rastrigin", "dim": 4},
-           "optimizer": {"method": "pso", "population": 8, "generations": 6},
-           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
-    for k, v in over.items():
-        raw[k] = {**raw.get(k, {}), **v} if isinstance(v, dict) else v
-    return config_from_dict(raw, source=str(tmp_path / "job.yaml"), base_dir=tmp_path)
+    return rastrigin_job(tmp_path, 4, 8, 6, **over)
 
 
 def history(run_dir):

@@ -16,7 +16,8 @@ import pytest
 import yaml
 
 import tuner.run as run_mod
-from tuner.config import ConfigError, config_from_dict
+from tests.tuner.jobs import rastrigin_job
+from tuner.config import ConfigError
 from tuner.loop import evaluation_seed, minimize
 from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
@@ -28,13 +29,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def job(tmp_path, **over):
-    raw = {"name": "t", "seed": 3,
-           "objective": {"kind": "function", "function": "rastrigin", "dim": 3},
-           "optimizer": {"method": "pso", "population": 6, "generations": 4},
-           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
-    for k, v in over.items():
-        raw[k] = {**raw.get(k, {}), **v} if isinstance(v, dict) else v
-    return config_from_dict(raw, source=str(tmp_path / "job.yaml"), base_dir=tmp_path)
+    return rastrigin_job(tmp_path, 3, 6, 4, **over)
 
 
 def history(run_dir):
