@@ -89,13 +89,7 @@ def normalized_q(n0, n1, n2, n3):
 @njit(cache=True, inline="always")
 def store_q_bias(a, q0, q1, q2, q3, b0, b1, b2):
     """Write a quaternion and a 3-vector into ``a[:7]`` (the quaternion-and-bias state of a kernel)."""
-    a[0] = q0
-    a[1] = q1
-    a[2] = q2
-    a[3] = q3
-    a[4] = b0
-    a[5] = b1
-    a[6] = b2
+    a[0], a[1], a[2], a[3], a[4], a[5], a[6] = q0, q1, q2, q3, b0, b1, b2
 
 
 @njit(cache=True, inline="always")
@@ -107,6 +101,10 @@ def load_q_bias(a):
 @njit(cache=True, inline="always")
 def write_vec(a, i, x, y, z):
     """``a[i, :3] = (x, y, z)``."""
-    a[i, 0] = x
-    a[i, 1] = y
-    a[i, 2] = z
+    a[i, 0], a[i, 1], a[i, 2] = x, y, z
+
+
+@njit(cache=True, inline="always")
+def write_q(a, i, q0, q1, q2, q3):
+    """``a[i, :4] = (q0, q1, q2, q3)``."""
+    a[i, 0], a[i, 1], a[i, 2], a[i, 3] = q0, q1, q2, q3

@@ -283,9 +283,7 @@ def _mad_sorted(S, n, med):
 @njit(cache=True, inline="always")
 def _store_sym3(M, cxx, cxy, cxz, cyy, cyz, czz):
     """Write a symmetric 3x3 block, given by its upper triangle, into ``M[:3, :3]``."""
-    M[0, 0] = cxx
+    M[0, 0], M[1, 1], M[2, 2] = cxx, cyy, czz
     M[0, 1] = M[1, 0] = cxy
     M[0, 2] = M[2, 0] = cxz
-    M[1, 1] = cyy
     M[1, 2] = M[2, 1] = cyz
-    M[2, 2] = czz

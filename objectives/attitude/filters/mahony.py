@@ -43,6 +43,7 @@ from objectives.attitude.filters._scalar import (
     read_unit,
     rotate_sensor_to_earth,
     store_q_bias,
+    write_q,
     write_vec,
 )
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
@@ -128,10 +129,7 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
         n2 = q2 + (q0_ * gy - q1 * gz + q3 * gx)
         n3 = q3 + (q0_ * gz + q1 * gy - q2 * gx)
         q0_, q1, q2, q3 = normalized_q(n0, n1, n2, n3)
-        out[i, 0] = q0_
-        out[i, 1] = q1
-        out[i, 2] = q2
-        out[i, 3] = q3
+        write_q(out, i, q0_, q1, q2, q3)
     store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
 
 
