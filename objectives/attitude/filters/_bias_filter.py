@@ -13,9 +13,9 @@ import numpy as np
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.stream import StateStream
-from objectives.params import imu_arrays
+from objectives.params import POSITIVE, ParamSet, check_number, imu_arrays, unit_quaternion
 
-__all__ = ["BiasKernelFilter", "run_bias_kernel"]
+__all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays"]
 
 
 def run_bias_kernel(kernel: Any, coef: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,
@@ -28,6 +28,17 @@ def run_bias_kernel(kernel: Any, coef: np.ndarray, gyr: np.ndarray, acc: np.ndar
     bias = np.empty((n if with_bias else 0, 3))
     kernel(gyr, acc, mag, coef, state, out, bias)
     return (out, bias) if with_bias else out
+
+
+def batch_on_arrays(decl: ParamSet, kernel: Any, coef: Any, values: dict, gyr, acc, mag, dt: float, q0,
+                    with_bias: bool):
+    """The ``*_batch`` functions: validate ``values`` against ``decl`` and the arrays, then one kernel call."""
+    name = decl.owner
+    v = decl.validate(values)
+    gyr, acc, mag = imu_arrays(name, gyr, acc, mag)
+    dt = check_number(name, "dt", dt, POSITIVE, "s")
+    return run_bias_kernel(kernel, coef(v, dt, mag.shape[0] > 0), gyr, acc, mag, unit_quaternion(name, "q0", q0),
+                           with_bias)
 
 
 class BiasKernelFilter(AttitudeFilter):

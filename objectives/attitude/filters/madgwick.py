@@ -34,7 +34,7 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.filters._bias_filter import BiasKernelFilter, run_bias_kernel
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays
 from objectives.attitude.filters._scalar import (
     FASTMATH,
     load_q_bias,
@@ -46,7 +46,7 @@ from objectives.attitude.filters._scalar import (
     write_q,
     write_vec,
 )
-from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
+from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
 
@@ -172,12 +172,6 @@ def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
     return np.array([dt, float(v["beta"]), float(v["zeta"]), VARIANTS[v["variant"]], 1.0 if has_mag else 0.0])
 
 
-def _run_arrays(v: dict, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, dt: float, q0: np.ndarray,
-                with_bias: bool):
-    """Kernel call on checked contiguous arrays and validated values."""
-    return run_bias_kernel(_madgwick_kernel, _coef(v, dt, mag.shape[0] > 0), gyr, acc, mag, q0, with_bias)
-
-
 def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float = 0.0,
                    variant: str = "paper", with_bias: bool = False):
     """Run the Madgwick kernel on raw arrays (NWU working frame, no frame conversion).
@@ -201,10 +195,8 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
     -------
     quat : (N, 4), or (quat, bias) when ``with_bias``.
     """
-    v = DECL.validate({"beta": beta, "zeta": zeta, "variant": variant})
-    gyr, acc, mag = imu_arrays("madgwick", gyr, acc, mag)
-    dt = check_number("madgwick", "dt", dt, POSITIVE, "s")
-    return _run_arrays(v, gyr, acc, mag, dt, unit_quaternion("madgwick", "q0", q0), with_bias)
+    values = {"beta": beta, "zeta": zeta, "variant": variant}
+    return batch_on_arrays(DECL, _madgwick_kernel, _coef, values, gyr, acc, mag, dt, q0, with_bias)
 
 
 class Madgwick(BiasKernelFilter):

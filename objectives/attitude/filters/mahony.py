@@ -34,7 +34,7 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.filters._bias_filter import BiasKernelFilter, run_bias_kernel
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays
 from objectives.attitude.filters._scalar import (
     FASTMATH,
     load_q_bias,
@@ -46,7 +46,7 @@ from objectives.attitude.filters._scalar import (
     write_q,
     write_vec,
 )
-from objectives.params import NONNEG, POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
+from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Mahony", "mahony_batch", "DECL"]
 
@@ -147,12 +147,6 @@ def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
     return np.array([dt, float(v["Kp"]), float(v["Ki"]), 1.0 if has_mag else 0.0])
 
 
-def _run_arrays(v: dict, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, dt: float, q0: np.ndarray,
-                with_bias: bool):
-    """Kernel call on checked contiguous arrays and validated values."""
-    return run_bias_kernel(_mahony_kernel, _coef(v, dt, mag.shape[0] > 0), gyr, acc, mag, q0, with_bias)
-
-
 def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
                  with_bias: bool = False):
     """Run the Mahony kernel on raw arrays (NWU working frame, no frame conversion).
@@ -172,10 +166,7 @@ def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
     with_bias : bool
         Also return the (N, 3) gyro bias estimate, rad/s.
     """
-    v = DECL.validate({"Kp": kp, "Ki": ki})
-    gyr, acc, mag = imu_arrays("mahony", gyr, acc, mag)
-    dt = check_number("mahony", "dt", dt, POSITIVE, "s")
-    return _run_arrays(v, gyr, acc, mag, dt, unit_quaternion("mahony", "q0", q0), with_bias)
+    return batch_on_arrays(DECL, _mahony_kernel, _coef, {"Kp": kp, "Ki": ki}, gyr, acc, mag, dt, q0, with_bias)
 
 
 class Mahony(BiasKernelFilter):
