@@ -96,19 +96,19 @@ def median_rate(fn: Callable[[], Any], n: int, repeats: int, min_time: float = 0
 
 
 def _plain(v: Any) -> Any:
+    """JSON-native values; non-finite floats become None ("not reached/failed": JSON has no inf/NaN)."""
+    from tuner.rundir import plain
+
+    return _finite_or_none(plain(v))
+
+
+def _finite_or_none(v: Any) -> Any:
     if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_plain(x) for x in v]
-    if isinstance(v, np.ndarray):
-        return _plain(v.tolist())
-    if isinstance(v, (np.floating, float)):
-        f = float(v)
-        return f if math.isfinite(f) else None  # JSON has no inf/NaN: None means "not reached/failed"
-    if isinstance(v, np.integer):
-        return int(v)
-    if isinstance(v, np.bool_):
-        return bool(v)
+        return {k: _finite_or_none(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_finite_or_none(x) for x in v]
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
     return v
 
 

@@ -233,10 +233,10 @@ class ParamSet:
         return iter(self.params)
 
     def __getitem__(self, name: str) -> Param:
-        for p in self.params:
-            if p.name == name:
-                return p
-        raise KeyError(name)
+        found = {p.name: p for p in self.params}.get(name)
+        if found is None:
+            raise KeyError(name)
+        return found
 
     def names(self) -> list[str]:
         return [p.name for p in self.params]
