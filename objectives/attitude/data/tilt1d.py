@@ -7,17 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from objectives.attitude.data.bench_common import (
-    _SENSOR_KEYS,
-    _check_duration,
-    _check_overrides,
-    _oscillation,
-    _phase_envelopes,
-    _schedule,
-    _sensor_model,
-    _slow_angles,
-    _translation_acc,
-)
+from objectives.attitude.data import bench_common as bench
 from objectives.attitude.data.imu_model import _check_frame, simulate_imu
 from objectives.attitude.data.recording import Recording
 
@@ -97,30 +87,30 @@ def tilt1d(
         (N,), ``phase`` (N,), ``true_gyr``, ``gyr_bias`` (N, 3).
     """
     _check_frame(frame)
-    _check_overrides("tilt1d", sensor_overrides, _SENSOR_KEYS + ("acc_resolution_g", "acc_range_g"))
-    n, dt = _check_duration(duration_s, rate_hz)
+    bench._check_overrides("tilt1d", sensor_overrides, bench._SENSOR_KEYS + ("acc_resolution_g", "acc_range_g"))
+    n, dt = bench._check_duration(duration_s, rate_hz)
     if ext_acc_max_g < 0:
         raise ValueError(f"ext_acc_max_g must be >= 0, got {ext_acc_max_g!r}")
     r_sched, r_slow, r_vib, r_acc, r_sens = (
         np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5))
-    codes, _ = _schedule(n, dt, r_sched, phase_s, _TILT_PHASES)
-    env = _phase_envelopes(codes, dt, vibration, external_acc)
+    codes, _ = bench._schedule(n, dt, r_sched, phase_s, _TILT_PHASES)
+    env = bench._phase_envelopes(codes, dt, vibration, external_acc)
     env_vib, env_acc = env.vibration, env.external_acc
 
-    sensor = _sensor_model(TILT1D_SENSOR, noise, r_sens, sensor_overrides)
+    sensor = bench._sensor_model(TILT1D_SENSOR, noise, r_sens, sensor_overrides)
     g = float(sensor.get("g", 9.81))
     res_g = sensor.pop("acc_resolution_g", None)
     range_g = sensor.pop("acc_range_g", None)
 
-    slow = _slow_angles(n, dt, r_slow, np.array([0.5]), env.speed)[:, 0]
+    slow = bench._slow_angles(n, dt, r_slow, np.array([0.5]), env.speed)[:, 0]
     # oscillation rate capped at 740 deg/s so that with the slow tilt (< 1.3 rad/s) |rate| < 800 deg/s
-    vib, f_vib = _oscillation(n, dt, r_vib, vib_freq_range_hz, (0.05, 0.5), math.radians(740.0), 1)
+    vib, f_vib = bench._oscillation(n, dt, r_vib, vib_freq_range_hz, (0.05, 0.5), math.radians(740.0), 1)
     angle = slow + env_vib * vib[:, 0]
     quat = np.zeros((n, 4))
     quat[:, 0] = np.cos(angle / 2)
     quat[:, 2] = np.sin(angle / 2)
     ext = np.zeros((n, 3))
-    ext[:, 0] = env_acc * _translation_acc(n, dt, r_acc, ext_acc_max_g * g, 1)[:, 0]
+    ext[:, 0] = env_acc * bench._translation_acc(n, dt, r_acc, ext_acc_max_g * g, 1)[:, 0]
     if not with_mag:
         sensor.setdefault("mag_field", False)
     spec = f"tilt1d(duration_s={duration_s}, rate_hz={rate_hz}, seed={seed}, noise={noise})"
