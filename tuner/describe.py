@@ -17,15 +17,18 @@ import math
 import re
 from typing import Any
 
-__all__ = ["UnknownName", "all_names", "describe", "format_text", "optimizer_description"]
+__all__ = ["UnknownName", "all_names", "describe", "doc_params", "format_text", "optimizer_description"]
 
 
 class UnknownName(ValueError):
     """A name nothing declares; the message lists the close matches."""
 
 
-def _doc_params(doc: str) -> dict[str, str]:
-    """``{name: text}`` from the ``Parameters`` section of a NumPy-style docstring (``a, b : type`` too)."""
+def doc_params(doc: str) -> dict[str, str]:
+    """``{name: text}`` from the ``Parameters`` section of a NumPy-style docstring.
+
+    ``a, b : type`` lines give several names the same text; ``**kwargs`` entries are left out.
+    """
     out: dict[str, str] = {}
     lines = inspect.cleandoc(doc or "").splitlines()
     try:
@@ -33,12 +36,14 @@ def _doc_params(doc: str) -> dict[str, str]:
     except StopIteration:
         return out
     names: list[str] = []
-    for ln in lines[i:]:
+    for k in range(i, len(lines)):
+        ln = lines[k]
         if ln and not ln.startswith(" "):
-            m = re.match(r"^([A-Za-z_][\w, ]*?)\s*:", ln)
-            if not m:
+            if k + 1 < len(lines) and lines[k + 1].startswith("---"):  # the next section (Returns...)
                 break
-            names = [n.strip() for n in m.group(1).split(",")]
+            names = [n.strip() for n in ln.split(" :")[0].split(",")]
+            if not all(n.isidentifier() for n in names):
+                names = []
             for n in names:
                 out[n] = ""
         elif ln.strip() and names:
@@ -53,7 +58,7 @@ def optimizer_description(name: str) -> dict[str, Any]:
     from tuner.optimizers.base import Optimizer
 
     cls = OPTIMIZERS[name]
-    docs = {**_doc_params(Optimizer.__doc__ or ""), **_doc_params(cls.__doc__ or "")}
+    docs = {**doc_params(Optimizer.__doc__ or ""), **doc_params(cls.__doc__ or "")}
     params = []
     for klass in cls.__mro__:
         if "__init__" not in klass.__dict__:

@@ -39,14 +39,16 @@ def metric_names() -> list[str]:
 def _generator_keys(name: str) -> list[dict[str, Any]]:
     """Keyword, default and unit hint of every key a synthetic generator accepts."""
     from objectives.attitude.data.cache import GENERATORS, _allowed_keywords
+    from tuner.describe import doc_params
 
     sig = inspect.signature(GENERATORS[name]).parameters
+    docs = doc_params(GENERATORS[name].__doc__ or "")
     out = []
     for key in _allowed_keywords(name):
         p = sig.get(key)
         default = None if p is None or p.default is inspect.Parameter.empty else p.default
-        out.append({"name": key, "default": list(default) if isinstance(default, tuple) else default,
-                    "doc": "sensor model (see objectives.attitude.data.bench_common)" if p is None else ""})
+        doc = docs.get(key) or ("" if p is not None else "sensor model override (objectives.attitude.data.imu_model)")
+        out.append({"name": key, "default": list(default) if isinstance(default, tuple) else default, "doc": doc})
     return out
 
 

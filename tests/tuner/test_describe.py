@@ -92,3 +92,28 @@ def test_data_source_keys_are_what_the_loader_accepts():
     assert {"duration_s", "rate_hz", "seed", "gyr_noise"} <= keys
     rec = synthetic("tilt1d", duration_s=0.5, rate_hz=100.0, seed=1, disk_cache=False)
     assert rec.gyr.shape == (50, 3)
+
+
+def test_doc_params_reads_numpy_sections():
+    from tuner.describe import doc_params
+
+    doc = """Summary.
+
+    Parameters
+    ----------
+    a, b : float
+        Shared text,
+        on two lines.
+    c
+        No type.
+    **extra
+        Left out.
+
+    Returns
+    -------
+    x : int
+        Not a parameter.
+    """
+    assert doc_params(doc) == {"a": "Shared text, on two lines.", "b": "Shared text, on two lines.", "c": "No type."}
+    seed = {p["name"]: p for p in describe("bench6dof")[0]["params"]}["seed"]
+    assert "SeedSequence" in seed["doc"] and seed["default"] == 0
