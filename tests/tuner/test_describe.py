@@ -117,3 +117,14 @@ def test_doc_params_reads_numpy_sections():
     assert doc_params(doc) == {"a": "Shared text, on two lines.", "b": "Shared text, on two lines.", "c": "No type."}
     seed = {p["name"]: p for p in describe("bench6dof")[0]["params"]}["seed"]
     assert "SeedSequence" in seed["doc"] and seed["default"] == 0
+
+
+def test_distribution_is_attitude_tuner_and_registers_the_kinds():
+    """`tuner` and `objectives` are taken on PyPI by unrelated projects: the distribution has its own name."""
+    from importlib.metadata import distribution
+
+    dist = distribution("attitude-tuner")
+    eps = {ep.name: ep.value for ep in dist.entry_points if ep.group == "tuner.objectives"}
+    assert eps["filter"] == "objectives.attitude.objective:FilterObjective"
+    assert {ep.name for ep in dist.entry_points if ep.group == "console_scripts"} == {"tuner"}
+    assert all(src.startswith("attitude-tuner ") for k, src in REGISTRY.kinds().items() if k != "python")
