@@ -12,6 +12,10 @@ setup: $(STAMP)
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
+	# the distribution was called `tuner` before it was renamed attitude-tuner: drop the old one and its
+	# metadata, or both would register the same objective kinds
+	$(BIN)/python -m pip uninstall --quiet --yes tuner 2>/dev/null || true
+	rm -rf tuner.egg-info
 	$(BIN)/python -m pip install --quiet -e ".[$(EXTRAS)]"
 	touch $(STAMP)
 

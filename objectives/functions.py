@@ -94,6 +94,18 @@ class FunctionObjective:
         """Names ``objective.function`` accepts (``tuner list functions``)."""
         return {"functions": sorted(FUNCTIONS)}
 
+    @classmethod
+    def explain(cls, name: str) -> dict[str, Any] | None:
+        """``tuner describe NAME`` for a test function (its search box per coordinate)."""
+        if name not in FUNCTIONS:
+            return None
+        fn, (lo, hi) = FUNCTIONS[name][0], FUNCTIONS[name][1]
+        doc = (fn.__doc__ or "").strip().splitlines()
+        return {"section": "functions", "name": name, "summary": doc[0] if doc else name,
+                "usage": f"objective: {{kind: function, function: {name}, dim: 2}}",
+                "params": [{"name": "x<i>", "default": None, "bounds": (float(lo), float(hi)), "scale": "linear",
+                            "unit": "", "doc": "coordinate i of dim", "eq": ""}]}
+
     def parameter_names(self) -> list[str]:
         return [f"x{i}" for i in range(self.dim)]
 

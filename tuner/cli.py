@@ -23,7 +23,8 @@ EPILOG = """examples:
   tuner export RUN_DIR --format c > tuned.h        best parameters as a C header
   tuner evaluate RUN_DIR --data other.yaml --json  score the best parameters on other data
   tuner sweep configs/thesis_tilt_sweep.yaml       many runs and one report
-  tuner list                                       optimizers, objectives, filters, controllers
+  tuner list                                       optimizers, objectives, filters, controllers, metrics, data
+  tuner describe ekf                               parameters, bounds, units and equations of one name
 """
 
 
@@ -68,8 +69,13 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("list", help="what can be named in a config, or the runs of a directory")
     p.add_argument("what", nargs="?", default="all",
                    help="all, optimizers, objectives, runs, or a section an objective kind lists "
-                        "(filters, controllers, functions)")
+                        "(filters, controllers, functions, metrics, data)")
     p.add_argument("--dir", default="runs", help="runs directory for `list runs` (default: runs)")
+
+    p = sub.add_parser("describe", help="parameters, bounds, units and equations of a filter, controller, "
+                                        "optimizer, metric, objective kind or data source")
+    p.add_argument("name", help="a name `tuner list` prints, e.g. ekf, pso, euler_mse_geomean, bench6dof")
+    p.add_argument("--json", action="store_true", help="strict JSON: {name, found: [descriptions]}")
 
     p = sub.add_parser("export", help="best parameters as yaml, json, python or a C header")
     p.add_argument("run_dir")
@@ -231,10 +237,31 @@ def _cmd_list(a) -> int:
         print("objective kinds:")
         for name, source in REGISTRY.kinds().items():
             print(f"  {name:12s} {source}")
-    for section, (kind, names) in catalog.items():
-        if what in ("all", section):
-            print(f"{section} (objective.kind: {kind}):")
-            print("  " + (", ".join(names) or "-"))
+    for section in catalog:
+        if what not in ("all", section):
+            continue
+        for kind, sections in REGISTRY.catalogs().items():  # a section several kinds list: one line per kind
+            if section in sections:
+                print(f"{section} (objective.kind: {kind}):")
+                print("  " + (", ".join(sections[section]) or "-"))
+    if what in ("all", *catalog):
+        print("`tuner describe NAME` shows the parameters, bounds, units and equations of any name above.")
+    return 0
+
+
+def _cmd_describe(a) -> int:
+    from tuner.describe import UnknownName, describe, format_text
+
+    try:
+        found = describe(a.name)
+    except UnknownName as exc:
+        raise UsageError(str(exc)) from None
+    if a.json:
+        from tuner.export_formats import to_json
+
+        print(to_json({"name": a.name, "found": found}))  # strict JSON, inf as "inf" (nonfinite_paths)
+    else:
+        print("\n\n".join(format_text(d) for d in found))
     return 0
 
 
@@ -295,8 +322,8 @@ def _cmd_report(a) -> int:
 
 
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
-            "list": _cmd_list, "export": _cmd_export, "evaluate": _cmd_evaluate, "sweep": _cmd_sweep,
-            "report": _cmd_report}
+            "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "evaluate": _cmd_evaluate,
+            "sweep": _cmd_sweep, "report": _cmd_report}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -327,7 +327,7 @@ class Evaluator:
                 from distributed import Client, LocalCluster
             except ImportError:
                 raise RuntimeError(
-                    "parallel.backend: dask needs the 'distributed' package: pip install 'tuner[cluster]'"
+                    "parallel.backend: dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)"
                 ) from None
             if self.address:
                 self._client = Client(self.address, timeout="30s")

@@ -4,8 +4,11 @@ Every format carries the provenance (run id, fitness, objective, data, date). Th
 the parameters as named ``static const`` constants and, where the objective has them, look-up tables.
 What is said about the objective comes from the objective itself, through its optional hooks
 (:class:`tuner.objective.TunableObjective`): ``describe()`` for the provenance and
-``export_tables(params)`` for the tables; an objective without them (or one that no longer builds)
-exports its kind and the parameters only.
+``export_tables(params)`` for the tables (look-up tables with their input ranges, or matrices such
+as the LQR gain K and the tracking matrices Nx, Nu: ``{name: {"table": array, "doc": text, "unit":
+text, "x_range"/"y_range": (lo, hi) for look-up tables}}``), written in every format (``tables:``
+in YAML/JSON, ``TABLES`` in Python, ``double[ny][nx]`` in C); an objective without them (or one that
+no longer builds) exports its kind and the parameters only.
 """
 
 from __future__ import annotations
@@ -68,16 +71,12 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
     objective = _build(run_dir) if objective_tables else None
     doc = provenance(run_dir, objective)
     doc.update(units=_units(run_dir, objective, doc["params"]), **_sample_rate(objective))
-    if fmt == "yaml":
-        return to_yaml(doc)
-    if fmt == "json":
-        return to_json(doc)
-    if fmt == "python":
-        return to_python(doc)
-    tables = None
     fn = hook(objective, "export_tables") if objective is not None else None
-    if fn is not None:
-        tables = fn(doc["params"])
+    tables = fn(doc["params"]) if fn is not None else None
+    if fmt != "c":  # what firmware runs (LQR gain K, Nx, Nu; fuzzy LUTs) in every format, as nested lists
+        if tables:
+            doc["tables"] = {name: {k: v for k, v in t.items()} for name, t in tables.items()}
+        return {"yaml": to_yaml, "json": to_json, "python": to_python}[fmt](doc)
     if prefix is None:
         from tuner.rundir import RunDir
 

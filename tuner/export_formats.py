@@ -114,13 +114,16 @@ def _py(v: Any) -> str:
 
 
 def to_python(doc: dict[str, Any]) -> str:
-    """A module defining ``PARAMS``, ``UNITS`` and ``PROVENANCE``; importable from anywhere (needs only ``math``)."""
+    """A module defining ``PARAMS``, ``UNITS``, ``PROVENANCE`` (and ``TABLES`` when the objective exports
+    matrices or look-up tables); importable from anywhere (needs only ``math``)."""
     doc = _plain(doc)
-    prov = {k: v for k, v in doc.items() if k not in ("params", "units")}
+    prov = {k: v for k, v in doc.items() if k not in ("params", "units", "tables")}
     lines = [f'"""Tuned parameters from tuner run {doc["run"]} (fitness {doc["fitness"]!r}).', "",
              _rate_line(doc), '"""', "", "import math", "",
              f"PARAMS = {_py(doc['params'])}", "", f"UNITS = {_py(doc.get('units') or {})}", "",
              f"PROVENANCE = {_py(prov)}", ""]
+    if doc.get("tables"):  # {name: {"table": nested lists, "doc": ..., ...}}: matrices and look-up tables
+        lines += [f"TABLES = {_py(doc['tables'])}", ""]
     return "\n".join(lines)
 
 
@@ -226,8 +229,14 @@ def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | No
         if arr.ndim == 1:
             arr = arr[None, :]
         ny, nx = arr.shape
-        lines += ["", f"/* look-up table {_comment(name)}: rows follow y, columns follow x */",
-                  f"#define {ident}_NX {nx}", f"#define {ident}_NY {ny}"]
+        if "x_range" in t or "y_range" in t:
+            what = f"look-up table {_comment(name)}: rows follow y, columns follow x"
+        else:  # a matrix (e.g. a gain): NY rows, NX columns
+            what = f"matrix {_comment(name)} ({ny} x {nx}, row-major)"
+        for key in ("doc", "unit"):
+            if t.get(key):
+                what += f"; {_comment(t[key])}"
+        lines += ["", f"/* {what} */", f"#define {ident}_NX {nx}", f"#define {ident}_NY {ny}"]
         for key, lab in (("x_range", "X"), ("y_range", "Y")):
             if key in t:
                 lines += [f"static const double {ident}_{lab}_MIN = {_c_number(float(t[key][0]))};",

@@ -121,8 +121,10 @@ class TunableObjective(Objective, Protocol):
         """The same objective on other data (``tuner evaluate --data``); ``ValueError`` on bad data."""
 
     def export_tables(self, params: Mapping[str, Any]) -> Mapping[str, Mapping[str, Any]] | None:
-        """Look-up tables for the C header: ``{name: {"table": 2-D array, "x_range": (lo, hi),
-        "y_range": (lo, hi)}}`` (rows follow y, columns follow x)."""
+        """Tables firmware needs, written by ``tuner export`` in every format: look-up tables
+        ``{name: {"table": 2-D array, "x_range": (lo, hi), "y_range": (lo, hi)}}`` (rows follow y,
+        columns follow x) or matrices without ranges (e.g. an LQR gain); optional ``doc`` and
+        ``unit`` texts go into the C comment."""
 
     def describe(self) -> Mapping[str, Any]:
         """Provenance written by ``tuner export``: ``{"objective": {...}, "data": ...}``."""

@@ -81,7 +81,7 @@ def _dask_check(cfg: RunConfig, objective: Any) -> None:
         from distributed import Client
     except ImportError:
         raise ConfigError(cfg.source, "parallel.backend",
-                          "dask needs the 'distributed' package: pip install 'tuner[cluster]'") from None
+                          "dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)") from None
     try:
         client = Client(cfg.parallel.address, timeout="30s")
     except OSError as exc:

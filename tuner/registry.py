@@ -12,7 +12,8 @@ package and the engine) is refused with both sources in the message.
 
 A factory raises ``ValueError`` whose message starts with the key path it complains about
 (``objective.filter: unknown filter 'x'; known: ...``). A kind class may also offer a classmethod
-``catalog() -> {section: [names]}`` (filters, controllers...) listed by ``tuner list``.
+``catalog() -> {section: [names]}`` (filters, controllers, metrics, data...) listed by ``tuner list``,
+and ``explain(name) -> dict | None`` (parameters, bounds, units, equations) shown by ``tuner describe``.
 """
 
 from __future__ import annotations
@@ -140,13 +141,37 @@ class Registry:
         return factory
 
     def catalog(self) -> dict[str, tuple[str, list[str]]]:
-        """``{section: (kind, names)}`` from each kind's optional ``catalog()`` classmethod."""
+        """``{section: (kinds, names)}`` from each kind's optional ``catalog()`` classmethod.
+
+        A section several kinds list (``metrics``, ``data``) joins their names; ``kinds`` is then
+        ``"filter, closed_loop"``.
+        """
         out: dict[str, tuple[str, list[str]]] = {}
+        for kind, sections in self.catalogs().items():
+            for section, names in sections.items():
+                kinds, have = out.get(section, ("", []))
+                out[section] = (f"{kinds}, {kind}" if kinds else kind, sorted({*have, *names}))
+        return out
+
+    def catalogs(self) -> dict[str, dict[str, list[str]]]:
+        """``{kind: {section: names}}``: each kind's own ``catalog()`` (kinds without one are left out)."""
+        out: dict[str, dict[str, list[str]]] = {}
         for kind in self.kinds():
             fn = getattr(self.get(kind), "catalog", None)
             if callable(fn):
-                for section, names in dict(fn()).items():
-                    out[section] = (kind, sorted(names))
+                out[kind] = {section: sorted(names) for section, names in dict(fn()).items()}
+        return out
+
+    def explain(self, name: str) -> list[tuple[str, dict[str, Any]]]:
+        """``[(kind, description)]`` from each kind's optional ``explain(name)`` classmethod (a dict
+        with ``section``, ``name``, ``summary``, ``params``; ``None`` when the kind does not know it)."""
+        out = []
+        for kind in self.kinds():
+            fn = getattr(self.get(kind), "explain", None)
+            if callable(fn):
+                d = fn(name)
+                if d is not None:
+                    out.append((kind, dict(d)))
         return out
 
     def build(self, section: Mapping[str, Any], base_dir: Path | None = None) -> Any:

@@ -217,10 +217,18 @@ class FilterObjective:
 
     @classmethod
     def catalog(cls) -> dict[str, list[str]]:
-        """Names ``objective.filter`` accepts (``tuner list filters``)."""
+        """Names ``objective.filter``, ``objective.metric`` and data specs accept (``tuner list``)."""
+        from objectives.attitude.catalog import data_sources
         from objectives.attitude.filters import filter_names
 
-        return {"filters": filter_names()}
+        return {"filters": filter_names(), "metrics": list(METRICS), "data": list(data_sources())}
+
+    @classmethod
+    def explain(cls, name: str) -> dict[str, Any] | None:
+        """``tuner describe NAME``: a filter, metric or data source (see :mod:`objectives.attitude.catalog`)."""
+        from objectives.attitude.catalog import explain
+
+        return explain(name)
 
     def with_data(self, data: Any) -> FilterObjective:
         """The same objective on other data (``tuner evaluate --data``): all of it is 'train'."""

@@ -210,10 +210,31 @@ class ClosedLoopObjective:
     # --- engine hooks (tuner.objective.TunableObjective) -----------------------------------------
     @classmethod
     def catalog(cls) -> dict[str, list[str]]:
-        """Names ``objective.controller`` accepts (``tuner list controllers``)."""
+        """Names ``objective.controller``, the cost and the profiles (``tuner list``)."""
         from objectives.control.controllers import CONTROLLERS
+        from objectives.control.profiles import PROFILES
 
-        return {"controllers": sorted(CONTROLLERS)}
+        return {"controllers": sorted(CONTROLLERS), "metrics": ["mae_weighted_cost"], "data": sorted(PROFILES)}
+
+    @classmethod
+    def explain(cls, name: str) -> dict[str, Any] | None:
+        """``tuner describe NAME``: a controller, the eq. 2.39 cost or a reference profile, else None."""
+        from objectives.control.controllers import CONTROLLERS, get_controller
+        from objectives.control.profiles import PROFILES
+
+        if name in CONTROLLERS:
+            return {"section": "controllers", **get_controller(name).describe()}
+        if name == "mae_weighted_cost":
+            doc = (mae_weighted_cost.__doc__ or "").strip().splitlines()[0]
+            weights = [{"name": k, "default": v, "unit": "1", "doc": "exponent (objective.cost)", "eq": "eq. 2.39"}
+                       for k, v in DEFAULT_COST_WEIGHTS.items()]
+            return {"section": "metrics", "name": name, "summary": doc, "unit": "SI (see docs/control-cost.md)",
+                    "eq": "thesis eq. 2.39", "usage": "objective: {kind: closed_loop, cost: {alpha1: 1.4, ...}}",
+                    "params": weights}
+        if name in PROFILES:
+            return {"section": "data", "name": name, "summary": "closed-loop reference profile (speed, yaw rate)",
+                    "usage": f"objective: {{kind: closed_loop, profile: {name}}}", "params": []}
+        return None
 
     def default_params(self) -> dict[str, Any]:
         """:attr:`defaults` (the engine's name for the untuned values)."""

@@ -5,7 +5,7 @@ trials with its default parameters) and the reference users compare tuned filter
 does not re-implement it: it calls the package's compiled core (``vqf.VQF.updateBatch``, causal, the
 default; or ``vqf.offlineVQF``, acausal, with ``offline: true``) and exposes its documented parameters.
 
-Install with ``pip install 'tuner[vqf]'`` (or ``pip install vqf``).
+Install with ``pip install vqf`` (or ``pip install -e '.[vqf]'`` in a clone of this repository).
 
 Frames
 ------
@@ -32,7 +32,7 @@ from objectives.params import POSITIVE, Param, ParamSet
 
 __all__ = ["VQF", "VQF_PARAMS", "INSTALL_HINT"]
 
-INSTALL_HINT = "the VQF filter needs the 'vqf' package: pip install 'tuner[vqf]' (or pip install vqf)"
+INSTALL_HINT = "the VQF filter needs the 'vqf' package: pip install vqf"
 
 #: VQF's documented parameters (``vqf.VQF(...).params`` of vqf 2.x) and their defaults.
 #: Units as VQF documents them: taus and times in s, bias values in deg/s, restThAcc in m/s^2,

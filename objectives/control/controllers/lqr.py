@@ -24,6 +24,7 @@ closed-loop kernel computes from the simulated accelerometer and gyroscope.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -189,6 +190,24 @@ class LQR(Controller):
     def _build(self, values):
         des = self.design(values)
         return np.concatenate([des.K.ravel(), des.Fr.ravel()])
+
+    def export_tables(self, values: dict[str, Any] | None = None) -> dict[str, dict[str, Any]]:
+        """What the firmware runs, for ``tuner export``: ``u = -K z + Fr r`` (eqs. 2.13-2.15, 2.19).
+
+        Matrices of :meth:`design` for ``values`` (no input ranges: :func:`tuner.export_formats.to_c`
+        writes them as ``double[rows][cols]``) with the design state ``z = (theta3, nu, omega3, xi)``
+        (rad, m/s, rad/s, rad/s), reference ``r = (nu, xi)`` (m/s, rad/s) and ``u`` in V.
+        """
+        des = self.design(values)
+        z, r = "z = (theta3 rad, nu m/s, omega3 rad/s, xi rad/s)", "r = (nu m/s, xi rad/s)"
+        return {
+            "K": {"table": des.K, "doc": f"feedback gain of u = -K z + Fr r, eq. 2.13; {z}", "unit": "V per unit of z"},
+            "Nx": {"table": des.Nx, "doc": f"steady state per unit reference, z_ss = Nx r, eq. 2.15; {r}",
+                   "unit": "unit of z per unit of r"},
+            "Nu": {"table": des.Nu, "doc": "steady input per unit reference, u_ss = Nu r, eq. 2.15",
+                   "unit": "V per unit of r"},
+            "Fr": {"table": des.Fr, "doc": "reference feed-forward Fr = Nu + K Nx", "unit": "V per unit of r"},
+        }
 
 
 class LQG(LQR):

@@ -1,0 +1,105 @@
+"""What ``tuner describe`` and ``tuner list metrics|data`` say about the attitude domain.
+
+:func:`explain` answers one name (a filter, a metric or a data source) with a plain dict; the
+filter objective's ``catalog()``/``explain()`` hooks hand it to the engine, which never imports
+this package.
+"""
+
+from __future__ import annotations
+
+import inspect
+from typing import Any
+
+__all__ = ["METRIC_DOCS", "data_sources", "explain", "metric_names"]
+
+#: metric name -> (unit, definition, equation) for ``objective.metric`` (lower is better)
+METRIC_DOCS: dict[str, tuple[str, str, str]] = {
+    "euler_mse_geomean": ("rad^2", "cube root of the product of the per-axis Euler MSEs over the recordings; "
+                          "metric_options.weights are per-axis exponents, normalize: true takes the geometric "
+                          "mean of all MSEs", "FAEKF paper eq. 35"),
+    "euler_rmse_mean": ("deg", "mean over recordings of the mean per-axis Euler RMSE", ""),
+    "mse_1d": ("rad^2", "mean square error of the tilt angle, mean over recordings", "thesis eq. 3.18"),
+    "broad_mean_rmse": ("deg", "mean over recordings of BROAD's total RMSE on motion samples (the criterion "
+                        "of BROAD's trial-agnostic good parameters)", "Laidig et al. 2021, BROAD"),
+    "broad_total_rmse": ("deg", "BROAD's total RMSE pooled over the motion samples of all recordings",
+                         "Laidig et al. 2021, BROAD"),
+}
+_METRIC_OPTIONS = {"weights": "(3,) per-axis exponents of euler_mse_geomean (default [1, 1, 1])",
+                   "normalize": "euler_mse_geomean: geometric mean of all MSEs instead of the cube root "
+                                "(default false)"}
+_CUT = {"start_s": "first second kept (optional)", "stop_s": "last second kept (optional)"}
+
+
+def metric_names() -> list[str]:
+    from objectives.attitude.objective import METRICS
+
+    return list(METRICS)
+
+
+def _generator_keys(name: str) -> list[dict[str, Any]]:
+    """Keyword, default and unit hint of every key a synthetic generator accepts."""
+    from objectives.attitude.data.cache import GENERATORS, _allowed_keywords
+    from tuner.describe import doc_params
+
+    sig = inspect.signature(GENERATORS[name]).parameters
+    docs = doc_params(GENERATORS[name].__doc__ or "")
+    out = []
+    for key in _allowed_keywords(name):
+        p = sig.get(key)
+        default = None if p is None or p.default is inspect.Parameter.empty else p.default
+        doc = docs.get(key) or ("" if p is not None else "sensor model override (objectives.attitude.data.imu_model)")
+        out.append({"name": key, "default": list(default) if isinstance(default, tuple) else default, "doc": doc})
+    return out
+
+
+def data_sources() -> dict[str, dict[str, Any]]:
+    """``{name: description}`` of every data source a data spec may name (broad, csv, synthetic:<gen>)."""
+    from objectives.attitude.data.cache import GENERATORS
+    from objectives.attitude.data.csv import CSV_OPTIONS
+
+    out: dict[str, dict[str, Any]] = {
+        "broad": {"summary": "BROAD trials (.mat/.hdf5, Laidig et al. 2021, CC-BY-4.0)",
+                  "spec": "{broad: {dir, trial | trials: [..] | all | <group>, start_s, stop_s}}",
+                  "keys": [{"name": "dir", "default": "../shared/data/broad", "doc": "directory of the trials"},
+                           {"name": "trial", "default": None, "doc": "one trial name"},
+                           {"name": "trials", "default": None, "doc": "list, 'all' or a group of trials.json"},
+                           *({"name": k, "default": None, "doc": d} for k, d in _CUT.items())]},
+        "csv": {"summary": "your own recording as CSV with a column map",
+                "spec": "{csv: {path, columns: {gyr: [..], acc: [..], mag: [..], quat: [..], time: t}, ...}}",
+                "keys": [{"name": "path", "default": None, "doc": "CSV file"},
+                         {"name": "columns", "default": None, "doc": "column map (mapping or YAML file)"},
+                         *({"name": k, "default": None, "doc": "unit/format option of load_csv"}
+                           for k in CSV_OPTIONS),
+                         *({"name": k, "default": None, "doc": d} for k, d in _CUT.items())]},
+    }
+    for gen, fn in sorted(GENERATORS.items()):
+        doc = (fn.__doc__ or "").strip().splitlines()
+        out[gen] = {"summary": f"synthetic generator: {doc[0] if doc else gen}",
+                    "spec": f"{{synthetic: {{generator: {gen}, ...}}}}", "keys": _generator_keys(gen)}
+    return out
+
+
+def explain(name: str) -> dict[str, Any] | None:
+    """The description of ``name`` as a filter, metric or data source, else ``None``.
+
+    Returns
+    -------
+    dict with ``section`` (filters, metrics, data), ``name``, ``summary`` and ``params`` (a list of
+    dicts with name, default, bounds, scale, unit, doc, eq), or None when the name is none of these.
+    """
+    from objectives.attitude.filters import filter_names, get_filter
+
+    if name in filter_names():
+        return {"section": "filters", **get_filter(name).describe()}
+    if name in METRIC_DOCS:
+        unit, doc, eq = METRIC_DOCS[name]
+        params = [{"name": k, "default": None, "unit": "", "doc": d, "eq": ""} for k, d in _METRIC_OPTIONS.items()]
+        return {"section": "metrics", "name": name, "summary": doc, "unit": unit, "eq": eq,
+                "usage": f"objective: {{kind: filter, metric: {name}}}",
+                "params": params if name == "euler_mse_geomean" else []}
+    sources = data_sources()
+    if name in sources:
+        s = sources[name]
+        return {"section": "data", "name": name, "summary": s["summary"], "usage": s["spec"],
+                "params": [{"unit": "", "eq": "", **k} for k in s["keys"]]}
+    return None
