@@ -22,4 +22,4 @@ def test_page_has_one_row_per_claim(tmp_path):
     out = tmp_path / "papers.md"
     papers.write(rows, out, 1.0, "notes\n")
     text = out.read_text()
-    assert text.count("\n| c") == 2 and "`cmd two`" in text and text.endswith("notes\n")
+    assert text.count("\n| c1 |") == 1 and text.count("\n| c2 |") == 1 and "`cmd two`" in text and text.endswith("notes\n")
