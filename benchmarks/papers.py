@@ -7,7 +7,7 @@ its held-out recordings: no tuning involved) or by a tuning run of the config at
 controllers takes longer than the whole budget of ``make papers``); F at the thesis's initial
 parameters is recomputed here.
 
-    python -m benchmarks.papers            # ~ a few minutes on 2 cores, writes docs/papers.md
+    python -m benchmarks.papers            # about 5 minutes on 2 cores, writes docs/papers.md
     python -m benchmarks.papers --smoke    # tiny budgets, for the tests
 """
 
@@ -103,6 +103,19 @@ def faekf_rows(pop: int, gen: int, out: Path) -> list[Row]:
                 f"--set optimizer.generations={gen}")]
 
 
+def ccf_rows(pop: int, gen: int, out: Path) -> list[Row]:
+    """Narkhede 2021, Tables 1-3: the tuned CCF is no worse than the tuned NCF (held-out, 50 Hz)."""
+    best = {f: tuned(f"{f}_narkhede.yaml", pop, gen, out) for f in ("ccf", "ncf")}
+    c, n = (best[f]["evaluation"]["test_fitness"] for f in ("ccf", "ncf"))
+    alpha = best["ccf"]["params"]["alpha"]
+    verdict = "CCF no worse" if c <= n * 1.01 else f"CCF {100 * (c / n - 1):.1f} % worse"
+    return [Row(f"The CCF is more accurate than the NCF (held-out total RMSE, deg, PSO {pop} x {gen})",
+                "CCF lowest RMSE on all 8 datasets", f"CCF {c:.3f} (alpha {alpha:.4f}) vs NCF {n:.3f}",
+                verdict + ("; alpha tuned to ~1, i.e. the CCF reduces to the NCF" if alpha > 0.99 else ""),
+                f"python -m tuner run configs/papers/{{ccf,ncf}}_narkhede.yaml --set optimizer.population={pop} "
+                f"--set optimizer.generations={gen}")]
+
+
 def control_rows() -> list[Row]:
     """Thesis ch. 2: F at Table 2.7's initial parameters (recomputed) and the tuned comparison (quoted)."""
     f0 = default_score("wmp_fuzzy_protective.yaml", "train")
@@ -143,10 +156,20 @@ NOTES = """## Deviations and open points
   magnetic 0.1-0.5: 2.48 vs 0.27 deg (9.2x at 40 Hz, 6.1x at 1 kHz); acceleration 0.5 g: 3.08 vs
   0.52 deg (5.9x; 4.1x at 1 kHz). Tuned at a small budget (PSO 10 x 6), the QUKF's R alone brings
   it to 1.46 deg on the held-out pair, the QRAUKF to 0.33 deg (4.4x).
-- **CCF (Narkhede 2021).** Not done: the paper-faithful alpha option of the ccf/lcf filters and its
-  config are still open; the issue's finding (CCF's best grid point no better than NCF's) stands.
-- **Tilt bench.** The adaptive KF's membership functions and K1..K5 are not yet searchable; the
-  ordering above is with the project's fixed choices.
+- **CCF (Narkhede 2021).** The paper never states its sampling rate. Eq. (8) is a per-sample
+  weight; eq. (9) writes the same filter with a time constant, so alpha = 0.7 means tau = 47 ms only
+  at an assumed 50 Hz (the APM's log rate). Option `alpha_rate_hz` of the lcf/ccf filters keeps that
+  time constant at any recording rate (default 0: per sample, histories unchanged); the configs
+  generate their data at 50 Hz. Eq. (14) makes the NCF a special case of the CCF (alpha = 1), so the
+  tuned CCF can only tie or beat the tuned NCF up to optimiser noise; on our disturbed bench the
+  tuner drives alpha to ~1 (0.9986 at PSO 20 x 15, held-out 2.53 vs NCF 2.45 deg): the LCF blend of
+  the accelerometer/magnetometer angles brings no accuracy, unlike Tables 1-3. The paper's
+  insensitivity to Kp, Ki is the LCF blend dominating (a fixed alpha = 0.7 per sample leaves the
+  PI loop little to do), which is not an accuracy gain on white-noise synthetic data.
+- **Tilt bench.** The adaptive KF's membership functions and K1..K5 are not yet searchable (issue
+  14 item 3 is open); the ordering above is with the project's fixed choices at a reduced budget
+  (PSO 20 x 15 each, thesis 30 x 30 / 20 x 20 / 10 x 10). Tuned Mahony ahead of the AKF matches
+  the issue's earlier measurement at the thesis budgets.
 - **Control.** F of the tuned controllers is quoted from docs/control-cost.md, not rerun here.
 """
 
@@ -158,9 +181,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "docs" / "papers.md")
     ap.add_argument("--runs", type=Path, default=ROOT / "runs" / "papers")
     args = ap.parse_args(argv)
-    pop, gen = (4, 2) if args.smoke else (12, 8)
+    pop, gen = (4, 2) if args.smoke else (20, 15)
     t0 = time.perf_counter()
-    rows = qraukf_rows() + control_rows() + tilt_rows(pop, gen, args.runs) + faekf_rows(pop, gen, args.runs)
+    rows = (qraukf_rows() + control_rows() + ccf_rows(pop, gen, args.runs) + tilt_rows(pop, gen, args.runs)
+            + faekf_rows(pop, gen, args.runs))
     write(rows, args.out, time.perf_counter() - t0, NOTES)
     print(args.out.read_text())
     return 0
