@@ -162,3 +162,33 @@ def test_registry_and_validation():
         NCF(Kp=-1.0)
     with pytest.raises(ValueError, match="euler0"):
         complementary_batch(np.zeros((3, 3)), np.ones((3, 3)), None, DT, np.zeros(2))
+
+
+def test_alpha_rate_keeps_the_lcf_time_constant():
+    """alpha defined at f_ref: the step response of the LCF (tau = alpha / (f_ref (1 - alpha))) is the same
+    at every rate; alpha_rate_hz = recording rate, or 0, reproduces the per-sample filter exactly."""
+    from objectives.attitude.filters.complementary import alpha_at_rate
+
+    assert alpha_at_rate(0.7, 100.0, 0.01) == pytest.approx(0.7, abs=1e-15)
+    assert alpha_at_rate(0.7, 0.0, 0.001) == 0.7 and alpha_at_rate(1.0, 50.0, 0.001) == 1.0
+    # closed form: tau = 0.7 / (50 * 0.3) = 46.7 ms; at 1 kHz alpha_eff = tau / (tau + 1 ms)
+    tau = 0.7 / (50 * 0.3)
+    assert alpha_at_rate(0.7, 50.0, 0.001) == pytest.approx(tau / (tau + 0.001), rel=1e-14)
+    # the roll response to a step of the accelerometer angle (gyro at rest): x_k = 1 - alpha_eff^k,
+    # i.e. 1 - exp(-t / tau') with tau' -> tau as dt -> 0; compare at t = tau at 100 Hz and 1 kHz
+    reached = {}
+    for rate in (100.0, 1000.0):
+        dt = 1.0 / rate
+        n = int(round(0.5 * rate))
+        q = quat_from_euler_zyx(np.tile([0.2, 0.0, 0.0], (n, 1)))
+        rec = simulate_imu(q, dt, frame="NED")
+        out = LCF(alpha=0.7, alpha_rate_hz=50.0).run_detailed(rec, q0=[1.0, 0.0, 0.0, 0.0]).diagnostics["euler"]
+        k = int(round(tau * rate))
+        reached[rate] = out[k - 1, 0] / 0.2
+    assert reached[100.0] == pytest.approx(reached[1000.0], abs=0.03)
+    assert reached[1000.0] == pytest.approx(1 - np.exp(-1), abs=0.03)
+    # per-sample default unchanged
+    rec = simulate_imu(quat_from_euler_zyx(np.tile([0.2, 0.0, 0.0], (50, 1))), 0.02, frame="NED")
+    a = CCF().run(rec)
+    b = CCF(alpha_rate_hz=50.0).run(rec)
+    assert np.array_equal(a, b)

@@ -34,7 +34,13 @@ Discrete filters (step ``dt``, previous estimate ``x``, error ``e = wrap(x_a - x
 
 ``alpha`` is the paper's per-sample weight, so the LCF time constant
 ``tau = alpha dt / (1 - alpha)`` depends on the sampling rate (keep the seed's definition: an
-``alpha`` tuned at one rate must be converted for another). ``Kp`` (1/s) and ``Ki`` (1/s^2) are
+``alpha`` tuned at one rate must be converted for another). Eq. (9) writes the LCF with a time
+constant ``tau``; the paper never states its sampling rate, so its ``alpha = 0.7`` fixes a time
+constant only together with the logging rate of its datasets. Option ``alpha_rate_hz`` (default 0:
+``alpha`` is per sample at the recording's rate, as before) declares the rate ``f_ref`` at which
+``alpha`` is defined: the filter keeps its time constant ``tau = alpha / (f_ref (1 - alpha))`` and
+uses ``alpha_eff = tau / (tau + dt)`` at the recording's ``dt`` (equal to ``alpha`` when
+``dt = 1 / f_ref``). ``Kp`` (1/s) and ``Ki`` (1/s^2) are
 continuous-time gains and rate-independent. The paper's grid (Tables 1-2) is ``Kp`` in
 {0.1, 1, 25, 75} and ``Ki`` in {0.01, 0.1, 1}, with ``alpha = 0.7`` for CCF.
 
@@ -324,6 +330,22 @@ _KP = dict(bounds=(0.01, 100.0), scale="log", unit="1/s", doc="proportional gain
            allowed=NONNEG)
 _KI = dict(bounds=(1e-3, 10.0), scale="log", unit="1/s^2", doc="integral gain of eq. (10)", eq="eq. (10)",
            allowed=NONNEG)
+_ALPHA_RATE = Param("alpha_rate_hz", 0.0, unit="Hz", allowed=NONNEG,
+                    doc="rate at which alpha is a per-sample weight (0: the recording's rate)")
+
+
+def alpha_at_rate(alpha: float, alpha_rate_hz: float, dt: float) -> float:
+    """Per-sample weight at step ``dt`` (s) with the LCF time constant ``alpha`` has at ``alpha_rate_hz``.
+
+    ``tau = alpha / (f_ref (1 - alpha))`` (eqs. (8)-(9) discretised at ``1 / f_ref``),
+    ``alpha_eff = tau / (tau + dt)``; ``alpha_rate_hz = 0`` or ``alpha`` in {0, 1} returns ``alpha``.
+    """
+    if alpha_rate_hz == 0.0 or alpha <= 0.0 or alpha >= 1.0:
+        return alpha
+    tau_s = alpha / (alpha_rate_hz * (1.0 - alpha))
+    return tau_s / (tau_s + dt)
+
+
 _USE_MAG = Param("use_mag", True, doc="yaw from the magnetometer (true) or gyro only (false)")
 _GATE = Param("acc_gate", math.inf, unit="1", allowed=GATE_RANGE,
               doc="no correction when | |acc| - g | > acc_gate g (inf: never, as the paper)")
@@ -344,6 +366,7 @@ class _ComplementaryBase(AttitudeFilter):
 
     def _coef(self, has_mag: bool, g_ref: float, dt: float) -> np.ndarray:
         alpha, kp, ki = self._gains()
+        alpha = alpha_at_rate(alpha, float(self.values.get("alpha_rate_hz", 0.0)), dt)
         return _coef(dt, alpha, kp, ki, has_mag, float(self.values.get("acc_gate", math.inf)), g_ref)
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
@@ -378,7 +401,7 @@ class LCF(_ComplementaryBase):
     """Linear complementary filter, eq. (8). Parameter ``alpha`` (default 0.98), ``use_mag``."""
 
     name = "lcf"
-    decl = ParamSet("lcf", (Param("alpha", 0.98, (0.5, 0.9999), **_ALPHA), _USE_MAG))
+    decl = ParamSet("lcf", (Param("alpha", 0.98, (0.5, 0.9999), **_ALPHA), _USE_MAG, _ALPHA_RATE))
 
     def _gains(self):
         return float(self.values["alpha"]), 0.0, 0.0
@@ -399,7 +422,7 @@ class CCF(_ComplementaryBase):
 
     name = "ccf"
     decl = ParamSet("ccf", (Param("alpha", 0.7, (0.5, 0.9999), **_ALPHA), Param("Kp", 25.0, **_KP),
-                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE))
+                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE, _ALPHA_RATE))
 
     def _gains(self):
         v = self.values

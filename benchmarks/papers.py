@@ -1,0 +1,214 @@
+"""Reproduce the seeds' headline claims from the configs in ``configs/papers/`` and write ``docs/papers.md``.
+
+Each claim is measured either at the paper's own parameter values (the config's defaults, scored on
+its held-out recordings: no tuning involved) or by a tuning run of the config at a reduced budget
+(``--set optimizer.population=... optimizer.generations=...``) in a run directory under
+``runs/papers/``. The control results come from ``docs/control-cost.md`` (a 40 x 40 sweep of four
+controllers takes longer than the whole budget of ``make papers``); F at the thesis's initial
+parameters is recomputed here.
+
+    python -m benchmarks.papers            # about 5 minutes on 2 cores, writes docs/papers.md
+    python -m benchmarks.papers --smoke    # tiny budgets, for the tests
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPERS = ROOT / "configs" / "papers"
+
+
+@dataclass
+class Row:
+    """One line of docs/papers.md: a claim, the paper's number, ours, the verdict and the command."""
+
+    claim: str
+    paper: str
+    ours: str
+    verdict: str
+    command: str
+
+
+def default_score(config: str, which: str = "test") -> float:
+    """Fitness of a paper config's default parameters (the paper's values) on one split."""
+    from tuner.config import load_config
+    from tuner.run import _build
+
+    objective, _ = _build(load_config(PAPERS / config, n_jobs=1))
+    params = objective.default_params()
+    if not hasattr(objective, "score"):  # single-scenario objectives (closed loop): the evaluation itself
+        ev = objective(params)
+        if ev.status != "ok":
+            raise ValueError(f"{config}: defaults could not be evaluated: {ev.error}")
+        return float(ev.fitness)
+    score = objective.score(params, which)
+    if not score.ok:
+        raise ValueError(f"{config}: defaults could not be scored on {which!r}: {score.failed}")
+    return float(score.fitness)
+
+
+def tuned(config: str, population: int, generations: int, out: Path) -> dict:
+    """Run ``config`` at the given PSO budget into ``out/<stem>``; return its best.yaml."""
+    run_dir = out / Path(config).stem
+    if run_dir.exists():  # runs/papers/ belongs to this script: each call measures afresh
+        shutil.rmtree(run_dir)
+    cmd = [sys.executable, "-m", "tuner", "run", str(PAPERS / config), "-q", "--run-dir", str(run_dir),
+           "--set", f"optimizer.population={population}", "--set", f"optimizer.generations={generations}"]
+    subprocess.run(cmd, check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+    return yaml.safe_load((run_dir / "best.yaml").read_text())
+
+
+def qraukf_rows() -> list[Row]:
+    """Chiella 2019, Tables 1-2: QRAUKF vs QUKF at the paper's values (no tuning)."""
+    u, r = default_score("qukf_chiella.yaml"), default_score("qraukf_chiella.yaml")
+    ratio = u / r
+    ok = 7.0 / 3.0 <= ratio <= 7.0 * 3.0
+    return [Row("QRAUKF beats the QUKF under slow magnetic disturbances and linear accelerations "
+                "(mean total RMSE, held-out 40 Hz recordings, paper's Q/R, untuned)",
+                "QUKF/QRAUKF about 7x (heading 13.0 vs 1.84 deg; 2.36 vs 0.16 deg)",
+                f"{u:.2f} vs {r:.2f} deg: {ratio:.1f}x",
+                "reproduces (within 3x of 7x)" if ok else f"ratio {ratio:.1f}x outside 2.3-21x",
+                "python -m benchmarks.papers  (default_score of configs/papers/q*ukf_chiella.yaml)")]
+
+
+def tilt_rows(pop: int, gen: int, out: Path) -> list[Row]:
+    """Thesis 3.1, Tables 3.1-3.6: ordering of the tuned tilt estimators on held-out recordings."""
+    names = {"KF": "thesis_kf1d.yaml", "AKF": "thesis_akf1d.yaml", "AKF+fuzzy": "thesis_akf1d_fuzzy.yaml",
+             "Mahony": "thesis_mahony1d.yaml", "Madgwick": "thesis_madgwick1d.yaml"}
+    test = {k: tuned(v, pop, gen, out)["evaluation"]["test_fitness"] for k, v in names.items()}
+    order = sorted(test, key=test.get)
+    ours = " < ".join(f"{k} {test[k]:.3g}" for k in order)
+    verdict = "reproduces" if order[0].startswith("AKF") else f"deviates: {order[0]} best"
+    return [Row(f"The adaptive KF is the best tilt estimator (held-out MSE, PSO {pop} x {gen} each)",
+                "AKF < KF < Mahony < Madgwick (Table 3.6)", ours, verdict,
+                f"python -m tuner run configs/papers/thesis_<f>.yaml --set optimizer.population={pop} "
+                f"--set optimizer.generations={gen}")]
+
+
+def faekf_rows(pop: int, gen: int, out: Path) -> list[Row]:
+    """FAEKF paper, section 5.2: the tuned FAEKF beats the tuned EKF on held-out bench recordings."""
+    ekf = tuned("ekf_bench6dof.yaml", pop, gen, out)["evaluation"]["test_fitness"]
+    fa = tuned("faekf_bench6dof.yaml", pop, gen, out)["evaluation"]["test_fitness"]
+    gain = 100.0 * (1.0 - fa / ekf)
+    return [Row(f"The tuned FAEKF beats the tuned EKF (held-out Euler MSE, geometric mean, PSO {pop} x {gen})",
+                "52-87 % lower error", f"EKF {ekf:.3g}, FAEKF {fa:.3g}: {gain:.0f} % lower",
+                "reproduces" if 52.0 <= gain else ("same direction, smaller" if gain > 0 else "deviates"),
+                f"python -m tuner run configs/papers/{{ekf,faekf}}_bench6dof.yaml --set optimizer.population={pop} "
+                f"--set optimizer.generations={gen}")]
+
+
+def ccf_rows(pop: int, gen: int, out: Path) -> list[Row]:
+    """Narkhede 2021, Tables 1-3: the tuned CCF is no worse than the tuned NCF (held-out, 50 Hz)."""
+    best = {f: tuned(f"{f}_narkhede.yaml", pop, gen, out) for f in ("ccf", "ncf")}
+    c, n = (best[f]["evaluation"]["test_fitness"] for f in ("ccf", "ncf"))
+    alpha = best["ccf"]["params"]["alpha"]
+    verdict = "CCF no worse" if c <= n * 1.01 else f"CCF {100 * (c / n - 1):.1f} % worse"
+    c0, n0 = default_score("ccf_narkhede.yaml"), default_score("ncf_narkhede.yaml")
+    return [Row("At the paper's values (alpha 0.7, Kp 25, Ki 0.1; Table 3) the CCF beats the NCF (held-out RMSE, deg)",
+                "CCF lowest RMSE on all 8 datasets", f"CCF {c0:.2f} vs NCF {n0:.2f}",
+                "CCF no worse" if c0 <= n0 * 1.01 else f"CCF {100 * (c0 / n0 - 1):.1f} % worse",
+                "python -m benchmarks.papers (default_score of configs/papers/{ccf,ncf}_narkhede.yaml)"),
+            Row(f"The CCF is more accurate than the NCF (held-out total RMSE, deg, PSO {pop} x {gen})",
+                "CCF lowest RMSE on all 8 datasets", f"CCF {c:.3f} (alpha {alpha:.4f}) vs NCF {n:.3f}",
+                verdict + ("; alpha tuned to ~1, i.e. the CCF reduces to the NCF" if alpha > 0.99 else ""),
+                f"python -m tuner run configs/papers/{{ccf,ncf}}_narkhede.yaml --set optimizer.population={pop} "
+                f"--set optimizer.generations={gen}")]
+
+
+def control_rows() -> list[Row]:
+    """Thesis ch. 2: F at Table 2.7's initial parameters (recomputed) and the tuned comparison (quoted)."""
+    f0 = default_score("wmp_fuzzy_protective.yaml", "train")
+    return [
+        Row("Eq. 2.39 at Table 2.7's initial parameters (SI units, thesis_2s profile)", "0.1049",
+            f"{f0:.4f} ({100 * (f0 / 0.1049 - 1):+.1f} %)",
+            "within 5 %" if abs(f0 / 0.1049 - 1) <= 0.05 else "outside 5 % (docs/control-cost.md section 3)",
+            "python -m benchmarks.papers (default_score of configs/papers/wmp_fuzzy_protective.yaml)"),
+        Row("PSO 150 x 150 improves F of the protective fuzzy scheme (quoted from docs/control-cost.md)",
+            "0.1049 -> 0.0558 (-46.8 %)", "0.1122 -> 0.0479 (-57.3 %)", "larger improvement than the thesis",
+            "python -m tuner run configs/papers/wmp_fuzzy_protective.yaml  (~10 min)"),
+        Row("Tuned fuzzy beats tuned PID on F and both peaks, same requirements (quoted, 40 x 40, seed 1)",
+            "IB 46.8 vs 56.8 deg, current 0.32 vs 0.54 A",
+            "F 0.0491 vs 0.0629; IB 29.4 vs 31.0 deg; current 0.230 vs 0.180 A",
+            "partly: F and IB peak yes, current peak no (docs/control-cost.md section 6)",
+            "python -m tuner sweep configs/papers/wmp_compare.yaml  (~5 min)"),
+    ]
+
+
+def write(rows: list[Row], path: Path, seconds: float, notes: str) -> None:
+    """Write the claims table and the deviations to ``path``."""
+    head = ("# The seeds' headline claims, reproduced\n\nGenerated by `make papers` "
+            f"(`python -m benchmarks.papers`, {seconds:.0f} s on this machine). Configs: `configs/papers/`.\n\n"
+            "| claim | paper | ours | verdict | command |\n|---|---|---|---|---|\n")
+    body = "".join(f"| {r.claim} | {r.paper} | {r.ours} | {r.verdict} | `{r.command}` |\n" for r in rows)
+    path.write_text(head + body + "\n" + notes)
+
+
+NOTES = """## Deviations and open points
+
+- **QRAUKF/QUKF.** The paper's recordings are 40 Hz robot-arm runs; ours are the synthetic 6-DOF
+  bench at 40 Hz without vibration, with magnetic perturbations of 0.1-0.5 earth field or linear
+  accelerations up to 0.5 g (the configs' header). With the bench's default 0.5-5 earth-field
+  perturbations (the FAEKF paper's range) the same untuned filters give QUKF 28.9 vs QRAUKF 0.16 deg
+  (175x, 40 Hz; 73x at 1 kHz): the QUKF follows a field several times the earth's, while the Hampel
+  identifier rejects such gross outliers outright. The 80-300x of issue 14 came from that setting,
+  not from the QUKF's parameters (which are the paper's). Measured by hand, two seeds each, 120 s:
+  magnetic 0.1-0.5: 2.48 vs 0.27 deg (9.2x at 40 Hz, 6.1x at 1 kHz); acceleration 0.5 g: 3.08 vs
+  0.52 deg (5.9x; 4.1x at 1 kHz). Tuned at a small budget (PSO 10 x 6), the QUKF's R alone brings
+  it to 1.46 deg on the held-out pair, the QRAUKF to 0.33 deg (4.4x).
+- **CCF (Narkhede 2021).** The paper never states its sampling rate. Eq. (8) is a per-sample
+  weight; eq. (9) writes the same filter with a time constant, so alpha = 0.7 means tau = 47 ms only
+  at an assumed 50 Hz (the APM's log rate). Option `alpha_rate_hz` of the lcf/ccf filters keeps that
+  time constant at any recording rate (default 0: per sample, histories unchanged); the configs
+  generate their data at 50 Hz. Eq. (14) makes the NCF a special case of the CCF (alpha = 1), so the
+  tuned CCF can only tie or beat the tuned NCF up to optimiser noise; on our disturbed bench the
+  tuner drives alpha to ~1 (0.9986 at PSO 20 x 15, held-out 2.53 vs NCF 2.45 deg): the LCF blend of
+  the accelerometer/magnetometer angles brings no accuracy, unlike Tables 1-3. The paper's
+  insensitivity to Kp, Ki is the LCF blend dominating (a fixed alpha = 0.7 per sample leaves the
+  PI loop little to do), which is not an accuracy gain on white-noise synthetic data.
+- **Tilt bench.** "AKF" keeps the project's fixed fuzzy system (K1..K5 = 1, 3, 10, 30, 100; input
+  ranges 6.5 Hz and 0.35 g); "AKF+fuzzy" (`configs/papers/thesis_akf1d_fuzzy.yaml`) searches the input
+  ranges, which place the Z/S/B sets, and K1..K5 with rho, q00, q11. Fig. 3.9 (the thesis's sets) is
+  missing from the text, so the set shapes stay a uniform partition: only their extent is tuned.
+  Budgets are reduced (PSO 20 x 15 each; thesis 30 x 30 / 20 x 20 / 10 x 10). The bench is
+  synthetic; its disturbance sets were not re-checked against 3.1.2 here.
+- **Verdicts at the committed budgets (seeded, so `make papers` repeats them).** QRAUKF/QUKF 6.9x
+  (target within 3x of 7x: met). CCF vs NCF: the CCF's tuned alpha goes to 0.9986 and its held-out
+  RMSE is 3.2 % above the NCF's (target "no worse": not met at PSO 20 x 15; since alpha = 1 is
+  exactly the NCF (tested), the gap is optimiser noise in a 3-D space against a 2-D one, and the
+  paper's CCF advantage does not appear). At the paper's values (Kp 25) both follow every
+  disturbance (about 18 deg): Kp = 25 1/s trusts the accelerometer and magnetometer within 40 ms.
+  Tilt: tuning the fuzzy system more than halves the AKF's
+  held-out MSE (0.00164 -> 0.00068, level with the KF) but tuned Mahony stays best (0.00046):
+  target "AKF best" not met on the synthetic bench. FAEKF vs EKF -56 % (paper 52-87 %: met).
+  F_init +6.9 % (target 5 %: not met, docs/control-cost.md section 3).
+- **Control.** F of the tuned controllers is quoted from docs/control-cost.md, not rerun here.
+"""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: measure every claim and write docs/papers.md (``--out`` for another path)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--smoke", action="store_true", help="tiny budgets (tests)")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "papers.md")
+    ap.add_argument("--runs", type=Path, default=ROOT / "runs" / "papers")
+    args = ap.parse_args(argv)
+    pop, gen = (4, 2) if args.smoke else (20, 15)
+    t0 = time.perf_counter()
+    rows = (qraukf_rows() + control_rows() + ccf_rows(pop, gen, args.runs) + tilt_rows(pop, gen, args.runs)
+            + faekf_rows(pop, gen, args.runs))
+    write(rows, args.out, time.perf_counter() - t0, NOTES)
+    print(args.out.read_text())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
