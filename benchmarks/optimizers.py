@@ -33,7 +33,7 @@ from benchmarks.common import RESULTS_DIR, fmt, md_table, peer
 
 __all__ = ["run", "METHODS", "OURS", "PEERS_Q", "run_method", "Budget", "evals_to_band"]
 
-OURS = ["pso", "pso_constriction", "pso_linear", "cmaes", "de"]
+OURS = ["pso", "pso_constriction", "pso_linear", "pso_lowbudget", "cmaes", "cmaes_restart", "auto", "de"]
 PEERS_Q = ["pyswarms_gbest", "optuna_tpe", "optuna_cmaes", "scipy_de"]
 METHODS = OURS + PEERS_Q + ["random"]
 
@@ -77,6 +77,13 @@ def _ours(method: str, fn: Budget, dim: int, pop: int, seed: int) -> None:
         name, opts = "pso", {"constriction": True, "c1": 2.05, "c2": 2.05}
     elif method == "pso_linear":
         name, opts = "pso", {"inertia": "linear", "w": 0.9, "w_end": 0.4, "c1": 1.5, "c2": 1.5}
+    elif method == "pso_lowbudget":
+        name, opts = "pso", {"preset": "lowbudget"}
+    if method in ("auto", "cmaes_restart"):  # they size their own population from the evaluation budget
+        opt = get_optimizer(method)(dim, rng, generations=None, max_evals=fn.budget)
+        space = Space(Real(f"u{i}", 0.0, 1.0) for i in range(dim))
+        minimize(lambda p: fn(np.fromiter(p.values(), float, dim)), space, opt)
+        return
     gens = math.ceil(fn.budget / pop) if method != "cmaes" else None
     if method == "cmaes":
         if dim < 2:

@@ -254,6 +254,8 @@ class Run:
             pass
         stage, space, n_evals, n_failed, best, interrupted = 0, self.base_space, 0, 0, None, False
         optimizer = self._new_optimizer(0, space, None)
+        if self.progress and hasattr(optimizer, "describe"):  # e.g. the method `auto` picked
+            self.progress(f"optimizer: {optimizer.describe()}")
         try:
             while True:
                 res = minimize(SeededCall(self.objective), space, optimizer, replay, on_generation,

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+from tuner.optimizers.auto import Auto
 from tuner.optimizers.base import Optimizer, OptionError
 from tuner.optimizers.cmaes import CMAES
+from tuner.optimizers.cmaes_restart import CMAESRestart
 from tuner.optimizers.de import DE
 from tuner.optimizers.pso import PSO
 from tuner.optimizers.random_search import RandomSearch
 
-__all__ = ["Optimizer", "OptionError", "OPTIMIZERS", "get_optimizer", "PSO", "CMAES", "DE", "RandomSearch"]
+__all__ = ["Optimizer", "OptionError", "OPTIMIZERS", "get_optimizer", "PSO", "CMAES", "CMAESRestart", "DE", "Auto",
+           "RandomSearch"]
 
 OPTIMIZERS: dict[str, type[Optimizer]] = {}
 
@@ -21,7 +24,7 @@ def register(cls: type[Optimizer]) -> type[Optimizer]:
     return cls
 
 
-for _cls in (PSO, CMAES, DE, RandomSearch):
+for _cls in (PSO, CMAES, CMAESRestart, DE, RandomSearch, Auto):
     register(_cls)
 
 

@@ -1,0 +1,124 @@
+"""``method: auto``: picks an optimiser from the dimension and the evaluation budget, then delegates to it.
+
+Rules (measured on the benchmark test functions and problems; numbers in
+``benchmarks/results/auto_rules.md``), with ``budget`` in evaluations (``max_evals``, else
+``population x generations``, with population 20 when none is given):
+
+1. ``dim == 1`` or ``budget < 30 dim``: ``pso`` with ``preset: lowbudget`` (pycma does not do 1-D;
+   with under 30 evaluations per dimension CMA-ES has barely adapted: at 120 evaluations in 10-D the
+   PSO preset wins on all four test functions, in 5-D on all four).
+2. ``budget >= 300 dim``: ``cmaes_restart`` (IPOP). By then a single CMA-ES run has usually
+   converged, and on multimodal landscapes only a restart with a larger population still gains.
+3. otherwise: ``cmaes``, the best of ours at 120 evaluations on 4 of the 7 real problems (tied on two
+   more) and on 3 of 4 test functions in 5-D at 300 evaluations.
+
+The choice depends only on ``dim`` and the budget, so it is deterministic and a replayed run picks the
+same method. :meth:`Auto.describe` names it (printed when the run starts; :attr:`Auto.chosen` holds the
+method name). The chosen method receives every common option (``target``, ``patience``, ``x0``, ...);
+for the CMA-ES family a ``generations`` budget is converted to ``max_evals = population x generations``
+(their population is pycma's ``4 + floor(3 ln dim)`` unless ``population`` is given), so the evaluation
+budget is the same whichever method is picked.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from tuner.optimizers.base import Optimizer, OptionError
+from tuner.optimizers.cmaes import CMAES
+from tuner.optimizers.cmaes_restart import CMAESRestart
+from tuner.optimizers.pso import PSO
+
+__all__ = ["Auto", "choose"]
+
+#: evaluations per dimension from which restarts pay off (auto_rules.md)
+RESTART_EVALS_PER_DIM = 300
+#: evaluations per dimension below which the low-budget PSO beats CMA-ES (auto_rules.md)
+PSO_EVALS_PER_DIM = 30
+#: swarm size of the measured low-budget PSO when no population is given
+PSO_POPULATION = 12
+
+
+def choose(dim: int, budget: int | None) -> str:
+    """The method ``auto`` picks for ``dim`` free parameters and ``budget`` evaluations (``None``: unbounded)."""
+    if dim < 2 or (budget is not None and budget < PSO_EVALS_PER_DIM * dim):
+        return "pso"
+    if budget is None or budget >= RESTART_EVALS_PER_DIM * dim:
+        return "cmaes_restart"
+    return "cmaes"
+
+
+class Auto(Optimizer):
+    """Delegating optimiser; see the module docstring for the rules.
+
+    Parameters
+    ----------
+    population, generations, max_evals, target, patience, tol, x0
+        As for every optimiser; together they set the budget the rules look at.
+    """
+
+    name = "auto"
+
+    def __init__(self, dim: int, rng: np.random.Generator, **common: Any):
+        pop_given = common.get("population")
+        super().__init__(dim, rng, **common)
+        gens, max_evals = self.generations, self.max_evals
+        budget = max_evals if max_evals is not None else (None if gens is None else self.population * gens)
+        self.chosen = choose(self.dim, budget)
+        inner_common = dict(common)
+        if self.chosen == "pso":
+            if gens is None and max_evals is None:
+                raise OptionError("auto picks pso in 1-D, which needs a generations or max_evals budget")
+            if pop_given is None:  # the measured swarm, same evaluation budget
+                inner_common["population"] = PSO_POPULATION
+                if gens is not None:
+                    inner_common["generations"] = max(1, budget // PSO_POPULATION)
+            self.inner: Optimizer = PSO(self.dim, rng, preset="lowbudget", **inner_common)
+        else:
+            if gens is not None:  # the same number of evaluations, whatever CMA-ES's population
+                inner_common["generations"] = None
+                inner_common["max_evals"] = budget
+            if pop_given is None:
+                inner_common.pop("population", None)
+            cls = CMAESRestart if self.chosen == "cmaes_restart" else CMAES
+            self.inner = cls(self.dim, rng, **inner_common)
+        # the outer object mirrors the inner budget so the engine's progress line is right
+        self.generations, self.max_evals = self.inner.generations, self.inner.max_evals
+        self.population = self.inner.population
+
+    def describe(self) -> str:
+        inner = self.inner.describe() if hasattr(self.inner, "describe") else self.chosen
+        if self.chosen == "pso":
+            inner = "pso(preset lowbudget)"
+        return f"auto -> {inner}"
+
+    def ask(self) -> np.ndarray:
+        x = self.inner.ask()
+        self.population = len(x)
+        return x
+
+    def _tell(self, x: np.ndarray, f: np.ndarray) -> None:
+        self.inner.tell(x, f)
+
+    def _method_done(self) -> str:
+        return self.inner._method_done()
+
+    def state(self) -> dict[str, Any]:
+        d = {k: v for k, v in self.__dict__.items() if k not in ("rng", "inner")}
+        d["inner"] = self.inner.state()
+        d["class"] = type(self).__name__
+        return d
+
+    @classmethod
+    def from_state(cls, state: dict[str, Any]) -> Auto:
+        state = dict(state)
+        if state.pop("class") != cls.__name__:
+            raise ValueError(f"state is not of a {cls.__name__}")
+        obj = cls.__new__(cls)
+        obj.__dict__.update(state)
+        inner_cls = {"pso": PSO, "cmaes": CMAES, "cmaes_restart": CMAESRestart}[obj.chosen]
+        obj.inner = inner_cls.from_state(state["inner"])
+        obj.rng = obj.inner.rng
+        return obj
