@@ -120,9 +120,8 @@ def test_filter_objective_score_is_typed_and_matches_call():
 
 
 def test_export_takes_provenance_and_tables_from_the_objective(tmp_path):
-    from tuner.export import export
-
     from tuner.config import config_from_dict
+    from tuner.export import export
     from tuner.run import run as run_job
 
     cfg = config_from_dict({"name": "exp", "seed": 3, "objective": {"kind": "function", "function": "ackley",
