@@ -15,7 +15,9 @@ YAML section (``objective:``)::
     data: {all: [...], kfold: {k: 4, fold: 0}}
     metric: euler_mse_geomean           # see METRICS
     metric_options: {weights: [1, 1, 1], normalize: false}
-    q0: accmag                          # initial orientation: accmag (first sample) or truth
+    q0: accmag                          # initial orientation: accmag (first sample), truth or broad
+                                        # (a filter's own `init` option, e.g. fixed: {init: broad} or
+                                        # `init: broad` in a --params file, takes precedence)
     warmup_s: 0.0                       # seconds at the start of each recording left out of metrics
     report: {traces: true, per_trial_optimum: false, per_trial_budget: 120}
 
@@ -165,10 +167,10 @@ class FilterObjective:
         w = self.metric_options.get("weights", (1.0, 1.0, 1.0))
         if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
             raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
-        if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth")):
+        if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth", "broad")):
             q = np.asarray(self.q0, float)
             if q.shape != (4,):
-                raise ValueError(f"objective.q0: expected accmag, truth or 4 numbers, got {self.q0!r}")
+                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 numbers, got {self.q0!r}")
         if self.warmup_s < 0:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._cache: dict[str, Any] = {}

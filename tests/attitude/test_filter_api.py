@@ -52,9 +52,13 @@ def test_declaration_reproduces_previous_defaults_and_space(name):
     """Defaults and default search space equal those of the hand-written tuples and dicts they replace."""
     cls = get_filter(name)
     before = BEFORE["filters"][name]
-    assert _plain(dict(cls.defaults)) == before["defaults"]
-    assert list(cls.defaults) == list(before["defaults"]) or set(cls.defaults) == set(before["defaults"])
+    # every declared filter gained the common start option ``init`` (last, fixed at "auto"); the rest is unchanged
+    assert cls.defaults["init"] == "auto" and list(cls.defaults)[-1] == "init"
+    defaults = {k: v for k, v in cls.defaults.items() if k != "init"}
+    assert _plain(defaults) == before["defaults"]
+    assert list(defaults) == list(before["defaults"]) or set(defaults) == set(before["defaults"])
     space = _plain(cls.space().to_dict())
+    assert space.pop("init")["fixed"] == "auto"
     assert list(space) == list(before["space"])  # same order: same unit-cube encoding
     for key, old in before["space"].items():
         for field, value in old.items():  # bounds, scale, integer, fixed value, unit and doc kept
