@@ -15,6 +15,9 @@ YAML section (``objective:``)::
     data: {all: [...], kfold: {k: 4, fold: 0}}
     metric: euler_mse_geomean           # see METRICS
     metric_options: {weights: [1, 1, 1], normalize: false}
+    # aggregation over recordings and a prior toward the defaults (objectives.attitude.objective_options):
+    # metric_options: {aggregate: mean|median|worst_k|cvar, k: 3, alpha: 0.5, group_balanced: true, groups: broad}
+    # prior: {strength: 3.0, center: defaults}
     q0: accmag                          # initial orientation: accmag (first sample), truth or broad
                                         # (a filter's own `init` option, e.g. fixed: {init: broad} or
                                         # `init: broad` in a --params file, takes precedence)
@@ -49,13 +52,20 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.fused_errors import error_sums
+from objectives.attitude.objective_options import (
+    AGG_KEYS,
+    aggregate_scores,
+    check_metric_options,
+    check_prior,
+    recording_groups,
+)
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
 METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
-_KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "q0", "warmup_s", "report")
+_KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
 #: filter values on which precomputed fuzzy inputs (disturbance measures) depend
 _CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
@@ -150,6 +160,7 @@ class FilterObjective:
     warmup_s: float = 0.0
     report: dict = field(default_factory=dict)
     base_dir: str = "."
+    prior: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         from objectives.attitude.filters import get_filter
@@ -161,9 +172,12 @@ class FilterObjective:
         if unknown:
             raise ValueError(f"objective.fixed.{unknown[0]}: not a parameter of {self.filter}; "
                              f"known: {sorted(self._cls.defaults)}")
-        bad = sorted(set(self.metric_options) - {"weights", "normalize"})
+        bad = sorted(set(self.metric_options) - {"weights", "normalize", *AGG_KEYS})
         if bad:
-            raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize")
+            raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize, "
+                             + ", ".join(AGG_KEYS))
+        check_metric_options(self.metric, self.metric_options)
+        self.prior = check_prior(self.prior, list(self._cls.defaults))
         w = self.metric_options.get("weights", (1.0, 1.0, 1.0))
         if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
             raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
@@ -214,7 +228,7 @@ class FilterObjective:
             metric=section.get("metric", "euler_mse_geomean"),
             metric_options=dict(section.get("metric_options") or {}),
             q0=section.get("q0", "accmag"), warmup_s=float(section.get("warmup_s", 0.0)),
-            report=dict(section.get("report") or {}), base_dir=str(base),
+            report=dict(section.get("report") or {}), base_dir=str(base), prior=section.get("prior") or {},
         )
 
     @classmethod
@@ -230,7 +244,7 @@ class FilterObjective:
         specs = train + test
         _check_specs(specs, Path(self.base_dir), "data")
         return FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
-                               self.q0, self.warmup_s, dict(self.report), self.base_dir)
+                               self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
 
     def __getstate__(self) -> dict[str, Any]:
         d = dict(self.__dict__)
@@ -404,7 +418,7 @@ class FilterObjective:
             per[rec.name] = m
             if keep_outputs:
                 outputs[rec.name] = res
-        fitness = self._combine(sums, per)
+        fitness = self._combine(sums, per, [r.name for r in recs], which)
         return Score(float(fitness), per, failed, outputs)
 
     @staticmethod
@@ -422,8 +436,21 @@ class FilterObjective:
             true = euler_zyx(rec.quat)[:, 1]
         return M.mse_1d(est, true, mask)
 
-    def _combine(self, sums: list[Any], per: dict[str, dict[str, float]]) -> float:
+    def _combine(self, sums: list[Any], per: dict[str, dict[str, float]], names: list[str] | None = None,
+                 which: str = "train") -> float:
         """The configured metric from the per-recording sums (definitions in the module docstring)."""
+        opts = self.metric_options
+        if opts.get("aggregate", "mean") != "mean" or opts.get("group_balanced", False):
+            key = {"broad_mean_rmse": "total_rmse_deg", "mse_1d": "mse_1d"}.get(self.metric)
+            names = list(per) if names is None else names
+            scores = ([per[n][key] for n in names] if key else [float(np.mean(s.rmse_deg)) for s in sums])
+            groups = None
+            if opts.get("group_balanced", False):
+                gkey = ("groups", which)
+                if gkey not in self._cache:
+                    self._cache[gkey] = recording_groups(self.recordings(which), opts.get("groups", "broad"))
+                groups = self._cache[gkey]
+            return aggregate_scores(scores, names, opts, groups)
         if self.metric == "mse_1d":
             return float(np.mean([m["mse_1d"] for m in per.values()]))
         if not sums:
@@ -441,6 +468,21 @@ class FilterObjective:
         total = sum(s.broad_ms_rad2[0] * s.n for s in sums) / sum(s.n for s in sums)
         return float(np.degrees(np.sqrt(total)))
 
+    def prior_penalty(self, params: Mapping[str, Any]) -> float:
+        """The ``prior`` penalty of ``params`` (0 without a prior), in the fitness's units."""
+        if not self.prior or self.prior["strength"] == 0:
+            return 0.0
+        from objectives.attitude.aggregate import prior_penalty
+
+        center = self.prior["center"]
+        center = self.default_params() if center == "defaults" else {**self.default_params(), **center}
+        space = self.default_space()
+        full = {**self.default_params(), **params}
+        for p in space.free:  # a log-scaled value <= 0 (an integral gain off) sits on the lower bound
+            if p.scale == "log" and float(full[p.name]) <= 0:
+                full[p.name] = p.low
+        return prior_penalty(full, space, center, self.prior["strength"])
+
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
         s = self.score(params, "train")
         metrics = {}
@@ -450,6 +492,10 @@ class FilterObjective:
                 metrics[f"{name}.{k}" if len(recs) > 1 else k] = v
         if s.failed:
             return Evaluation.failed(s.failed, metrics)
+        if self.prior:
+            pen = self.prior_penalty(params)
+            metrics["prior_penalty"] = pen
+            return Evaluation(s.fitness + pen, metrics)
         return Evaluation(s.fitness, metrics)
 
     # --- after the run ------------------------------------------------------------------------
