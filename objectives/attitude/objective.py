@@ -347,7 +347,10 @@ class FilterObjective:
         base = Path(self.base_dir)
         out: list[Recording] = []
         for spec in specs:
-            if isinstance(spec, tuple):  # k-fold: round-robin assignment of the listed recordings
+            if isinstance(spec, tuple) and spec[0] == "subset":  # a cross-validation fold: these recordings
+                _, items, names = spec
+                out += [r for r in self._load(list(items)) if r.name in names]
+            elif isinstance(spec, tuple):  # k-fold: round-robin assignment of the listed recordings
                 which, items, k, fold = spec
                 recs = [r for s in items for r in load_recordings(s, base)]
                 out += [r for i, r in enumerate(recs) if (i % k == fold) == (which == "kfold-test")]
@@ -497,6 +500,53 @@ class FilterObjective:
             metrics["prior_penalty"] = pen
             return Evaluation(s.fitness + pen, metrics)
         return Evaluation(s.fitness, metrics)
+
+    # --- cross-validation (tuner cv) -----------------------------------------------------------------
+    def cv_folds(self, k: int | None = None) -> list[tuple[str, FilterObjective, FilterObjective]]:
+        """Folds over all the objective's recordings (train and test): ``(name, tune on, held out)``.
+
+        Without ``k``, recordings that are all BROAD trials (a ``trials.json`` beside them) are grouped by
+        BROAD's level-2 motion/disturbance group and each group is held out once (leave-one-group-out);
+        otherwise, or with ``k``, recordings are assigned round-robin to ``k`` folds (default ``min(5, n)``).
+        Both sides keep the objective's metric, options and prior; the engine scores the held-out side
+        with its plain ``score``.
+        """
+        from objectives.attitude.objective_options import recording_groups
+
+        recs = list(self.recordings("train")) + (list(self.recordings("test")) if self.test_specs else [])
+        names = [r.name for r in recs]
+        if len(set(names)) != len(names):
+            raise ValueError("objective.data: recording names repeat; cross-validation needs unique names")
+        if len(recs) < 2:
+            raise ValueError(f"objective.data: cross-validation needs >= 2 recordings, got {len(recs)}")
+        groups: dict[str, str] | None = None
+        if k is None:
+            try:
+                groups = recording_groups(recs, "broad")
+            except ValueError:
+                groups = None
+        if groups is not None and len(set(groups.values())) >= 2:
+            order = list(dict.fromkeys(groups[n] for n in names))
+            parts = [(g, [n for n in names if groups[n] == g]) for g in order]
+        else:
+            kk = min(5, len(recs)) if k is None else int(k)
+            if not 2 <= kk <= len(recs):
+                raise ValueError(f"cv: need 2 <= k <= {len(recs)} (recordings), got k={k}")
+            parts = [(f"fold-{i}", [n for j, n in enumerate(names) if j % kk == i]) for i in range(kk)]
+        specs = list(self.train_specs) + list(self.test_specs)
+        by_name = dict(zip(names, recs))
+        out = []
+        for fname, held in parts:
+            rest = [n for n in names if n not in held]
+            sides = []
+            for keep in (rest, held):
+                obj = FilterObjective(self.filter, [("subset", specs, tuple(keep))], [], dict(self.fixed),
+                                      self.metric, dict(self.metric_options), self.q0, self.warmup_s,
+                                      dict(self.report), self.base_dir, dict(self.prior))
+                obj._cache["train"] = [by_name[n] for n in keep]
+                sides.append(obj)
+            out.append((fname, sides[0], sides[1]))
+        return out
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:
