@@ -172,8 +172,8 @@ def score_trials(filter_name: str, values: Mapping[str, Any], paths: Sequence[st
     (:func:`objectives.attitude.init_broad.broad_start`). A run with non-finite output scores
     ``failure_deg``.
     """
+    from objectives.attitude.fused_errors import error_sums
     from objectives.attitude.init_broad import broad_start
-    from objectives.attitude.scoring import error_sums
 
     cls = filter_class(filter_name)
     flt = cls(**{k: v for k, v in values.items() if k in cls.defaults})
