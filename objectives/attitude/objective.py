@@ -508,8 +508,9 @@ class FilterObjective:
         Without ``k``, recordings that are all BROAD trials (a ``trials.json`` beside them) are grouped by
         BROAD's level-2 motion/disturbance group and each group is held out once (leave-one-group-out);
         otherwise, or with ``k``, recordings are assigned round-robin to ``k`` folds (default ``min(5, n)``).
-        Both sides keep the objective's metric, options and prior; the engine scores the held-out side
-        with its plain ``score``.
+        The tuning side keeps the objective's metric, options and prior; the held-out side keeps the metric
+        without the aggregation options (each held-out recording counts once, as in the plain metric), and
+        the engine scores it with ``score`` (no prior).
         """
         from objectives.attitude.objective_options import recording_groups
 
@@ -534,14 +535,15 @@ class FilterObjective:
                 raise ValueError(f"cv: need 2 <= k <= {len(recs)} (recordings), got k={k}")
             parts = [(f"fold-{i}", [n for j, n in enumerate(names) if j % kk == i]) for i in range(kk)]
         specs = list(self.train_specs) + list(self.test_specs)
+        plain = {k: v for k, v in self.metric_options.items() if k not in AGG_KEYS}
         by_name = dict(zip(names, recs))
         out = []
         for fname, held in parts:
             rest = [n for n in names if n not in held]
             sides = []
-            for keep in (rest, held):
+            for keep, opts in ((rest, dict(self.metric_options)), (held, plain)):
                 obj = FilterObjective(self.filter, [("subset", specs, tuple(keep))], [], dict(self.fixed),
-                                      self.metric, dict(self.metric_options), self.q0, self.warmup_s,
+                                      self.metric, opts, self.q0, self.warmup_s,
                                       dict(self.report), self.base_dir, dict(self.prior))
                 obj._cache["train"] = [by_name[n] for n in keep]
                 sides.append(obj)

@@ -49,11 +49,16 @@ def test_kfold_scores_equal_direct_scoring_of_held_out_recordings(tmp_path):
     assert "| fold-0 | 2 |" in md and "beta" in md and "gap" in md
 
 
-def test_prior_tunes_but_held_out_score_is_plain(tmp_path):
-    out = cross_validate(_cfg(SPECS[:2], tmp_path, prior={"strength": 50.0}), k=2, full=False)
+def test_prior_and_aggregation_tune_but_held_out_score_is_plain(tmp_path):
+    cfg = _cfg(SPECS, tmp_path, prior={"strength": 50.0}, metric_options={"aggregate": "worst_k", "k": 1})
+    out = cross_validate(cfg, k=2, full=False)
+    held = {0: [SPECS[0], SPECS[2]], 1: [SPECS[1], SPECS[3]]}
     for i, f in enumerate(out.folds):
-        direct = FilterObjective("madgwick", [SPECS[i]], metric="broad_mean_rmse")
+        direct = FilterObjective("madgwick", held[i], metric="broad_mean_rmse")  # the mean, not the worst
         assert f.cv_fitness == pytest.approx(direct.score(f.params).fitness, rel=1e-12)
+        tuned = FilterObjective("madgwick", held[1 - i], metric="broad_mean_rmse",
+                                metric_options={"aggregate": "worst_k", "k": 1}, prior={"strength": 50.0})
+        assert f.train_fitness == pytest.approx(tuned(f.params).fitness, rel=1e-12)  # tuned with both
 
 
 def test_cli_writes_the_directory_and_bad_k_names_the_problem(tmp_path, capsys):
