@@ -67,8 +67,8 @@ class CVOutcome:
                "defaults_fold_std": float(np.std(de)), "defaults_fold_worst": float(np.max(de)),
                "cv_mean": float(np.sum(cv * n) / np.sum(n)), "defaults_mean": float(np.sum(de * n) / np.sum(n))}
         if self.full is not None:
-            out["tuning_score"] = self.full.train_fitness
-            out["gap"] = out["cv_mean"] - self.full.train_fitness
+            out["tuning_score"] = self.full.cv_fitness  # tuned on all, scored like the held-out folds
+            out["gap"] = out["cv_mean"] - self.full.cv_fitness
         return out
 
 
@@ -151,7 +151,12 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
             params, train_fit = _tune(cfg, objective, evaluate, stage=0)
         finally:
             evaluate.close()
-        out.full = FoldOutcome("all", 0, params, train_fit, math.nan, math.nan)
+        # its score on all data as the folds count it (held-out scores weighted by recordings), so the
+        # gap compares like with like whatever aggregation or prior the tuning used
+        sc = [(_score(test, params), n) for (_, _, test), n in zip(folds, [f.n_test for f in out.folds])] \
+            if params else []
+        plain = sum(s[0] * n for s, n in sc) / sum(n for _, n in sc) if sc else math.nan
+        out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan)
         say(f"all data: tuned {train_fit:.4g}")
     out.seconds = time.time() - t0
     return out
@@ -186,7 +191,8 @@ def write_cv(out: CVOutcome, directory: str | Path) -> Path:
                      f"{' (failed)' if f.failed else ''} | {_fmt(f.default_fitness)} | "
                      + " | ".join(_fmt(f.params.get(n, "")) for n in names) + " |")
     if out.full:
-        lines.append(f"| *all (tuning)* | | {_fmt(out.full.train_fitness)} | | | "
+        lines.append(f"| *all (tuning)* | {out.full.n_test} | {_fmt(out.full.train_fitness)} | "
+                     f"{_fmt(out.full.cv_fitness)} (on all, not held out) | | "
                      + " | ".join(_fmt(out.full.params.get(n, "")) for n in names) + " |")
     lines += ["", "| | tuned (CV) | defaults |", "|---|---|---|",
               f"| mean over held-out recordings | {s['cv_mean']:.4g} | {s['defaults_mean']:.4g} |",

@@ -40,7 +40,9 @@ def test_kfold_scores_equal_direct_scoring_of_held_out_recordings(tmp_path):
         assert f.train_fitness == pytest.approx(train.score(f.params).fitness, rel=1e-12)  # tuned on the rest
     s = out.summary()
     assert s["cv_mean"] == pytest.approx(sum(f.cv_fitness * f.n_test for f in out.folds) / 4)
-    assert s["gap"] == pytest.approx(s["cv_mean"] - out.full.train_fitness)
+    assert s["gap"] == pytest.approx(s["cv_mean"] - out.full.cv_fitness)
+    assert out.full.cv_fitness == pytest.approx(FilterObjective("madgwick", SPECS, metric="broad_mean_rmse").score(
+        out.full.params).fitness, rel=1e-12)
     d = write_cv(out, tmp_path / "cv")
     rows = list(csv.DictReader(open(d / "cv.csv")))
     assert [r["fold"] for r in rows] == ["fold-0", "fold-1", "all"]
