@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -90,6 +91,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--data", help="YAML file with a `data` list (or mapping) replacing the config's data")
     p.add_argument("--json", action="store_true", help="print {fitness, recordings: {...}} as JSON")
 
+    p = sub.add_parser("cv", help="cross-validate a config: tune on the other folds, score the held-out fold")
+    p.add_argument("config")
+    p.add_argument("--k", type=int, default=None, help="number of folds for k-fold (default: the objective's "
+                   "groups, e.g. BROAD's trial groups, else 5)")
+    p.add_argument("--dir", default=None, help="output directory (default: <output>/cv/<name>-<stamp>)")
+    p.add_argument("--no-full", action="store_true", help="skip the tuning on all data (no gap)")
+    p.add_argument("-q", "--quiet", action="store_true")
     p = sub.add_parser("sweep", help="run many jobs (configs x overrides x seeds) and write one report")
     p.add_argument("sweep", help="sweep YAML file")
     p.add_argument("--dir", help="sweep directory (default: runs/sweeps/<name>)")
@@ -296,6 +304,21 @@ def _cmd_evaluate(a) -> int:
     return 0
 
 
+def _cmd_cv(a) -> int:
+    from tuner.config import load_config
+    from tuner.cv import cross_validate, write_cv
+
+    cfg = load_config(a.config)
+    out = cross_validate(cfg, k=a.k, full=not a.no_full, progress=None if a.quiet else
+                         (lambda m: print(m, file=sys.stderr, flush=True)))
+    stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
+    d = write_cv(out, a.dir or Path(cfg.output) / "cv" / f"{cfg.name}-{stamp}")
+    s = out.summary()
+    print(f"CV mean {s['cv_mean']:.4g} (defaults {s['defaults_mean']:.4g})"
+          + (f", tuning score {s['tuning_score']:.4g}, gap {s['gap']:+.3g}" if "gap" in s else "") + f"\n{d}")
+    return 0
+
+
 def _cmd_sweep(a) -> int:
     from tuner.sweep import collect, run_sweep, summary_text
 
@@ -323,7 +346,7 @@ def _cmd_report(a) -> int:
 
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
             "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "evaluate": _cmd_evaluate,
-            "sweep": _cmd_sweep, "report": _cmd_report}
+            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report}
 
 
 def main(argv: list[str] | None = None) -> int:

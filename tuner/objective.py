@@ -137,6 +137,10 @@ class TunableObjective(Objective, Protocol):
         """``(rate in Hz, note)`` that per-sample parameters assume (``None`` with the reason if unknown);
         ``tuner export`` writes it into every format."""
 
+    def cv_folds(self, k: int | None = None) -> list[tuple[str, Any, Any]]:
+        """Cross-validation folds for ``tuner cv``: ``[(name, train_objective, test_objective)]``, each
+        objective on part of the data (e.g. leave one recording group out; ``k`` folds if given)."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
@@ -144,7 +148,7 @@ class TunableObjective(Objective, Protocol):
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "parameter_names", "preflight", "score", "has_test_data",
-         "with_data", "export_tables", "describe", "sample_rate", "traces", "finalize")
+         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "finalize")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

@@ -15,7 +15,12 @@ YAML section (``objective:``)::
     data: {all: [...], kfold: {k: 4, fold: 0}}
     metric: euler_mse_geomean           # see METRICS
     metric_options: {weights: [1, 1, 1], normalize: false}
-    q0: accmag                          # initial orientation: accmag (first sample) or truth
+    # aggregation over recordings and a prior toward the defaults (objectives.attitude.objective_options):
+    # metric_options: {aggregate: mean|median|worst_k|cvar, k: 3, alpha: 0.5, group_balanced: true, groups: broad}
+    # prior: {strength: 3.0, center: defaults}
+    q0: accmag                          # initial orientation: accmag (first sample), truth or broad
+                                        # (a filter's own `init` option, e.g. fixed: {init: broad} or
+                                        # `init: broad` in a --params file, takes precedence)
     warmup_s: 0.0                       # seconds at the start of each recording left out of metrics
     report: {traces: true, per_trial_optimum: false, per_trial_budget: 120}
 
@@ -47,13 +52,20 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.fused_errors import error_sums
+from objectives.attitude.objective_options import (
+    AGG_KEYS,
+    aggregate_scores,
+    check_metric_options,
+    check_prior,
+    recording_groups,
+)
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
 METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
-_KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "q0", "warmup_s", "report")
+_KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
 #: filter values on which precomputed fuzzy inputs (disturbance measures) depend
 _CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
@@ -148,6 +160,7 @@ class FilterObjective:
     warmup_s: float = 0.0
     report: dict = field(default_factory=dict)
     base_dir: str = "."
+    prior: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         from objectives.attitude.filters import get_filter
@@ -159,16 +172,19 @@ class FilterObjective:
         if unknown:
             raise ValueError(f"objective.fixed.{unknown[0]}: not a parameter of {self.filter}; "
                              f"known: {sorted(self._cls.defaults)}")
-        bad = sorted(set(self.metric_options) - {"weights", "normalize"})
+        bad = sorted(set(self.metric_options) - {"weights", "normalize", *AGG_KEYS})
         if bad:
-            raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize")
+            raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize, "
+                             + ", ".join(AGG_KEYS))
+        check_metric_options(self.metric, self.metric_options)
+        self.prior = check_prior(self.prior, list(self._cls.defaults))
         w = self.metric_options.get("weights", (1.0, 1.0, 1.0))
         if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
             raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
-        if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth")):
+        if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth", "broad")):
             q = np.asarray(self.q0, float)
             if q.shape != (4,):
-                raise ValueError(f"objective.q0: expected accmag, truth or 4 numbers, got {self.q0!r}")
+                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 numbers, got {self.q0!r}")
         if self.warmup_s < 0:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._cache: dict[str, Any] = {}
@@ -212,7 +228,7 @@ class FilterObjective:
             metric=section.get("metric", "euler_mse_geomean"),
             metric_options=dict(section.get("metric_options") or {}),
             q0=section.get("q0", "accmag"), warmup_s=float(section.get("warmup_s", 0.0)),
-            report=dict(section.get("report") or {}), base_dir=str(base),
+            report=dict(section.get("report") or {}), base_dir=str(base), prior=section.get("prior") or {},
         )
 
     @classmethod
@@ -236,7 +252,7 @@ class FilterObjective:
         specs = train + test
         _check_specs(specs, Path(self.base_dir), "data")
         return FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
-                               self.q0, self.warmup_s, dict(self.report), self.base_dir)
+                               self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
 
     def __getstate__(self) -> dict[str, Any]:
         d = dict(self.__dict__)
@@ -339,7 +355,10 @@ class FilterObjective:
         base = Path(self.base_dir)
         out: list[Recording] = []
         for spec in specs:
-            if isinstance(spec, tuple):  # k-fold: round-robin assignment of the listed recordings
+            if isinstance(spec, tuple) and spec[0] == "subset":  # a cross-validation fold: these recordings
+                _, items, names = spec
+                out += [r for r in self._load(list(items)) if r.name in names]
+            elif isinstance(spec, tuple):  # k-fold: round-robin assignment of the listed recordings
                 which, items, k, fold = spec
                 recs = [r for s in items for r in load_recordings(s, base)]
                 out += [r for i, r in enumerate(recs) if (i % k == fold) == (which == "kfold-test")]
@@ -410,7 +429,7 @@ class FilterObjective:
             per[rec.name] = m
             if keep_outputs:
                 outputs[rec.name] = res
-        fitness = self._combine(sums, per)
+        fitness = self._combine(sums, per, [r.name for r in recs], which)
         return Score(float(fitness), per, failed, outputs)
 
     @staticmethod
@@ -428,8 +447,21 @@ class FilterObjective:
             true = euler_zyx(rec.quat)[:, 1]
         return M.mse_1d(est, true, mask)
 
-    def _combine(self, sums: list[Any], per: dict[str, dict[str, float]]) -> float:
+    def _combine(self, sums: list[Any], per: dict[str, dict[str, float]], names: list[str] | None = None,
+                 which: str = "train") -> float:
         """The configured metric from the per-recording sums (definitions in the module docstring)."""
+        opts = self.metric_options
+        if opts.get("aggregate", "mean") != "mean" or opts.get("group_balanced", False):
+            key = {"broad_mean_rmse": "total_rmse_deg", "mse_1d": "mse_1d"}.get(self.metric)
+            names = list(per) if names is None else names
+            scores = ([per[n][key] for n in names] if key else [float(np.mean(s.rmse_deg)) for s in sums])
+            groups = None
+            if opts.get("group_balanced", False):
+                gkey = ("groups", which)
+                if gkey not in self._cache:
+                    self._cache[gkey] = recording_groups(self.recordings(which), opts.get("groups", "broad"))
+                groups = self._cache[gkey]
+            return aggregate_scores(scores, names, opts, groups)
         if self.metric == "mse_1d":
             return float(np.mean([m["mse_1d"] for m in per.values()]))
         if not sums:
@@ -447,6 +479,21 @@ class FilterObjective:
         total = sum(s.broad_ms_rad2[0] * s.n for s in sums) / sum(s.n for s in sums)
         return float(np.degrees(np.sqrt(total)))
 
+    def prior_penalty(self, params: Mapping[str, Any]) -> float:
+        """The ``prior`` penalty of ``params`` (0 without a prior), in the fitness's units."""
+        if not self.prior or self.prior["strength"] == 0:
+            return 0.0
+        from objectives.attitude.aggregate import prior_penalty
+
+        center = self.prior["center"]
+        center = self.default_params() if center == "defaults" else {**self.default_params(), **center}
+        space = self.default_space()
+        full = {**self.default_params(), **params}
+        for p in space.free:  # a log-scaled value <= 0 (an integral gain off) sits on the lower bound
+            if p.scale == "log" and float(full[p.name]) <= 0:
+                full[p.name] = p.low
+        return prior_penalty(full, space, center, self.prior["strength"])
+
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
         s = self.score(params, "train")
         metrics = {}
@@ -456,7 +503,60 @@ class FilterObjective:
                 metrics[f"{name}.{k}" if len(recs) > 1 else k] = v
         if s.failed:
             return Evaluation.failed(s.failed, metrics)
+        if self.prior:
+            pen = self.prior_penalty(params)
+            metrics["prior_penalty"] = pen
+            return Evaluation(s.fitness + pen, metrics)
         return Evaluation(s.fitness, metrics)
+
+    # --- cross-validation (tuner cv) -----------------------------------------------------------------
+    def cv_folds(self, k: int | None = None) -> list[tuple[str, FilterObjective, FilterObjective]]:
+        """Folds over all the objective's recordings (train and test): ``(name, tune on, held out)``.
+
+        Without ``k``, recordings that are all BROAD trials (a ``trials.json`` beside them) are grouped by
+        BROAD's level-2 motion/disturbance group and each group is held out once (leave-one-group-out);
+        otherwise, or with ``k``, recordings are assigned round-robin to ``k`` folds (default ``min(5, n)``).
+        The tuning side keeps the objective's metric, options and prior; the held-out side keeps the metric
+        without the aggregation options (each held-out recording counts once, as in the plain metric), and
+        the engine scores it with ``score`` (no prior).
+        """
+        from objectives.attitude.objective_options import recording_groups
+
+        recs = list(self.recordings("train")) + (list(self.recordings("test")) if self.test_specs else [])
+        names = [r.name for r in recs]
+        if len(set(names)) != len(names):
+            raise ValueError("objective.data: recording names repeat; cross-validation needs unique names")
+        if len(recs) < 2:
+            raise ValueError(f"objective.data: cross-validation needs >= 2 recordings, got {len(recs)}")
+        groups: dict[str, str] | None = None
+        if k is None:
+            try:
+                groups = recording_groups(recs, "broad")
+            except ValueError:
+                groups = None
+        if groups is not None and len(set(groups.values())) >= 2:
+            order = list(dict.fromkeys(groups[n] for n in names))
+            parts = [(g, [n for n in names if groups[n] == g]) for g in order]
+        else:
+            kk = min(5, len(recs)) if k is None else int(k)
+            if not 2 <= kk <= len(recs):
+                raise ValueError(f"cv: need 2 <= k <= {len(recs)} (recordings), got k={k}")
+            parts = [(f"fold-{i}", [n for j, n in enumerate(names) if j % kk == i]) for i in range(kk)]
+        specs = list(self.train_specs) + list(self.test_specs)
+        plain = {k: v for k, v in self.metric_options.items() if k not in AGG_KEYS}
+        by_name = dict(zip(names, recs))
+        out = []
+        for fname, held in parts:
+            rest = [n for n in names if n not in held]
+            sides = []
+            for keep, opts in ((rest, dict(self.metric_options)), (held, plain)):
+                obj = FilterObjective(self.filter, [("subset", specs, tuple(keep))], [], dict(self.fixed),
+                                      self.metric, opts, self.q0, self.warmup_s,
+                                      dict(self.report), self.base_dir, dict(self.prior))
+                obj._cache["train"] = [by_name[n] for n in keep]
+                sides.append(obj)
+            out.append((fname, sides[0], sides[1]))
+        return out
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:

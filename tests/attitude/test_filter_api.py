@@ -52,9 +52,20 @@ def test_declaration_reproduces_previous_defaults_and_space(name):
     """Defaults and default search space equal those of the hand-written tuples and dicts they replace."""
     cls = get_filter(name)
     before = BEFORE["filters"][name]
-    assert _plain(dict(cls.defaults)) == before["defaults"]
-    assert list(cls.defaults) == list(before["defaults"]) or set(cls.defaults) == set(before["defaults"])
+    # every declared filter gained the common start option ``init`` (last, fixed at "auto") and the EKF family
+    # its robust blocks (appended, fixed, off); the rest is unchanged
+    assert cls.defaults["init"] == "auto" and list(cls.defaults)[-1] == "init"
+    added = {"init": "auto"}
+    if name in ("ekf", "faekf"):
+        added.update(acc_lp_tau_s=0.0, mag_rejection=False, mag_max_rejection_s=60.0, mag_norm_th=0.1,
+                     mag_dip_th_deg=10.0, rest_bias=False, rest_bias_var=3e-6)
+    assert {k: cls.defaults[k] for k in added} == added
+    defaults = {k: v for k, v in cls.defaults.items() if k not in added}
+    assert _plain(defaults) == before["defaults"]
+    assert list(defaults) == list(before["defaults"]) or set(defaults) == set(before["defaults"])
     space = _plain(cls.space().to_dict())
+    for k, v in added.items():
+        assert space.pop(k)["fixed"] == v
     assert list(space) == list(before["space"])  # same order: same unit-cube encoding
     for key, old in before["space"].items():
         for field, value in old.items():  # bounds, scale, integer, fixed value, unit and doc kept

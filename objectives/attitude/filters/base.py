@@ -29,10 +29,16 @@ from typing import Any, ClassVar
 import numpy as np
 
 from objectives.attitude.data.recording import Recording
-from objectives.params import Declared, ParamSet
+from objectives.params import Declared, Param, ParamSet
 from tuner.space import Real, Space
 
-__all__ = ["AttitudeFilter", "FilterResult", "quat_from_rotmat", "quat_from_acc_mag", "initial_quaternion"]
+__all__ = ["AttitudeFilter", "FilterResult", "INIT", "quat_from_rotmat", "quat_from_acc_mag", "initial_quaternion"]
+
+#: the start option every declared filter gets (YAML ``init: broad`` in ``fixed`` or a ``--params`` file)
+INIT = Param("init", "auto", choices=("auto", "accmag", "truth", "broad"),
+             doc="initial orientation: auto (the run's q0, objective.q0: accmag by default), accmag (first "
+                 "acc/mag sample), truth (first finite truth sample) or broad (BROAD's quatFromAccMag, "
+                 "as in its published results)")
 
 
 @dataclass(frozen=True)
@@ -103,9 +109,15 @@ def initial_quaternion(rec: Recording, frame: str, q0: Any = None, use_mag: bool
     """The common initialisation of all filters.
 
     ``q0`` may be ``None``/``"accmag"`` (first acc/mag sample), ``"truth"`` (first finite truth sample,
-    converted to ``frame``), or an explicit (4,) quaternion in ``frame``.
+    converted to ``frame``), ``"broad"`` (BROAD's own start, :mod:`objectives.attitude.init_broad`; needs a
+    magnetometer) or an explicit (4,) quaternion in ``frame``.
     """
     from objectives.attitude.quaternion import to_frame
+
+    if isinstance(q0, str) and q0 == "broad":
+        from objectives.attitude.init_broad import broad_initial_quaternion
+
+        return broad_initial_quaternion(rec, frame)
 
     if q0 is None or (isinstance(q0, str) and q0 == "accmag"):
         mag = rec.mag[0] if (use_mag and rec.mag is not None) else None
@@ -119,7 +131,7 @@ def initial_quaternion(rec: Recording, frame: str, q0: Any = None, use_mag: bool
         return to_frame(rec.quat[int(np.argmax(ok))], rec.frame, frame)
     q = np.asarray(q0, float).reshape(-1)
     if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
-        raise ValueError(f"q0 must be 'accmag', 'truth' or a finite (4,) quaternion, got {q0!r}")
+        raise ValueError(f"q0 must be 'accmag', 'truth', 'broad' or a finite (4,) quaternion, got {q0!r}")
     return q / np.linalg.norm(q)
 
 
@@ -138,6 +150,8 @@ class AttitudeFilter(Declared):
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if cls.__dict__.get("decl") is not None:
+            if "init" not in cls.decl.names():  # every declared filter takes the start option
+                cls.decl = ParamSet(cls.decl.owner, cls.decl.params + (INIT,))
             cls.params = cls.decl.reals()
             cls.defaults = cls.decl.defaults()
 
@@ -190,8 +204,9 @@ class AttitudeFilter(Declared):
             With arrays: accelerometer (m/s^2) and optional magnetometer (any unit) samples.
         rate_hz, dt : float
             With arrays: the sampling rate in Hz or the sample time in s (exactly one).
-        q0 : None, "accmag", "truth" or (4,)
-            Initialisation (see :func:`initial_quaternion`).
+        q0 : None, "accmag", "truth", "broad" or (4,)
+            Initialisation (see :func:`initial_quaternion`); the filter's ``init`` option, unless
+            ``auto``, takes precedence.
         frame : {"ENU", "NED"}
             With arrays: earth frame of the output.
         disturbances : optional
@@ -241,7 +256,8 @@ class AttitudeFilter(Declared):
         if self.needs_mag and self.values.get("use_mag", True) and rec.mag is None:
             raise ValueError(f"{self.name}: recording {rec.name!r} has no magnetometer; set use_mag: false")
         use_mag = bool(self.values.get("use_mag", True)) and rec.mag is not None
-        qi = initial_quaternion(rec, self.working_frame, q0, use_mag=use_mag)
+        init = self.values.get("init", "auto")
+        qi = initial_quaternion(rec, self.working_frame, q0 if init == "auto" else init, use_mag=use_mag)
         res = self._run(rec, qi)
         if res.frame != rec.frame:
             res = FilterResult(to_frame(res.quat, res.frame, rec.frame), rec.frame, res.diagnostics)

@@ -74,6 +74,13 @@ Deviations from the paper (and why)
     ``huber_deg`` scales ``R_k`` by ``d / huber`` when the innovation angle
     ``d = 2 acos|z . q^-|`` exceeds it (a Huber M-estimate: the correction stops growing with the
     error, as Madgwick's normalised step). Both default to ``inf`` (off).
+  * Robust blocks (:mod:`objectives.attitude.filters.robust`, all off by default = the paper's filter,
+    bit for bit): ``acc_lp_tau_s`` feeds the TRIAD an earth-frame low-pass of the accelerometer (fast
+    translation: BROAD trial 15 from 53 to < 5 deg), ``mag_rejection`` (with ``mag_norm_th``,
+    ``mag_dip_th_deg``, ``mag_max_rejection_s``) leaves the heading to the gyro while the field's norm
+    or dip departs from a reference learned when undisturbed, ``rest_bias`` (``rest_bias_var``)
+    measures the gyro bias at detected rest. Kernel: :func:`~objectives.attitude.filters._ekf_kernel.ekf_robust_kernel`;
+    leave-one-group-out CV on BROAD: ``benchmarks/results/broad_cv.md``.
 - The fuzzy sets (Figure 3) and the singletons are not in the text; our defaults are documented at
   :data:`FUZZY_DEFAULTS` and :data:`K_DEFAULTS`, and can be tuned (section 5.3's future work item 3).
 """
@@ -88,8 +95,9 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_steps
+from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_robust_kernel, ekf_steps
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import fuzzify, grid_rules, sugeno_mu
 from objectives.params import ANY_REAL, POSITIVE, Interval, Param, ParamSet
@@ -239,6 +247,28 @@ _EKF_DECL: tuple[Param, ...] = (
           doc="gyro sample that propagates k-1 -> k: 'previous' (k-1, eq. 16) or 'current' (k, BROAD)"),
 )
 
+#: robust blocks (objectives.attitude.filters.robust) in the EKF kernel; all off by default = the paper's EKF
+_ROBUST_DECL: tuple[Param, ...] = (
+    Param("acc_lp_tau_s", 0.0, unit="s", allowed=Interval(0.0),
+          doc="time constant of the earth-frame accelerometer low-pass feeding the TRIAD (robust block c; "
+              "0: raw accelerometer, as the paper); 3-5 s keeps inclination through fast translation"),
+    Param("mag_rejection", False, choices=(True, False),
+          doc="magnetic disturbance rejection (robust block a): field norm and dip against a reference "
+              "learned when undisturbed; a rejected field leaves the heading to the gyro"),
+    Param("mag_max_rejection_s", 60.0, unit="s", allowed=POSITIVE,
+          doc="longest full rejection of a disturbed field before a new field is accepted (mag_rejection)"),
+    Param("mag_norm_th", 0.1, unit="1", allowed=POSITIVE,
+          doc="relative field-norm deviation beyond which the field is disturbed (mag_rejection)"),
+    Param("mag_dip_th_deg", 10.0, unit="deg", allowed=POSITIVE,
+          doc="dip-angle deviation beyond which the field is disturbed (mag_rejection)"),
+    Param("rest_bias", False, choices=(True, False),
+          doc="gyro bias estimation at rest (robust block b): at detected rest the low-passed gyro "
+              "measures the bias state"),
+    Param("rest_bias_var", 3e-6, unit="(rad/s)^2", allowed=POSITIVE,
+          doc="variance of the rest bias pseudo-measurement (rest_bias)"),
+)
+_ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "rest_bias")
+
 
 def gravity_in_units(rec: Recording) -> float:
     """Standard gravity in the recording's accelerometer unit (``m/s^2`` or ``g``); else the median
@@ -279,7 +309,7 @@ class EKF(AttitudeFilter):
     """
 
     name: ClassVar[str] = "ekf"
-    decl: ClassVar[ParamSet] = ParamSet("ekf", _EKF_DECL)
+    decl: ClassVar[ParamSet] = ParamSet("ekf", _EKF_DECL + _ROBUST_DECL)
     working_frame: ClassVar[str] = "NED"
     needs_mag: ClassVar[bool] = True
 
@@ -297,24 +327,48 @@ class EKF(AttitudeFilter):
         mag = np.ascontiguousarray(rec.mag, dtype=np.float64) if use_mag else np.zeros((1, 3))
         return gyr, acc, mag, use_mag
 
-    def _kernel(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    @property
+    def robust(self) -> bool:
+        """True when any robust block is on (the kernel with the blocks runs; else the paper's)."""
+        v = self.values
+        return bool(v["mag_rejection"]) or bool(v["rest_bias"]) or float(v["acc_lp_tau_s"]) > 0
+
+    def _kernel(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict]:
+        """Quaternions (N, 4), gyro bias (N, 3) and the robust blocks' diagnostics (empty when off)."""
         gyr, acc, mag, use_mag = self._inputs(rec)
         n = rec.n
         out_q = np.empty((n, 4))
         out_b = np.empty((n, 3))
         x0 = np.zeros(7)
         x0[:4] = q0
-        coef = self.coefficients(rec.dt, use_mag, gravity_in_units(rec))
-        ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b)
-        return out_q, out_b
+        g = gravity_in_units(rec)
+        coef = self.coefficients(rec.dt, use_mag, g)
+        if not self.robust:
+            ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b)
+            return out_q, out_b, {}
+        v = self.values
+        tau = float(v["acc_lp_tau_s"])
+        flags = np.array([float(bool(v["mag_rejection"])), float(bool(v["rest_bias"])), float(tau > 0),
+                          float(v["rest_bias_var"])])
+        mcoef = mag_dist_coefficients(rec.dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
+                                      max_rejection_s=float(v["mag_max_rejection_s"]))
+        rcoef = rest_coefficients(rec.dt, th_acc=0.5 * g / 9.81)
+        acoef = acc_lp_coefficients(rec.dt, tau_acc_s=tau, gravity=g)
+        out_d = np.empty((n, 2))
+        ekf_robust_kernel(gyr, acc, mag, coef, np.ascontiguousarray(kscale, dtype=np.float64), flags, mcoef, rcoef,
+                          acoef, x0, out_q, out_b, out_d)
+        return out_q, out_b, {"mag_gain": out_d[:, 0], "rest": out_d[:, 1]}
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
-        q, b = self._kernel(rec, q0, np.ones(1))
-        return FilterResult(q, self.working_frame, {"gyr_bias": b})
+        q, b, extra = self._kernel(rec, q0, np.ones(1))
+        return FilterResult(q, self.working_frame, {"gyr_bias": b, **extra})
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
         """O(1) per-sample EKF (state and covariance carried between :func:`ekf_steps` calls); the
-        accelerometer is in m/s^2 as for :meth:`run` on arrays."""
+        accelerometer is in m/s^2 as for :meth:`run` on arrays. With a robust block on, the buffered
+        fallback of :class:`AttitudeFilter` (equal to :meth:`run`)."""
+        if self.robust:
+            return AttitudeFilter.stream(self, rate_hz, dt, q0, frame)
         return _EKFStream(self, rate_hz, dt, q0, frame)
 
 
@@ -408,6 +462,7 @@ class FAEKF(EKF):
               allowed=POSITIVE),
         Param("omega_thr", 0.26, unit="rad/s", doc="|Omega|_thr of eq. 25", eq="eq. 25", allowed=POSITIVE),
         Param("tune_fuzzy", False, doc="search the fuzzy sets too (FAEKF.space(tune_fuzzy=True))"),
+        *_ROBUST_DECL,
     ))
 
     @classmethod
@@ -507,8 +562,8 @@ class FAEKF(EKF):
         if dist is None:
             dist = self.disturbances(rec)
         k = self.scale(dist)
-        q, b = self._kernel(rec, q0, k)
+        q, b, extra = self._kernel(rec, q0, k)
         return FilterResult(q, self.working_frame, {
-            "gyr_bias": b, "K": k, "vib_freq_hz": dist.vib_freq_hz, "ext_acc": dist.ext_acc_g,
+            "gyr_bias": b, **extra, "K": k, "vib_freq_hz": dist.vib_freq_hz, "ext_acc": dist.ext_acc_g,
             "mag_pert": dist.mag_pert_nu,
         })

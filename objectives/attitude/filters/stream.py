@@ -111,11 +111,19 @@ class StreamBase:
         """The initial quaternion in the working frame (as ``initial_quaternion`` does)."""
         from objectives.attitude.filters.base import quat_from_acc_mag
 
-        if self.q0 is None or (isinstance(self.q0, str) and self.q0 == "accmag"):
+        init = self.filter.values.get("init", "auto")
+        q0 = self.q0 if init == "auto" else init
+        if q0 is None or (isinstance(q0, str) and q0 == "accmag"):
             return quat_from_acc_mag(acc, mag, self.filter.working_frame)
-        q = np.asarray(self.q0, float).reshape(-1)
+        if isinstance(q0, str) and q0 == "broad":
+            from objectives.attitude.init_broad import broad_start
+
+            if mag is None:
+                raise ValueError(f"{self.filter.name}: init broad needs a magnetometer sample in the first update")
+            return broad_start(acc, np.asarray(mag, float).reshape(-1)[:3], self.filter.working_frame)
+        q = np.asarray(q0, float).reshape(-1)
         if q.shape != (4,) or not np.all(np.isfinite(q)) or np.linalg.norm(q) == 0:
-            raise ValueError(f"q0 must be 'accmag', 'truth' or a finite (4,) quaternion, got {self.q0!r}")
+            raise ValueError(f"q0 must be 'accmag', 'broad' or a finite (4,) quaternion, got {q0!r}")
         return q / np.linalg.norm(q)
 
 

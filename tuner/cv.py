@@ -1,0 +1,210 @@
+"""Cross-validation of a tuning job: tune on the other folds, score the held-out fold.
+
+``tuner cv CONFIG`` asks the objective for its folds through the ``cv_folds`` hook
+(:class:`tuner.objective.TunableObjective`): ``cv_folds(k) -> [(name, train_objective, test_objective)]``,
+e.g. leave-one-group-out over a dataset's recording groups, or ``k``-fold. For every fold the config's
+optimiser tunes ``train_objective`` on the config's search space and parallel backend
+(:func:`tuner.loop.minimize`), and ``test_objective``'s plain score (its ``score`` hook, no prior) is
+taken for the tuned parameters and for the objective's defaults. The job is also tuned once on all of
+its data: its tuning score against the CV score is the generalisation gap.
+
+Output directory ``<output>/cv/<name>-<UTC stamp>/``: ``cv.md`` (per-fold table with the tuned
+parameters, summary with mean and spread over folds and over held-out recordings) and ``cv.csv``
+(one row per fold). The engine knows nothing of the domain: what a fold is belongs to the objective.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tuner.config import ConfigError, RunConfig
+from tuner.loop import minimize
+from tuner.objective import hook
+
+__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv"]
+
+
+@dataclass
+class FoldOutcome:
+    """One fold: held-out recordings, tuned parameters and the scores (lower is better)."""
+
+    name: str
+    n_test: int
+    params: dict[str, Any]
+    train_fitness: float
+    cv_fitness: float
+    default_fitness: float
+    failed: str = ""
+
+
+@dataclass
+class CVOutcome:
+    """All folds plus the tuning on all data (``full``)."""
+
+    name: str
+    folds: list[FoldOutcome]
+    full: FoldOutcome | None
+    seconds: float = 0.0
+    searched: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def _col(self, key: str) -> np.ndarray:
+        return np.array([getattr(f, key) for f in self.folds], float)
+
+    def summary(self) -> dict[str, float]:
+        """Mean and spread over folds; means weighted by held-out recordings; the gap to the tuning score."""
+        cv, de, n = self._col("cv_fitness"), self._col("default_fitness"), self._col("n_test")
+        out = {"cv_fold_mean": float(np.mean(cv)), "cv_fold_std": float(np.std(cv)),
+               "cv_fold_worst": float(np.max(cv)), "defaults_fold_mean": float(np.mean(de)),
+               "defaults_fold_std": float(np.std(de)), "defaults_fold_worst": float(np.max(de)),
+               "cv_mean": float(np.sum(cv * n) / np.sum(n)), "defaults_mean": float(np.sum(de * n) / np.sum(n))}
+        if self.full is not None:
+            out["tuning_score"] = self.full.cv_fitness  # tuned on all, scored like the held-out folds
+            out["gap"] = out["cv_mean"] - self.full.cv_fitness
+        return out
+
+
+def _score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
+    """Plain score (fitness, failure, number of recordings) of ``params`` on ``objective``'s data."""
+    score = hook(objective, "score")
+    if score is None:
+        ev = objective(params)
+        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), 1
+    s = score(params, "train")
+    return float(s.fitness), s.failed, max(len(s.recordings), 1)
+
+
+def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int) -> tuple[dict[str, Any], float]:
+    from tuner.run import new_optimizer
+
+    space = cfg.space(objective)
+    if space.dim == 0:
+        raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
+    res = minimize(objective, space, new_optimizer(cfg, stage, space, None), evaluate=evaluate)
+    if res.best is None:
+        return {}, math.inf
+    return dict(res.best.params), float(res.best.fitness)
+
+
+def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
+                   progress: Callable[[str], None] | None = None) -> CVOutcome:
+    """Cross-validate ``cfg``: tune per fold with its optimiser and backend, score the held-out fold.
+
+    Parameters
+    ----------
+    cfg : RunConfig
+        The job (objective, search space, optimiser, parallel backend, seed).
+    k : int, optional
+        Number of folds where the objective uses k-fold (``None``: the objective's choice, e.g. its groups).
+    full : bool
+        Also tune on all the data, for the tuning score and the gap.
+
+    Raises
+    ------
+    ConfigError
+        The objective has no ``cv_folds`` hook, or gives fewer than two folds.
+    """
+    from tuner.registry import build_objective
+    from tuner.run import _LiveMap, _n_jobs
+
+    t0 = time.time()
+    say = progress or (lambda msg: None)
+    try:
+        objective = build_objective(dict(cfg.objective), cfg.base_dir)
+    except ValueError as exc:
+        raise ConfigError(cfg.source, "objective", str(exc)) from None
+    folds_fn = hook(objective, "cv_folds")
+    if folds_fn is None:
+        raise ConfigError(cfg.source, "objective", f"{type(objective).__name__} has no cv_folds hook: "
+                          "it cannot be cross-validated")
+    try:
+        folds = list(folds_fn(k))
+    except ValueError as exc:
+        raise ConfigError(cfg.source, "objective", str(exc)) from None
+    if len(folds) < 2:
+        raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
+    n_jobs, notes = _n_jobs(cfg, cfg.optimizer.population or 2)
+    out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
+    defaults_fn = hook(objective, "default_params")
+    defaults = dict(defaults_fn()) if defaults_fn else None
+    for i, (name, train, test) in enumerate(folds):
+        evaluate = _LiveMap(cfg, n_jobs)
+        try:
+            params, train_fit = _tune(cfg, train, evaluate, stage=0)
+        finally:
+            evaluate.close()
+        cv_fit, failed, n_test = _score(test, params) if params else (math.inf, "no successful evaluation", 1)
+        de_fit, _, n_test = _score(test, defaults) if defaults is not None else (math.nan, "", n_test)
+        out.folds.append(FoldOutcome(str(name), n_test, params, train_fit, cv_fit, de_fit, failed))
+        say(f"fold {i + 1}/{len(folds)} {name}: tuned {train_fit:.4g}, held out {cv_fit:.4g}, defaults {de_fit:.4g}")
+    if full:
+        evaluate = _LiveMap(cfg, n_jobs)
+        try:
+            params, train_fit = _tune(cfg, objective, evaluate, stage=0)
+        finally:
+            evaluate.close()
+        # its score on all data as the folds count it (held-out scores weighted by recordings), so the
+        # gap compares like with like whatever aggregation or prior the tuning used
+        sc = [(_score(test, params), n) for (_, _, test), n in zip(folds, [f.n_test for f in out.folds])] \
+            if params else []
+        plain = sum(s[0] * n for s, n in sc) / sum(n for _, n in sc) if sc else math.nan
+        out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan)
+        say(f"all data: tuned {train_fit:.4g}")
+    out.seconds = time.time() - t0
+    return out
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def write_cv(out: CVOutcome, directory: str | Path) -> Path:
+    """Write ``cv.md`` and ``cv.csv`` into ``directory`` (created); returns the directory."""
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    rows = out.folds + ([out.full] if out.full else [])
+    names = list(out.searched)
+    with open(d / "cv.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", *names])
+        for f in rows:
+            w.writerow([f.name, f.n_test, f.train_fitness, f.cv_fitness, f.default_fitness, f.failed,
+                        *[f.params.get(n, "") for n in names]])
+    s = out.summary()
+    lines = [f"# Cross-validation of {out.name}", "",
+             f"{len(out.folds)} folds, {out.seconds:.0f} s. Each fold: tuned on the other folds, scored on the "
+             "held-out recordings (plain metric, no prior); defaults scored on the same recordings.", "",
+             "| fold (held out) | n | tuned: train | tuned: held out (CV) | defaults: held out | "
+             + " | ".join(names) + " |", "|" + "---|" * (5 + len(names))]
+    for f in out.folds:
+        lines.append(f"| {f.name} | {f.n_test} | {_fmt(f.train_fitness)} | {_fmt(f.cv_fitness)}"
+                     f"{' (failed)' if f.failed else ''} | {_fmt(f.default_fitness)} | "
+                     + " | ".join(_fmt(f.params.get(n, "")) for n in names) + " |")
+    if out.full:
+        lines.append(f"| *all (tuning)* | {out.full.n_test} | {_fmt(out.full.train_fitness)} | "
+                     f"{_fmt(out.full.cv_fitness)} (on all, not held out) | | "
+                     + " | ".join(_fmt(out.full.params.get(n, "")) for n in names) + " |")
+    lines += ["", "| | tuned (CV) | defaults |", "|---|---|---|",
+              f"| mean over held-out recordings | {s['cv_mean']:.4g} | {s['defaults_mean']:.4g} |",
+              f"| mean over folds (std) | {s['cv_fold_mean']:.4g} ({s['cv_fold_std']:.3g}) | "
+              f"{s['defaults_fold_mean']:.4g} ({s['defaults_fold_std']:.3g}) |",
+              f"| worst fold | {s['cv_fold_worst']:.4g} | {s['defaults_fold_worst']:.4g} |"]
+    if "gap" in s:
+        lines += ["", f"Tuning score on all data {s['tuning_score']:.4g}; CV {s['cv_mean']:.4g}; "
+                      f"gap {s['gap']:+.3g}" + (" (large: the tuned parameters do not carry over)"
+                                                if s["gap"] > 0.15 * abs(s["tuning_score"]) else "") + "."]
+    if s["cv_mean"] > s["defaults_mean"]:
+        lines += ["", "CV score worse than the defaults': tuning does not help on unseen recordings."]
+    lines += [*(f"- {n}" for n in out.notes), ""]
+    (d / "cv.md").write_text("\n".join(lines))
+    return d
