@@ -59,6 +59,10 @@ def optimizer_description(name: str) -> dict[str, Any]:
 
     cls = OPTIMIZERS[name]
     docs = {**doc_params(Optimizer.__doc__ or ""), **doc_params(cls.__doc__ or "")}
+    presets = getattr(inspect.getmodule(cls), "PRESETS", None)
+    preset_default = inspect.signature(cls.__init__).parameters.get("preset")
+    # options left None take their value from the default preset (e.g. PSO's "paper" settings)
+    from_preset = presets.get(preset_default.default, {}) if presets and preset_default is not None else {}
     params = []
     for klass in cls.__mro__:
         if "__init__" not in klass.__dict__:
@@ -66,6 +70,8 @@ def optimizer_description(name: str) -> dict[str, Any]:
         for p in inspect.signature(klass.__init__).parameters.values():
             if p.kind is p.KEYWORD_ONLY and p.name not in {q["name"] for q in params}:
                 default = None if p.default is p.empty else p.default
+                if default is None:
+                    default = from_preset.get(p.name)
                 params.append({"name": p.name, "default": default, "bounds": None, "scale": None, "unit": "",
                                "doc": docs.get(p.name, ""), "eq": ""})
     summary = (cls.__doc__ or "").strip().splitlines()
