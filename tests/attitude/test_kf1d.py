@@ -160,7 +160,7 @@ def test_initial_angle_from_accelerometer_and_defaults():
         sp = cls.space()
         assert sp.dim >= 1
     assert KF1D.defaults["q00"] == 5e-7 and KF1D.defaults["q11"] == 5e-9 and KF1D.defaults["rho"] == 0.05
-    assert Mahony1D.defaults == {"Kp": 0.5, "Ki": 0.0, "exact_step": True}
+    assert Mahony1D.defaults == {"Kp": 0.5, "Ki": 0.0, "exact_step": True, "init": "auto"}
     assert Madgwick1D.defaults["beta"] == 0.1
 
 

@@ -21,7 +21,7 @@ from objectives.attitude.quaternion import to_frame
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
 import ukf_reference as ref  # noqa: E402
 
-PARAMS = dict(QUKF.defaults)
+PARAMS = {k: v for k, v in QUKF.defaults.items() if k != "init"}  # the start option is the wrapper's
 
 
 def _trajectory(n, dt, seed=1):
