@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError
+from tuner.optimizers.base import Optimizer, OptionError, WrapperOptimizer
 from tuner.optimizers.cmaes import CMAES
 from tuner.optimizers.cmaes_restart import CMAESRestart
 from tuner.optimizers.pso import PSO
@@ -50,7 +50,7 @@ def choose(dim: int, budget: int | None) -> str:
     return "cmaes"
 
 
-class Auto(Optimizer):
+class Auto(WrapperOptimizer):
     """Delegating optimiser; see the module docstring for the rules.
 
     Parameters
@@ -105,20 +105,6 @@ class Auto(Optimizer):
     def _method_done(self) -> str:
         return self.inner._method_done()
 
-    def state(self) -> dict[str, Any]:
-        d = {k: v for k, v in self.__dict__.items() if k not in ("rng", "inner")}
-        d["inner"] = self.inner.state()
-        d["class"] = type(self).__name__
-        return d
-
     @classmethod
-    def from_state(cls, state: dict[str, Any]) -> Auto:
-        state = dict(state)
-        if state.pop("class") != cls.__name__:
-            raise ValueError(f"state is not of a {cls.__name__}")
-        obj = cls.__new__(cls)
-        obj.__dict__.update(state)
-        inner_cls = {"pso": PSO, "cmaes": CMAES, "cmaes_restart": CMAESRestart}[obj.chosen]
-        obj.inner = inner_cls.from_state(state["inner"])
-        obj.rng = obj.inner.rng
-        return obj
+    def _inner_class(cls, fields: dict[str, Any]) -> type:
+        return {"pso": PSO, "cmaes": CMAES, "cmaes_restart": CMAESRestart}[fields["chosen"]]

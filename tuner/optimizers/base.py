@@ -190,3 +190,29 @@ class Optimizer:
 
     def _restore(self) -> None:
         """Hook for subclasses whose state needs rebuilding after :meth:`from_state`."""
+
+
+class WrapperOptimizer(Optimizer):
+    """An optimiser that drives another one (``self.inner``) and shares its RNG: its state is its own
+    fields plus the inner optimiser's state; subclasses name the inner class of a state."""
+
+    def state(self) -> dict[str, Any]:
+        d = {k: v for k, v in self.__dict__.items() if k not in ("rng", "inner")}
+        d["inner"] = self.inner.state()
+        d["class"] = type(self).__name__
+        return d
+
+    @classmethod
+    def _inner_class(cls, fields: dict[str, Any]) -> type:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    @classmethod
+    def from_state(cls, state: dict[str, Any]) -> WrapperOptimizer:
+        state = dict(state)
+        if state.pop("class") != cls.__name__:
+            raise ValueError(f"state is not of a {cls.__name__}")
+        obj = cls.__new__(cls)
+        obj.__dict__.update(state)
+        obj.inner = cls._inner_class(state).from_state(state["inner"])
+        obj.rng = obj.inner.rng
+        return obj

@@ -29,13 +29,13 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError
+from tuner.optimizers.base import OptionError, WrapperOptimizer
 from tuner.optimizers.cmaes import CMAES
 
 __all__ = ["CMAESRestart"]
 
 
-class CMAESRestart(Optimizer):
+class CMAESRestart(WrapperOptimizer):
     """CMA-ES restarted with an increasing (IPOP) or bi-population (BIPOP) schedule.
 
     Parameters
@@ -123,19 +123,6 @@ class CMAESRestart(Optimizer):
             return f"{self.restarts} restarts, then {stop}" if stop else ""
         return ""
 
-    def state(self) -> dict[str, Any]:
-        d = {k: v for k, v in self.__dict__.items() if k not in ("rng", "inner")}
-        d["inner"] = self.inner.state()
-        d["class"] = type(self).__name__
-        return d
-
     @classmethod
-    def from_state(cls, state: dict[str, Any]) -> CMAESRestart:
-        state = dict(state)
-        if state.pop("class") != cls.__name__:
-            raise ValueError(f"state is not of a {cls.__name__}")
-        obj = cls.__new__(cls)
-        obj.__dict__.update(state)
-        obj.inner = CMAES.from_state(state["inner"])
-        obj.rng = obj.inner.rng
-        return obj
+    def _inner_class(cls, fields: dict[str, Any]) -> type:
+        return CMAES
