@@ -92,7 +92,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print {fitness, recordings: {...}} as JSON")
 
     p = sub.add_parser("cv", help="cross-validate a config: tune on the other folds, score the held-out fold")
-    p.add_argument("config")
+    p.add_argument("config", help="a config file, or a finished run directory (its tables are written into it)")
     p.add_argument("--k", type=int, default=None, help="number of folds for k-fold (default: the objective's "
                    "groups, e.g. BROAD's trial groups, else 5)")
     p.add_argument("--dir", default=None, help="output directory (default: <output>/cv/<name>-<stamp>)")
@@ -308,11 +308,18 @@ def _cmd_cv(a) -> int:
     from tuner.config import load_config
     from tuner.cv import cross_validate, write_cv
 
+    progress = None if a.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
+    if Path(a.config).is_dir():  # a finished run: its best is the tuning result, the tables go into it
+        from tuner.validation import cv_run_dir
+
+        v = cv_run_dir(a.config, k=a.k, progress=progress)
+        print(f"CV mean {v['cv_score']:.4g} (defaults {v['defaults_cv_score']:.4g}), tuning score "
+              f"{v['tuning_score']:.4g}, gap {v['gap']:+.3g}{' (large)' if v['gap_large'] else ''}\n{a.config}")
+        return 0
     cfg = load_config(a.config)
-    out = cross_validate(cfg, k=a.k, full=not a.no_full, progress=None if a.quiet else
-                         (lambda m: print(m, file=sys.stderr, flush=True)))
+    out = cross_validate(cfg, k=a.k, full=not a.no_full, progress=progress)
     stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
-    d = write_cv(out, a.dir or Path(cfg.output) / "cv" / f"{cfg.name}-{stamp}")
+    d = write_cv(out, a.dir or Path(cfg.output) / "cv" / f"{cfg.name}-{stamp}", cfg.validation)
     s = out.summary()
     print(f"CV mean {s['cv_mean']:.4g} (defaults {s['defaults_mean']:.4g})"
           + (f", tuning score {s['tuning_score']:.4g}, gap {s['gap']:+.3g}" if "gap" in s else "") + f"\n{d}")

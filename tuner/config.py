@@ -13,6 +13,7 @@ Shape of a job (see README for every key)::
                 refine: {stages: 2, shrink: 0.2}}
     parallel: {backend: loky, n_jobs: 2, address: null}
     output: runs                              # parent directory of run directories
+    validation: {cv: logo, select: {top_k: 5, holdout: 0.25}}   # optional, see ValidationConfig
 """
 
 from __future__ import annotations
@@ -28,8 +29,8 @@ import yaml
 from tuner.objective import hook
 from tuner.space import Space, SpaceError
 
-__all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig",
-           "load_config", "read_yaml", "config_from_dict", "apply_overrides"]
+__all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig", "ValidationConfig",
+           "SelectConfig", "load_config", "read_yaml", "config_from_dict", "apply_overrides"]
 
 TOP_KEYS = {
     "name": "job name (used in the run directory name)",
@@ -40,6 +41,7 @@ TOP_KEYS = {
     "optimizer": "{method: pso|cmaes|de|random, population, generations, ...options}",
     "parallel": "{backend: serial|loky|dask, n_jobs, address}",
     "output": "directory holding the run directories (default: runs)",
+    "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, select: {top_k, holdout}}",
 }
 
 
@@ -76,6 +78,53 @@ class ParallelConfig:
 
 
 @dataclass(frozen=True)
+class SelectConfig:
+    """Final choice by a validation fold: the ``top_k`` distinct best candidates of the tuning history
+    are rescored on the held-out recordings ``holdout`` (a fold name of the objective's ``cv_folds``,
+    e.g. a BROAD group, or a fraction ``f`` in (0, 0.5]: fold 0 of ``round(1 / f)``-fold); the run
+    tunes on the rest."""
+
+    top_k: int = 5
+    holdout: str | float = 0.25
+
+
+@dataclass(frozen=True)
+class ValidationConfig:
+    """The ``validation:`` section (all optional; absent = no validation, the run as before).
+
+    cv : ``None`` (no CV), ``"logo"`` (the objective's own folds, e.g. BROAD's groups, else 5-fold) or
+        ``"kfold"`` (``folds`` folds): cross-validation after the run, written into the run directory.
+    folds : folds of ``kfold`` (>= 2).
+    budget_fraction : generations (and ``max_evals``) of each fold's tuning relative to the run's, in (0, 1].
+    gap_warn_rel, gap_warn_abs : the gap (CV score - tuning score) is *large* when it exceeds
+        ``gap_warn_rel * |tuning score|`` or, when given, ``gap_warn_abs`` (fitness units, e.g. 0.6 deg).
+    select : :class:`SelectConfig` or ``None``.
+    """
+
+    cv: str | None = None
+    folds: int | None = None
+    budget_fraction: float = 1.0
+    gap_warn_rel: float = 0.25
+    gap_warn_abs: float | None = None
+    select: SelectConfig | None = None
+
+    @property
+    def active(self) -> bool:
+        return self.cv is not None or self.select is not None
+
+    def gap_is_large(self, gap: float, tuning: float) -> bool:
+        """True when ``gap`` exceeds the relative or the absolute threshold (a NaN gap is not large)."""
+        if not gap == gap:
+            return False
+        return gap > self.gap_warn_rel * abs(tuning) or (self.gap_warn_abs is not None and gap > self.gap_warn_abs)
+
+    def gap_rule(self) -> str:
+        """The rule in words, for reports."""
+        rel = f"> {self.gap_warn_rel:.0%} of the tuning score"
+        return rel + (f" or > {self.gap_warn_abs:g}" if self.gap_warn_abs is not None else "")
+
+
+@dataclass(frozen=True)
 class RunConfig:
     """A validated job. ``raw`` is the resolved YAML mapping written into the run directory."""
 
@@ -90,6 +139,7 @@ class RunConfig:
     base_dir: Path
     raw: Mapping[str, Any]
     description: str = ""
+    validation: ValidationConfig = field(default_factory=ValidationConfig)
 
     def space(self, objective: Any = None) -> Space:
         """The search space: ``parameters`` if given, else the objective's ``default_space()``."""
@@ -214,6 +264,62 @@ def _check_optimizer(f: Any, method: str, population: int | None, generations: i
         raise ConfigError(f, f"optimizer.{key}" if key else "optimizer", f"invalid for {method}: {msg}") from None
 
 
+def _number(d: Mapping, key: str, f: Any, path: str, low: float, high: float, default: Any,
+            low_open: bool = False) -> Any:
+    v = _get(d, key, (int, float), f, path, default=default)
+    if v is None:
+        return None
+    ok = (low < v if low_open else low <= v) and v <= high
+    if not ok or v != v:
+        lo = "(" if low_open else "["
+        raise ConfigError(f, f"{path}{key}", f"expected a number in {lo}{low:g}, {high:g}], got {v!r}")
+    return float(v)
+
+
+def parse_validation(raw: Any, f: Any) -> ValidationConfig:
+    """The ``validation:`` section (see :class:`ValidationConfig`); errors name ``validation.<key>``."""
+    if raw is None:
+        return ValidationConfig()
+    if not isinstance(raw, Mapping):
+        raise ConfigError(f, "validation", f"expected a mapping, got {type(raw).__name__} {raw!r}")
+    allowed = ("cv", "folds", "budget_fraction", "gap_warn_rel", "gap_warn_abs", "select")
+    bad = sorted(set(raw) - set(allowed))
+    if bad:
+        raise ConfigError(f, f"validation.{bad[0]}", f"unknown key; allowed: {', '.join(allowed)}")
+    cv = raw.get("cv")
+    if cv is False or cv == "none":
+        cv = None
+    if cv is not None and cv not in ("logo", "kfold"):
+        raise ConfigError(f, "validation.cv", f"expected logo, kfold or none, got {cv!r}")
+    folds = _get(raw, "folds", int, f, "validation.", default=None)
+    if folds is not None and folds < 2:
+        raise ConfigError(f, "validation.folds", f"must be >= 2, got {folds}")
+    if cv == "kfold" and folds is None:
+        raise ConfigError(f, "validation.folds", "missing: cv: kfold needs the number of folds (>= 2)")
+    if folds is not None and cv != "kfold":
+        raise ConfigError(f, "validation.folds", f"only used with cv: kfold (cv is {cv!r})")
+    frac = _number(raw, "budget_fraction", f, "validation.", 0.0, 1.0, 1.0, low_open=True)
+    rel = _number(raw, "gap_warn_rel", f, "validation.", 0.0, float("inf"), 0.25)
+    gabs = _number(raw, "gap_warn_abs", f, "validation.", 0.0, float("inf"), None)
+    sel_raw = raw.get("select")
+    select = None
+    if sel_raw is not None:
+        if not isinstance(sel_raw, Mapping):
+            raise ConfigError(f, "validation.select", f"expected a mapping {{top_k, holdout}}, got {sel_raw!r}")
+        bad = sorted(set(sel_raw) - {"top_k", "holdout"})
+        if bad:
+            raise ConfigError(f, f"validation.select.{bad[0]}", "unknown key; allowed: top_k, holdout")
+        top_k = _get(sel_raw, "top_k", int, f, "validation.select.", default=5)
+        if top_k < 2:
+            raise ConfigError(f, "validation.select.top_k", f"must be >= 2 (a choice among candidates), got {top_k}")
+        holdout = _get(sel_raw, "holdout", (str, int, float), f, "validation.select.", default=0.25)
+        if not isinstance(holdout, str) and not 0 < holdout <= 0.5:
+            raise ConfigError(f, "validation.select.holdout", "expected a fold name (e.g. a BROAD group) or a "
+                              f"fraction in (0, 0.5], got {holdout!r}")
+        select = SelectConfig(top_k, holdout if isinstance(holdout, str) else float(holdout))
+    return ValidationConfig(cv, folds, frac, rel, gabs, select)
+
+
 def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir: Path | None = None) -> RunConfig:
     """Validate a job mapping (see module docstring)."""
     from tuner.optimizers import OPTIMIZERS
@@ -289,6 +395,7 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
         raise ConfigError(f, "parallel.address", f"only used with backend: dask (backend is {backend!r})")
     parallel = ParallelConfig(backend, n_jobs, address)
     output = str(_get(raw, "output", str, f, "", default="runs"))
+    validation = parse_validation(raw.get("validation"), f)
 
     resolved = {
         "name": name,
@@ -301,5 +408,7 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
         "parallel": {"backend": backend, "n_jobs": n_jobs, "address": address},
         "output": output,
     }
+    if raw.get("validation") is not None:  # absent stays absent: the config hash of older jobs is unchanged
+        resolved["validation"] = raw["validation"]
     return RunConfig(name, seed, objective, parameters, optimizer, parallel, output, source,
-                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")))
+                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")), validation)

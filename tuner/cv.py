@@ -11,6 +11,12 @@ its data: its tuning score against the CV score is the generalisation gap.
 Output directory ``<output>/cv/<name>-<UTC stamp>/``: ``cv.md`` (per-fold table with the tuned
 parameters, summary with mean and spread over folds and over held-out recordings) and ``cv.csv``
 (one row per fold). The engine knows nothing of the domain: what a fold is belongs to the objective.
+
+The same cross-validation runs after ``tuner run`` when the config has ``validation: {cv: ...}``, and
+``tuner cv RUN_DIR`` runs it for a finished run (:mod:`tuner.validation`); then the run's own best
+parameters give the tuning score (``full_params``: no second tuning on all data) and the tables go
+into the run directory. The gap is *large* by :meth:`tuner.config.ValidationConfig.gap_is_large`
+(default: more than 25 % of the tuning score).
 """
 
 from __future__ import annotations
@@ -25,11 +31,11 @@ from typing import Any
 
 import numpy as np
 
-from tuner.config import ConfigError, RunConfig
+from tuner.config import ConfigError, RunConfig, ValidationConfig
 from tuner.loop import minimize
 from tuner.objective import hook
 
-__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv"]
+__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score"]
 
 
 @dataclass
@@ -72,7 +78,7 @@ class CVOutcome:
         return out
 
 
-def _score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
+def plain_score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
     """Plain score (fitness, failure, number of recordings) of ``params`` on ``objective``'s data."""
     score = hook(objective, "score")
     if score is None:
@@ -80,6 +86,20 @@ def _score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
         return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), 1
     s = score(params, "train")
     return float(s.fitness), s.failed, max(len(s.recordings), 1)
+
+
+def scaled_budget(cfg: RunConfig, fraction: float) -> RunConfig:
+    """``cfg`` with its generations (and ``max_evals``) times ``fraction`` (at least 1; 1.0: unchanged)."""
+    import dataclasses
+
+    if fraction >= 1.0:
+        return cfg
+    opt = cfg.optimizer
+    gens = None if opt.generations is None else max(1, round(opt.generations * fraction))
+    options = dict(opt.options)
+    if isinstance(options.get("max_evals"), int):
+        options["max_evals"] = max(1, round(options["max_evals"] * fraction))
+    return dataclasses.replace(cfg, optimizer=dataclasses.replace(opt, generations=gens, options=options))
 
 
 def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int) -> tuple[dict[str, Any], float]:
@@ -95,7 +115,8 @@ def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int) -> tup
 
 
 def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
-                   progress: Callable[[str], None] | None = None) -> CVOutcome:
+                   progress: Callable[[str], None] | None = None, budget_fraction: float = 1.0,
+                   full_params: dict[str, Any] | None = None) -> CVOutcome:
     """Cross-validate ``cfg``: tune per fold with its optimiser and backend, score the held-out fold.
 
     Parameters
@@ -106,6 +127,11 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         Number of folds where the objective uses k-fold (``None``: the objective's choice, e.g. its groups).
     full : bool
         Also tune on all the data, for the tuning score and the gap.
+    budget_fraction : float
+        Each fold (and the tuning on all data) runs this fraction of the config's generations, in (0, 1].
+    full_params : dict, optional
+        Parameters already tuned on all the data (a run's best): they give the tuning score and the gap
+        instead of a new tuning on all data (``full`` is then ignored).
 
     Raises
     ------
@@ -117,6 +143,10 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
 
     t0 = time.time()
     say = progress or (lambda msg: None)
+    if not 0 < budget_fraction <= 1:
+        raise ConfigError(cfg.source, "validation.budget_fraction", f"expected a number in (0, 1], got "
+                          f"{budget_fraction!r}")
+    cfg = scaled_budget(cfg, budget_fraction)
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
     except ValueError as exc:
@@ -141,23 +171,26 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
             params, train_fit = _tune(cfg, train, evaluate, stage=0)
         finally:
             evaluate.close()
-        cv_fit, failed, n_test = _score(test, params) if params else (math.inf, "no successful evaluation", 1)
-        de_fit, _, n_test = _score(test, defaults) if defaults is not None else (math.nan, "", n_test)
+        cv_fit, failed, n_test = plain_score(test, params) if params else (math.inf, "no successful evaluation", 1)
+        de_fit, _, n_test = plain_score(test, defaults) if defaults is not None else (math.nan, "", n_test)
         out.folds.append(FoldOutcome(str(name), n_test, params, train_fit, cv_fit, de_fit, failed))
         say(f"fold {i + 1}/{len(folds)} {name}: tuned {train_fit:.4g}, held out {cv_fit:.4g}, defaults {de_fit:.4g}")
-    if full:
-        evaluate = _LiveMap(cfg, n_jobs)
-        try:
-            params, train_fit = _tune(cfg, objective, evaluate, stage=0)
-        finally:
-            evaluate.close()
+    if full or full_params is not None:
+        if full_params is not None:
+            params, train_fit = dict(full_params), math.nan
+        else:
+            evaluate = _LiveMap(cfg, n_jobs)
+            try:
+                params, train_fit = _tune(cfg, objective, evaluate, stage=0)
+            finally:
+                evaluate.close()
         # its score on all data as the folds count it (held-out scores weighted by recordings), so the
         # gap compares like with like whatever aggregation or prior the tuning used
-        sc = [(_score(test, params), n) for (_, _, test), n in zip(folds, [f.n_test for f in out.folds])] \
+        sc = [(plain_score(test, params), n) for (_, _, test), n in zip(folds, [f.n_test for f in out.folds])] \
             if params else []
         plain = sum(s[0] * n for s, n in sc) / sum(n for _, n in sc) if sc else math.nan
         out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan)
-        say(f"all data: tuned {train_fit:.4g}")
+        say(f"all data: tuned {train_fit:.4g}, scored as the folds {plain:.4g}")
     out.seconds = time.time() - t0
     return out
 
@@ -168,18 +201,29 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-def write_cv(out: CVOutcome, directory: str | Path) -> Path:
+def write_cv(out: CVOutcome, directory: str | Path, validation: ValidationConfig | None = None) -> Path:
     """Write ``cv.md`` and ``cv.csv`` into ``directory`` (created); returns the directory."""
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
+    md, table = cv_texts(out, validation)
+    (d / "cv.csv").write_text(table)
+    (d / "cv.md").write_text(md)
+    return d
+
+
+def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tuple[str, str]:
+    """``(cv.md, cv.csv)`` of ``out``; ``validation`` says when the gap is large (default thresholds)."""
+    import io
+
+    validation = validation or ValidationConfig()
     rows = out.folds + ([out.full] if out.full else [])
     names = list(out.searched)
-    with open(d / "cv.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", *names])
-        for f in rows:
-            w.writerow([f.name, f.n_test, f.train_fitness, f.cv_fitness, f.default_fitness, f.failed,
-                        *[f.params.get(n, "") for n in names]])
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", *names])
+    for f in rows:
+        w.writerow([f.name, f.n_test, f.train_fitness, f.cv_fitness, f.default_fitness, f.failed,
+                    *[f.params.get(n, "") for n in names]])
     s = out.summary()
     lines = [f"# Cross-validation of {out.name}", "",
              f"{len(out.folds)} folds, {out.seconds:.0f} s. Each fold: tuned on the other folds, scored on the "
@@ -201,10 +245,10 @@ def write_cv(out: CVOutcome, directory: str | Path) -> Path:
               f"| worst fold | {s['cv_fold_worst']:.4g} | {s['defaults_fold_worst']:.4g} |"]
     if "gap" in s:
         lines += ["", f"Tuning score on all data {s['tuning_score']:.4g}; CV {s['cv_mean']:.4g}; "
-                      f"gap {s['gap']:+.3g}" + (" (large: the tuned parameters do not carry over)"
-                                                if s["gap"] > 0.15 * abs(s["tuning_score"]) else "") + "."]
+                      f"gap {s['gap']:+.3g}" + (f" (large, {validation.gap_rule()}: the tuned parameters do not "
+                                                "carry over)" if validation.gap_is_large(s["gap"], s["tuning_score"])
+                                                else "") + "."]
     if s["cv_mean"] > s["defaults_mean"]:
         lines += ["", "CV score worse than the defaults': tuning does not help on unseen recordings."]
     lines += [*(f"- {n}" for n in out.notes), ""]
-    (d / "cv.md").write_text("\n".join(lines))
-    return d
+    return "\n".join(lines), buf.getvalue()

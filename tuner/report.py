@@ -1,10 +1,12 @@
 """Run reports: ``report.md`` and a self-contained ``report.html`` (figures embedded).
 
 Content: a summary card (status, best fitness, budget and evaluations, failures, wall time, train /
-test / CV scores), warnings (parameters at a search bound, failed evaluations, see
-:mod:`tuner.bounds`), the best parameters within their bounds, a recording x metric table, the
-objective's other results, and figures (convergence, fitness against each parameter, parallel
-coordinates of the best candidates, then the objective's own figures from its ``finalize`` hook).
+test / CV scores and the generalisation gap), warnings (parameters at a search bound, failed
+evaluations, see :mod:`tuner.bounds`; a large gap between CV and tuning score, see
+:mod:`tuner.validation`), the cross-validation summary and the final selection when the run has them,
+the best parameters within their bounds, a recording x metric table, the objective's other results,
+and figures (convergence, fitness against each parameter, parallel coordinates of the best candidates,
+then the objective's own figures from its ``finalize`` hook).
 
 While a run is going, :func:`write_run_report` with ``live=True`` writes the same report with status
 "running" and a page that reloads itself every ``refresh_s`` seconds; the final report does not
@@ -152,7 +154,8 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
     status = f"{s['status']}" + (f" ({s['stop_reason']})" if s["stop_reason"] else "")
     rows: list[list[Any]] = [["status", status], ["best fitness", s["best_fitness"] if s["best_fitness"] is not None
                                                   else "-"]]
-    for key in ("train_fitness", "test_fitness", "cv_fitness", "initial_fitness", "improvement_pct"):
+    for key in ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "initial_fitness",
+                "improvement_pct"):
         if isinstance(ev.get(key), (int, float)):
             rows.append([key.replace("_", " "), ev[key]])
     rows += [["evaluations / budget", f"{n} / {_budget(cfg)}"],
@@ -168,6 +171,53 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
         rows.append(["best found at", f"stage {f.get('stage')}, generation {f.get('generation')}, "
                                       f"evaluation {f.get('eval')}"])
     return rows
+
+
+def _validation(run_dir: Path) -> dict[str, Any]:
+    try:
+        return RunDir(run_dir).validation() or {}
+    except Exception:  # noqa: BLE001 - a damaged validation.json must not stop the report
+        return {"cv": {"error": "validation.json unreadable"}}
+
+
+def _gap_warning(val: dict[str, Any]) -> list[str]:
+    cv = val.get("cv") or {}
+    if not cv.get("gap_large"):
+        return []
+    return [f"- **generalisation gap**: CV score {fmt_num(cv['cv_score'], 4)} vs tuning score "
+            f"{fmt_num(cv['tuning_score'], 4)} (gap {cv['gap']:+.3g}, large: {md_escape(cv.get('gap_rule', ''))}); "
+            "the tuned parameters do not carry over to held-out data as well as the tuning score says."]
+
+
+def _validation_md(val: dict[str, Any]) -> list[str]:
+    """The ``validation.json`` results: tuning score, CV score, gap; the final selection's candidates."""
+    md: list[str] = []
+    cv = val.get("cv") or {}
+    if cv.get("error"):
+        md += ["## Generalisation", "", f"Cross-validation not run: {md_escape(cv['error'])}", ""]
+    elif cv:
+        gap = cv.get("gap")
+        flag = " (large)" if cv.get("gap_large") else ""
+        rows = [["tuning score (best parameters, every held-out fold)", cv.get("tuning_score")],
+                ["CV score (tuned without the fold, scored on it)", cv.get("cv_score")],
+                ["gap (CV - tuning)", (f"{gap:+.4g}{flag}" if isinstance(gap, (int, float)) else "-")],
+                ["defaults, same folds", cv.get("defaults_cv_score")],
+                ["folds", f"{cv.get('folds')} ({cv.get('kind')}), worst fold {fmt_num(cv.get('cv_fold_worst'), 4)}, "
+                          f"std over folds {fmt_num(cv.get('cv_fold_std'), 3)}"],
+                ["budget per fold", f"{cv.get('budget_fraction', 1.0):g} x the run's"]]
+        md += ["## Generalisation", "", f"Cross-validation of this job ([cv.md](cv.md)); the gap is large when "
+               f"{md_escape(cv.get('gap_rule', ''))}.", "", _rows_table(rows, ["item", "value"], 4), ""]
+    sel = val.get("selection") or {}
+    if sel:
+        rows = [[c["eval"], c["tuning_fitness"], c["holdout_fitness"],
+                 "chosen" if c["eval"] == sel.get("chosen_eval") else
+                 ("tuning best" if c["eval"] == sel.get("tuning_best_eval") else "")] for c in sel["candidates"]]
+        md += ["## Final selection on a held-out fold", "",
+               f"The {sel['top_k']} best distinct candidates of the tuning (which did not see fold "
+               f"`{md_escape(sel['holdout'])}`, {sel.get('n_holdout')} recordings) rescored on that fold; the best "
+               "there is best.yaml" + (" (not the tuning best)." if sel.get("changed") else " (the tuning best)."), "",
+               _rows_table(rows, ["evaluation", "tuning fitness", "held-out fitness", ""], 4), ""]
+    return md
 
 
 def _params_rows(params: dict[str, Any], space: Any) -> list[list[Any]]:
@@ -225,10 +275,12 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     md += [f"Note: {md_escape(n)}." for n in s["notes"]] + ([""] if s["notes"] else [])
 
     warnings = run_warnings(run_dir)
+    val = _validation(run_dir)
     md += ["## Warnings", ""]
-    md += [f"- **{w.kind}**: {md_escape(w.message)}" for w in warnings] or ["None: no parameter within 2 % of a "
-                                                                              "search bound, no failed evaluation."]
+    md += [f"- **{w.kind}**: {md_escape(w.message)}" for w in warnings] + _gap_warning(val) \
+        or ["None: no parameter within 2 % of a search bound, no failed evaluation."]
     md += [""]
+    md += _validation_md(val)
     if s["params"]:
         md += ["## Best parameters", "", "Position in bounds: 0 % = low bound, 100 % = high bound, measured in "
                "log10 for log-scaled parameters.", "",
@@ -238,7 +290,8 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     md += _figures_md(run_dir, s, space, live)
     files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
              ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
-             ("scores.csv", "scores per recording")]
+             ("scores.csv", "scores per recording"), ("cv.md", "cross-validation tables"),
+             ("validation.json", "cross-validation summary and final selection")]
     md += ["## Files", ""] + [f"- [{n}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
     md += ["", f"Written {now}.", ""]
     text = "\n".join(md)

@@ -290,7 +290,16 @@ class Run:
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
+        selection = None
+        if self.best is not None and self.cfg.validation.select is not None:  # final choice on a held-out fold
+            from tuner.validation import select_best
+
+            self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
         extra = self._finalize() if self.best is not None else {}
+        if self.best is not None and self.cfg.validation.active:  # CV into the run directory (tuner.validation)
+            from tuner.validation import validate_run
+
+            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress)
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None:
@@ -410,6 +419,10 @@ def _build(cfg: RunConfig):
         if key.startswith("objective") and rest:
             raise ConfigError(cfg.source, key, rest) from None
         raise ConfigError(cfg.source, "objective", msg) from None
+    if cfg.validation.select is not None:  # tune without the held-out fold of the final selection
+        from tuner.validation import tuning_objective
+
+        objective = tuning_objective(cfg, objective)
     space = cfg.space(objective)
     if space.dim == 0:
         raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")

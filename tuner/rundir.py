@@ -13,6 +13,9 @@ Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
 ``checkpoint.json``   how many rows of ``history.csv`` are complete generations (data only, no code)
 ``.lock``             holds an exclusive ``flock`` while a process runs or resumes the run
 ``report.md``, ``report.html``, ``figures/``  written when the run finishes
+``validation.json``   with a ``validation:`` section or after ``tuner cv RUN_DIR``: the cross-validation
+                      summary (tuning score, CV score, gap, large or not) and the final selection
+``cv.md``, ``cv.csv`` the cross-validation tables (per fold, summary) of :mod:`tuner.cv`
 
 Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data.
 (A config with ``objective.kind: python`` imports the module it names by design: trust the config.)
@@ -476,6 +479,23 @@ class RunDir:
 
     def write_checkpoint(self, ck: Checkpoint) -> None:
         atomic_write(self.path / "checkpoint.json", json.dumps(dataclasses.asdict(ck)))
+
+    def validation(self) -> dict[str, Any] | None:
+        """``validation.json`` (``None`` when the run has none)."""
+        if not (self.path / "validation.json").is_file():
+            return None
+        doc = self._json("validation.json", "validation results")
+        if not isinstance(doc, dict):
+            raise RunError(f"{self.path / 'validation.json'}: expected a JSON object, got {type(doc).__name__}")
+        return doc
+
+    def write_validation(self, doc: dict[str, Any]) -> None:
+        atomic_write(self.path / "validation.json", json.dumps(plain(doc), indent=1))
+
+    def write_cv_tables(self, markdown: str, table_csv: str) -> None:
+        """``cv.md`` and ``cv.csv`` (the texts of :func:`tuner.cv.cv_texts`)."""
+        atomic_write(self.path / "cv.csv", table_csv)
+        atomic_write(self.path / "cv.md", markdown)
 
     def remove_tmp(self) -> list[str]:
         """Delete temporary files a killed writer left behind; return their names."""

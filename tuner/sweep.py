@@ -236,6 +236,10 @@ def collect(sweep_dir: Path) -> Any:
                 row["train_fitness"] = ev["train_fitness"]
             if ev.get("test_fitness") is not None:
                 row["test_fitness"] = ev["test_fitness"]
+            if ev.get("cv_fitness") is not None:  # validation: cv (tuner.validation): CV score and its gap
+                row["cv_fitness"] = ev["cv_fitness"]
+                row["cv_gap"] = ev.get("cv_gap")
+                row["cv_gap_large"] = "LARGE" if ev.get("cv_gap_large") else ""
             for split in ("train", "test"):
                 recs = ev.get(split) or {}
                 if recs:
@@ -323,7 +327,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     if len(ranking):
         ranking = ranking[["rank", "method"] + [c for c in ranking.columns if c not in ("rank", "method")]]
     main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
-                             "n_evals", "wall_s"] if c in df.columns]
+                             "cv_fitness", "cv_gap", "cv_gap_large", "n_evals", "wall_s"] if c in df.columns]
     running = live and not (len(df) and (df["status"] == "finished").all())
     md = [f"# Sweep {md_escape(sw['name'])}", "", md_escape(sw.get("description") or ""), "",
           f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
