@@ -20,7 +20,8 @@ each trial in exactly one. :func:`kfold_folds` assigns recordings round-robin (a
 Scores
 ------
 Per recording: BROAD's total RMSE (deg) over the motion samples. A filter output with non-finite
-samples is a recorded failure scored ``failure_deg`` (default 180 deg, the largest possible error).
+samples, or with an error growing without bound (:mod:`objectives.attitude.divergence`), is a recorded
+failure scored ``failure_deg`` (default 180 deg, the largest possible error).
 """
 
 from __future__ import annotations
@@ -169,9 +170,10 @@ def score_trials(filter_name: str, values: Mapping[str, Any], paths: Sequence[st
     """BROAD total RMSE (deg, motion samples) of the filter with ``values`` on each BROAD file.
 
     ``init`` is ``accmag`` (the filters' first-sample start), ``truth`` or ``broad``
-    (:func:`objectives.attitude.init_broad.broad_start`). A run with non-finite output scores
-    ``failure_deg``.
+    (:func:`objectives.attitude.init_broad.broad_start`). A run with non-finite output or an error
+    growing without bound scores ``failure_deg``.
     """
+    from objectives.attitude.divergence import unbounded_growth
     from objectives.attitude.fused_errors import error_sums
     from objectives.attitude.init_broad import broad_start
 
@@ -181,8 +183,10 @@ def score_trials(filter_name: str, values: Mapping[str, Any], paths: Sequence[st
     for i, p in enumerate(paths):
         rec = _recording(str(p))
         q0 = broad_start(rec.acc[0], rec.mag[0], cls.working_frame) if init == "broad" else init
-        es = error_sums(flt.run(rec, q0=q0), rec.quat, rec.motion)
-        out[i] = failure_deg if es.n_nonfinite else float(es.broad_rmse_deg[0])
+        q = flt.run(rec, q0=q0)
+        es = error_sums(q, rec.quat, rec.motion)
+        out[i] = failure_deg if es.n_nonfinite or unbounded_growth(q, rec.quat, rec.motion) \
+            else float(es.broad_rmse_deg[0])
     return out
 
 

@@ -35,9 +35,10 @@ Metrics (lower is better):
                        criterion of BROAD's trial-agnostic good parameters (TAGP).
 ``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
 
-A filter whose output is not finite scores the penalty and the evaluation is recorded as failed
-with the recording's name. Recordings are loaded once per worker process (lazily, on first call)
-and are not pickled with the objective.
+A filter whose output is not finite, or whose attitude error grows without bound (steadily over the
+recording to more than 60 deg, :mod:`objectives.attitude.divergence`), scores the penalty and the
+evaluation is recorded as failed with the recording's name. Recordings are loaded once per worker
+process (lazily, on first call) and are not pickled with the objective.
 """
 
 from __future__ import annotations
@@ -51,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.divergence import unbounded_growth
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective_options import (
     AGG_KEYS,
@@ -420,6 +422,9 @@ class FilterObjective:
                     raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
                 if es.n_nonfinite and not failed:
                     failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
+                elif not failed:  # finite but running away: a failure too (objectives.attitude.divergence)
+                    why = unbounded_growth(q, rec.quat, mask)
+                    failed = f"filter diverged on {rec.name}: {why}" if why else ""
                 m.update(es.as_dict())
                 sums.append(es)
             elif not np.isfinite(q).all() and not failed:
