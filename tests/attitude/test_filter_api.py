@@ -53,10 +53,10 @@ def test_declaration_reproduces_previous_defaults_and_space(name):
     cls = get_filter(name)
     before = BEFORE["filters"][name]
     # every declared filter gained the common start option ``init`` (last, fixed at "auto") and the EKF family
-    # its robust blocks (appended, fixed, off); the rest is unchanged
+    # and the QRAUKF its robust blocks (appended, fixed, off); the rest is unchanged
     assert cls.defaults["init"] == "auto" and list(cls.defaults)[-1] == "init"
     added = {"init": "auto"}
-    if name in ("ekf", "faekf"):
+    if name in ("ekf", "faekf", "qraukf"):
         added.update(acc_lp_tau_s=0.0, mag_rejection=False, mag_max_rejection_s=60.0, mag_norm_th=0.1,
                      mag_dip_th_deg=10.0, rest_bias=False, rest_bias_var=3e-6)
     assert {k: cls.defaults[k] for k in added} == added

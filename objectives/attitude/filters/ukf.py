@@ -76,15 +76,18 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._ukf_kernels import new_state, ukf_chunk
+from objectives.attitude.filters._ukf_kernels import new_state, new_work, ukf_chunk
+from objectives.attitude.filters._ukf_robust import ukf_robust_run
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["QUKF", "QRAUKF", "run_ukf"]
 
 
 def run_ukf(gyr, acc, mag, dt, q0, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sigma_mag,
-            p0_att=0.1, p0_bias=0.01, robust=False, window=20, n_sigma=3.0) -> dict[str, np.ndarray]:
+            p0_att=0.1, p0_bias=0.01, robust=False, window=20, n_sigma=3.0,
+            blocks: dict[str, Any] | None = None) -> dict[str, np.ndarray]:
     """Array entry point of QUKF (``robust=False``) and QRAUKF (``robust=True``), ENU frame.
 
     Parameters
@@ -94,6 +97,9 @@ def run_ukf(gyr, acc, mag, dt, q0, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sig
     dt : float, s.
     q0 : (4,) initial sensor-to-earth quaternion in ENU, unit norm.
     sigma_gyr ... n_sigma : see :class:`QUKF` and :class:`QRAUKF`.
+    blocks : robust blocks, ``{"acc_lp_tau_s", "mag_rejection", "mag_norm_th", "mag_dip_th_deg",
+        "mag_max_rejection_s", "rest_bias", "rest_bias_var", "gravity"}`` (see :class:`QRAUKF`); ``None``
+        or all off: the paper's filter, bit for bit. With a block on the outputs add ``mag_gain`` and ``rest``.
 
     Returns
     -------
@@ -129,6 +135,19 @@ def run_ukf(gyr, acc, mag, dt, q0, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sig
         raise ValueError(f"window must be an integer >= 2, got {window!r}")
     state, istate = new_state(q0, p0_att, p0_bias, window if robust else 1)
     kcoef = np.array([dt, sigma_gyr, att_rw, bias_rw, sigma_acc, sigma_mag, n_sigma], dtype=np.float64)
+    b = blocks or {}
+    tau = float(b.get("acc_lp_tau_s", 0.0))
+    if bool(b.get("mag_rejection")) or bool(b.get("rest_bias")) or tau > 0:
+        g = float(b.get("gravity", 9.81))
+        flags = np.array([float(bool(b.get("mag_rejection"))), float(bool(b.get("rest_bias"))), float(tau > 0),
+                          float(b.get("rest_bias_var", 3e-6))])
+        mcoef = mag_dist_coefficients(dt, norm_th=float(b.get("mag_norm_th", 0.1)),
+                                      dip_th_deg=float(b.get("mag_dip_th_deg", 10.0)),
+                                      max_rejection_s=float(b.get("mag_max_rejection_s", 60.0)))
+        rcoef = rest_coefficients(dt, th_acc=0.5 * g / 9.81)
+        acoef = acc_lp_coefficients(dt, tau_acc_s=tau, gravity=g)
+        return ukf_robust_run(gyr, acc, mag, kcoef, bool(robust), state, istate, new_work(), flags, mcoef, rcoef,
+                              acoef)
     return ukf_chunk(gyr, acc, mag, kcoef, bool(robust), state, istate)
 
 
@@ -150,6 +169,30 @@ _COMMON = (
     Param("p0_bias", 0.01, unit="rad/s", doc="initial gyro bias std", allowed=POSITIVE),
 )
 _KERNEL_KEYS = ("sigma_gyr", "sigma_acc", "sigma_mag", "bias_rw", "att_rw", "p0_att", "p0_bias")
+
+#: robust blocks of the QRAUKF (objectives.attitude.filters.robust, driver _ukf_robust); all off by default
+#: = the paper's QRAUKF, bit for bit
+_ROBUST_DECL: tuple[Param, ...] = (
+    Param("acc_lp_tau_s", 0.0, unit="s", allowed=Interval(0.0),
+          doc="time constant of the earth-frame accelerometer low-pass feeding the pseudo-measurement (robust "
+              "block c; 0: raw accelerometer, as the paper); 3-5 s keeps inclination through fast translation"),
+    Param("mag_rejection", False, choices=(True, False),
+          doc="magnetic disturbance rejection (robust block a): field norm and dip against a reference learned "
+              "when undisturbed; a rejected field is replaced by the predicted heading direction"),
+    Param("mag_max_rejection_s", 60.0, unit="s", allowed=POSITIVE,
+          doc="longest full rejection of a disturbed field before a new field is accepted (mag_rejection)"),
+    Param("mag_norm_th", 0.1, unit="1", allowed=POSITIVE,
+          doc="relative field-norm deviation beyond which the field is disturbed (mag_rejection)"),
+    Param("mag_dip_th_deg", 10.0, unit="deg", allowed=POSITIVE,
+          doc="dip-angle deviation beyond which the field is disturbed (mag_rejection)"),
+    Param("rest_bias", False, choices=(True, False),
+          doc="gyro bias estimation at rest (robust block b): at detected rest the low-passed gyro measures the "
+              "bias state"),
+    Param("rest_bias_var", 3e-6, unit="(rad/s)^2", allowed=POSITIVE,
+          doc="variance of the rest bias pseudo-measurement (rest_bias)"),
+)
+_BLOCK_SWITCHES = ("acc_lp_tau_s", "mag_rejection", "rest_bias")
+_BLOCK_KEYS = tuple(p.name for p in _ROBUST_DECL)
 
 
 class QUKF(AttitudeFilter):
@@ -184,12 +227,25 @@ class QUKF(AttitudeFilter):
         return {k: v[k] for k in _KERNEL_KEYS}
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
-        out = run_ukf(rec.gyr, rec.acc, rec.mag, rec.dt, q0, robust=self.robust, **self._kwargs())
+        out = run_ukf(rec.gyr, rec.acc, rec.mag, rec.dt, q0, robust=self.robust, **self._kwargs(),
+                      **self._blocks(rec))
         diag = {"bias": out["bias"], "skipped": out["skipped"]}
         if self.robust:
             diag["lam"] = out["lam"]
             diag["fallback"] = out["fallback"]
+        for key in ("mag_gain", "rest"):
+            if key in out:
+                diag[key] = out[key]
         return FilterResult(out["quat"], "ENU", diag)
+
+    def _blocks(self, rec: Recording) -> dict[str, Any]:
+        """``{"blocks": ...}`` for :func:`run_ukf` when a robust block is on (QRAUKF), else ``{}``."""
+        v = self.values
+        if not any(bool(v.get(k)) for k in _BLOCK_SWITCHES):
+            return {}
+        from objectives.attitude.filters.ekf import gravity_in_units
+
+        return {"blocks": {**{k: v[k] for k in _BLOCK_KEYS}, "gravity": gravity_in_units(rec)}}
 
 
 class QRAUKF(QUKF):
@@ -203,6 +259,12 @@ class QRAUKF(QUKF):
 
     Diagnostics add ``lam`` (N, 3) Hampel gains and ``fallback`` (N,) samples where eq. 37 gave no
     positive definite covariance and the nominal R0 was used.
+
+    Robust blocks (options, all off by default = the paper's filter, bit for bit; not in the default
+    search space; :mod:`objectives.attitude.filters._ukf_robust`): ``acc_lp_tau_s`` (earth-frame
+    accelerometer low-pass, s), ``mag_rejection`` (with ``mag_norm_th``, ``mag_dip_th_deg``,
+    ``mag_max_rejection_s``), ``rest_bias`` (with ``rest_bias_var``). With a block on, diagnostics add
+    ``mag_gain`` (N,) and ``rest`` (N,).
     """
 
     name = "qraukf"
@@ -211,7 +273,7 @@ class QRAUKF(QUKF):
               allowed=Interval(2.0), integer=True),
         Param("n_sigma", 3.0, (1.0, 10.0), unit="1", doc="Hampel confidence region (paper 3)", eq="eq. 36",
               allowed=POSITIVE),
-    ))
+    ) + _ROBUST_DECL)
     robust = True
 
     def _kwargs(self) -> dict[str, Any]:
