@@ -21,22 +21,14 @@ import time
 from pathlib import Path
 
 import numpy as np
-import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-#: ../shared/data/broad of the checkout (or of its parent, for a worktree one level deeper)
-_CANDIDATES = [base / "shared" / "data" / "broad" for base in (ROOT.parent, ROOT.parent.parent)]
-BROAD_DIR = next((d for d in _CANDIDATES if d.is_dir()), _CANDIDATES[0])
+try:
+    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, append, broad_folds, pairs
+except ImportError:  # run as a script: benchmarks/ is on the path (broad_cv_common puts the checkout there)
+    from broad_cv_common import BROAD_DIR, RESULTS_MD, append, broad_folds, pairs
 
 from objectives.attitude.aggregate import aggregate, group_weights, prior_penalty  # noqa: E402
-from objectives.attitude.cv import (  # noqa: E402
-    broad_trial_groups,
-    filter_class,
-    logo_folds,
-    score_trials,
-    search_space,
-)
+from objectives.attitude.cv import filter_class, score_trials, search_space  # noqa: E402
 
 #: (label, aggregation, options, group_balanced, prior strength in deg)
 SETUPS = [
@@ -68,19 +60,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--init", default="accmag")
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--cache", default="")
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results" / "broad_cv.md"))
+    ap.add_argument("--out", default=str(RESULTS_MD))
     ap.add_argument("--title", default="")
     a = ap.parse_args(argv)
 
-    data = Path(a.data)
-    paths = {p.stem: str(p) for p in sorted(data.glob("*.mat"))}
+    paths, groups, folds = broad_folds(a.data)
+    paths = {k: str(v) for k, v in paths.items()}
     names = list(paths)
-    groups = broad_trial_groups(data, names)
-    folds = logo_folds(names, groups)
-    fixed = {}
-    for it in a.fixed:
-        k, v = it.split("=", 1)
-        fixed[k] = yaml.safe_load(v)
+    fixed = pairs(a.fixed, "--fixed")
     axes = {}
     for g in a.grid:
         k, spec = g.split("=", 1)
@@ -142,8 +129,7 @@ def main(argv: list[str] | None = None) -> int:
                      + " | ".join(f"{v[idx].mean():.2f}" for v in per_trial.values()) + " |")
     text = "\n".join(lines) + "\n"
     print(text)
-    with Path(a.out).open("a") as fh:
-        fh.write(text)
+    append(a.out, text)
     return 0
 
 

@@ -3,7 +3,8 @@
 Benchmarks (one module each): ``filters`` (filter throughput against ahrs, imufusion, VQF),
 ``closed_loop`` (WMP simulations per second, thesis-size PSO run), ``parallel`` (speed-up on 2
 workers, engine overhead, peak memory) and ``optimizers`` (quality per evaluation against pyswarms,
-Optuna, scipy DE, random search). Each writes ``<out>/<name>.json`` with the machine facts; the run
+Optuna, scipy DE, random search) and ``broad_cv`` (leave-one-group-out CV of every ``configs/broad_*.yaml``
+on the shared BROAD trials, skipped without the data). Each writes ``<out>/<name>.json`` with the machine facts; the run
 writes ``<out>/SUMMARY.md`` with a table per benchmark, targets marked pass/FAIL, and curves as PNG.
 
 ``--full`` writes to ``benchmarks/results/`` (committed); ``--smoke`` uses tiny sizes and writes to
@@ -27,7 +28,7 @@ from pathlib import Path
 
 from benchmarks.common import PEERS, RESULTS_DIR, fmt, machine_facts, md_table, peer, write_result
 
-BENCHMARKS = ["filters", "closed_loop", "parallel", "optimizers"]
+BENCHMARKS = ["filters", "closed_loop", "parallel", "optimizers", "broad_cv"]
 INSTALL_HINT = "pip install ahrs imufusion vqf pyswarms optuna cmaes"
 
 
@@ -63,7 +64,8 @@ def _summary(out: Path, sections: list[tuple[str, dict]], facts: dict, smoke: bo
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__.splitlines()[0])
     mode = ap.add_mutually_exclusive_group(required=True)
-    mode.add_argument("--full", action="store_true", help="full sizes (about 25 min on 2 cores)")
+    mode.add_argument("--full", action="store_true", help="full sizes (about 25 min on 2 cores, plus 5-10 min per "
+                      "BROAD config for broad_cv)")
     mode.add_argument("--smoke", action="store_true", help="tiny sizes, to check the suite works")
     ap.add_argument("--only", nargs="+", choices=BENCHMARKS, help="run only these benchmarks")
     ap.add_argument("--out", type=Path, default=None, help="output directory")
