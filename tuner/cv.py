@@ -197,7 +197,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
 
 def _fmt(v: Any) -> str:
     if isinstance(v, float):
-        return f"{v:.4g}"
+        return "-" if math.isnan(v) else f"{v:.4g}"
     return str(v)
 
 
