@@ -141,8 +141,11 @@ def _cv(cfg: RunConfig, rd: RunDir, params: dict[str, Any], progress: Callable[[
     from tuner.cv import cross_validate, cv_texts
 
     v = cfg.validation
-    kind = v.cv or ("kfold" if k else "logo")
-    k = k if k is not None else (v.folds if kind == "kfold" else None)
+    if k is None:
+        kind = v.cv or "logo"
+        k = v.folds if kind == "kfold" else None
+    else:  # an explicit number of folds (tuner cv RUN_DIR --k K) wins over the config's
+        kind = "kfold"
     t0 = time.time()
     out = cross_validate(cfg, k=k, progress=progress, budget_fraction=v.budget_fraction, full_params=params)
     md, table = cv_texts(out, v)
