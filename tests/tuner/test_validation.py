@@ -83,12 +83,21 @@ def test_run_with_cv_writes_tables_and_the_report_shows_the_gap(tmp_path):
     assert val["gap"] == pytest.approx(val["cv_score"] - val["tuning_score"])
     assert val["gap_large"] == (val["gap"] > 0)  # gap_warn_rel 0: any positive gap is large
     assert best.evaluation["cv_fitness"] == val["cv_score"] and best.evaluation["cv_gap"] == val["gap"]
-    # each fold ran half the run's generations: 4 x 1 evaluations (pso), fewer than the run's 8
     assert val["budget_fraction"] == 0.5 and val["folds"] == 2
     md = (rd.path / "report.md").read_text()
     assert "## Generalisation" in md and "gap (CV - tuning)" in md and "(cv.md)" in md
     assert ("**generalisation gap**" in md) == val["gap_large"]
     assert "| fold-0 | 2 |" in (rd.path / "cv.md").read_text()
+
+
+def test_budget_fraction_scales_generations_and_max_evals(tmp_path):
+    from tuner.cv import scaled_budget
+
+    cfg = config_from_dict(_raw(tmp_path, optimizer={"method": "pso", "population": 4, "generations": 10}))
+    assert scaled_budget(cfg, 1.0) is cfg
+    assert scaled_budget(cfg, 0.5).optimizer.generations == 5 and scaled_budget(cfg, 0.01).optimizer.generations == 1
+    capped = config_from_dict(_raw(tmp_path, optimizer={"method": "random", "population": 4, "max_evals": 40}))
+    assert scaled_budget(capped, 0.25).optimizer.options["max_evals"] == 10
 
 
 def test_cv_of_a_finished_run_writes_into_it(tmp_path, capsys):
