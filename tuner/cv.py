@@ -190,7 +190,8 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
             if params else []
         plain = sum(s[0] * n for s, n in sc) / sum(n for _, n in sc) if sc else math.nan
         out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan)
-        say(f"all data: tuned {train_fit:.4g}, scored as the folds {plain:.4g}")
+        say(("all data: the run's best" if full_params is not None else f"all data: tuned {train_fit:.4g}")
+            + f", scored as the folds {plain:.4g}")
     out.seconds = time.time() - t0
     return out
 
