@@ -123,7 +123,9 @@ def mae_weighted_cost(e_nu, e_xi, e_omega3, i_avg, weights: Mapping[str, float] 
     Notes
     -----
     The value depends on the units (module docstring): with these SI units F at Table 2.7's initial
-    parameters is 0.112 on our model with the thesis profile of 2 s steps (thesis: 0.1049).
+    parameters is 0.112 on our model with the thesis profile of 2 s steps (thesis: 0.1049). It also
+    scales as ~1 / T^1.06 with the run length T (the means run over the whole run), which the thesis
+    does not state (docs/control-cost.md section 3: 8.5 s instead of 8 s gives 0.1056).
     """
     w = dict(DEFAULT_COST_WEIGHTS)
     if weights:

@@ -192,3 +192,131 @@ def test_alpha_rate_keeps_the_lcf_time_constant():
     a = CCF().run(rec)
     b = CCF(alpha_rate_hz=50.0).run(rec)
     assert np.array_equal(a, b)
+
+
+# --- alpha_mode: the seed's per-sample blend unchanged, the time-constant and eq. (14) readings ---------------
+def _digest(*arrays) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(str(a.dtype).encode())
+        h.update(repr(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+# Computed with the kernel of commit a77527f (before the kernel's shared blocks became inline helpers and
+# alpha_mode was added), on the recordings below; they hold for the pinned NumPy/numba on x86-64 (see
+# tests/attitude/test_synthetic_identity.py for what to do after an upgrade).
+PER_SAMPLE_DIGESTS = {
+    "lcf_rate": "264de5a1d7d44076f15c4d8c2cf861fbbdd3292a9b32edf5c9a6fe9d8ee024cb",
+    "ncf": "30a5c371e3635a90abfa74ff1794fb29b7c5dedc7ce840101612a9ea4894b085",
+    "ccf": "93c779f25df55d850547d588150e4eaa3b107736ffa1152ede78be163b56ed31",
+    "ccf_gate": "1f9c9c2b30f1712ff9e87b9f6fd180da1f9b37cc32dffdbce4317b463efe780e",
+    "ccf_nomag": "986684eb29bf601b3539967b8f951cb9525bc52da3da0ad3678b18eaf5c6d7f1",
+    "batch_degenerate": "f7d5434b9f73108b4dda140f45e9d5df0aaa178700e78f47c801da0706233aa5",
+    "batch_degenerate_gate": "2c6c13b65f9ac6e7326f4483a49f880b72b2022afd4c310c2240ae2aed2c0650",
+    "stream": "a130423e722fd1ae269f77563ca8ac6c495e2baa907961993ab9b09ecfdf9e06",
+}
+
+
+def test_per_sample_mode_is_bit_identical_to_the_seed_kernel():
+    from objectives.attitude.data.bench6dof import bench6dof
+
+    rec = bench6dof(30.0, 100.0, 3, vibration=False, ext_acc_max_g=0.5, mag_pert_range=(0.1, 0.5))
+    rec2 = bench6dof(20.0, 200.0, 5)
+    got = {}
+    for key, f, r in (("lcf_rate", LCF(alpha=0.9, alpha_rate_hz=50.0), rec), ("ncf", NCF(Kp=3.0, Ki=0.05), rec),
+                      ("ccf", CCF(), rec), ("ccf_gate", CCF(alpha=0.9, Kp=2.0, Ki=0.3, acc_gate=0.2), rec2),
+                      ("ccf_nomag", CCF(use_mag=False), rec)):
+        res = f.run_detailed(r)
+        got[key] = _digest(res.quat, res.diagnostics["euler"], res.diagnostics["gyr_bias"])
+    g, a, m = rec.gyr.copy(), rec.acc.copy(), rec.mag.copy()
+    a[100] = 0
+    a[200, 1] = np.nan
+    m[300] = 0
+    m[400, 2] = np.inf
+    g[500, 0] = np.nan
+    x0 = [0.1, -0.2, 0.3]
+    got["batch_degenerate"] = _digest(*complementary_batch(g, a, m, 0.01, x0, 0.7, 25.0, 0.1, detailed=True))
+    got["batch_degenerate_gate"] = _digest(*complementary_batch(g, a, m, 0.01, x0, 1.0, 1.0, 0.1, detailed=True,
+                                                                acc_gate=0.3, g_ref=9.80665))
+    s = CCF(alpha=0.9, Kp=2.0, Ki=0.3).stream(rate_hz=100.0, frame=rec.frame)
+    got["stream"] = _digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
+    assert got == PER_SAMPLE_DIGESTS
+    assert np.array_equal(CCF(alpha_mode="per_sample").run(rec), CCF().run(rec))
+
+
+@pytest.mark.parametrize("alpha,kp,ki", [(0.7, 25.0, 0.1), (0.9, 1.0, 1.0), (0.5, 0.0, 0.0)])
+@pytest.mark.parametrize("use_mag", [True, False])
+def test_static_mode_matches_reference(biased, alpha, kp, ki, use_mag):
+    """Eq. (14) as written (static output weight), against the slow reference written from the equation."""
+    r = biased.slice(0, 800)
+    mag = r.mag if use_mag else None
+    x0 = np.array([0.1, -0.2, 0.3])
+    got = complementary_batch(r.gyr, r.acc, mag, DT, x0, alpha, kp, ki, detailed=True, static=True)[1]
+    ref = complementary_ref(r.gyr, r.acc, mag, DT, x0, alpha, kp, ki, static=True)
+    assert np.abs(wrap(got - ref)).max() < 1e-9
+
+
+def test_static_mode_is_eq_15():
+    """Step of the accelerometer roll at rest: the output follows eq. (15)'s
+    ((1 - a) s^2 + a Kp s + a Ki) / (s^2 + a Kp s + a Ki), a direct feed-through of 1 - alpha at t = 0+,
+    at 100 Hz and 1 kHz alike (alpha is rate-independent); at alpha = 1 it is the NCF bit for bit."""
+    from scipy import signal
+
+    a, kp, ki, step = 0.7, 4.0, 2.0, 0.2
+    t_end = 3.0
+    for rate in (100.0, 1000.0):
+        dt = 1.0 / rate
+        n = int(round(t_end * rate))
+        q = quat_from_euler_zyx(np.tile([step, 0.0, 0.0], (n, 1)))
+        rec = simulate_imu(q, dt, frame="NED")
+        f = CCF(alpha=a, Kp=kp, Ki=ki, alpha_mode="static")
+        roll = f.run_detailed(rec, q0=[1.0, 0.0, 0.0, 0.0]).diagnostics["euler"][:, 0]
+        t = np.arange(1, n + 1) * dt
+        _, y = signal.step(([1 - a, a * kp, a * ki], [1.0, a * kp, a * ki]), T=t)
+        assert roll[0] / step == pytest.approx(1 - a, abs=0.05)
+        assert np.abs(roll / step - y).max() < (0.03 if rate == 100.0 else 0.004)
+    rec = simulate_imu(quat_from_euler_zyx(_euler_traj(500)), DT, frame="NED", rng=np.random.default_rng(2),
+                       gyr_noise=0.01, acc_noise=0.05, mag_noise=0.01)
+    assert np.array_equal(CCF(alpha=1.0, Kp=kp, Ki=ki, alpha_mode="static").run(rec), NCF(Kp=kp, Ki=ki).run(rec))
+
+
+def test_tau_mode_is_rate_independent_and_stays_stable():
+    """tau_s fixes the LCF time constant of eq. (9) at every rate (x reaches 1 - 1/e of a step at t = tau);
+    a proportional gain far above 2 / dt leaves the tau-mode CCF bounded where the per-sample one diverges."""
+    from objectives.attitude.filters.complementary import tau_gains
+
+    al, kpe = tau_gains(0.05, 10.0, 0.01)
+    assert al == pytest.approx(0.05 / 0.06, rel=1e-15) and kpe == pytest.approx((1 - np.exp(-0.1)) / 0.01, rel=1e-12)
+    assert tau_gains(0.05, 1e6, 0.01)[1] * 0.01 <= 1.0
+    tau = 0.05
+    for rate in (100.0, 1000.0):
+        dt = 1.0 / rate
+        n = int(round(0.3 * rate))
+        q = quat_from_euler_zyx(np.tile([0.2, 0.0, 0.0], (n, 1)))
+        rec = simulate_imu(q, dt, frame="NED")
+        out = LCF(alpha_mode="tau", tau_s=tau).run_detailed(rec, q0=[1.0, 0.0, 0.0, 0.0]).diagnostics["euler"]
+        k = int(round(tau * rate))
+        assert out[k - 1, 0] / 0.2 == pytest.approx(1 - np.exp(-1), abs=0.06 if rate == 100.0 else 0.01)
+    rec = simulate_imu(quat_from_euler_zyx(_euler_traj(1000)), 0.02, frame="NED", rng=np.random.default_rng(4),
+                       gyr_noise=0.01, acc_noise=0.05, mag_noise=0.01)
+    truth = _euler_traj(1000)
+    stable = CCF(alpha_mode="tau", tau_s=0.2, Kp=500.0, Ki=0.1).run_detailed(rec).diagnostics["euler"]
+    rms = np.sqrt(np.mean(wrap(stable - truth)[100:] ** 2))
+    assert np.all(np.isfinite(stable)) and rms < 0.2  # follows the noisy acc/mag angles, bounded
+    per_sample = CCF(alpha=0.5, Kp=500.0, Ki=0.1).run_detailed(rec).diagnostics["euler"]
+    assert np.sqrt(np.mean(wrap(per_sample - truth)[100:] ** 2)) > 0.5  # Kp dt = 10: the seed's update overshoots
+
+
+def test_alpha_mode_options_are_validated():
+    with pytest.raises(ValueError, match="alpha_mode"):
+        CCF(alpha_mode="per_second")
+    with pytest.raises(ValueError, match="tau_s"):
+        LCF(alpha_mode="tau", tau_s=0.0)
+    rec = simulate_imu(quat_from_euler_zyx(np.zeros((10, 3))), DT, frame="NED")
+    with pytest.raises(ValueError, match="alpha_rate_hz"):
+        CCF(alpha_mode="static", alpha_rate_hz=50.0).run(rec)

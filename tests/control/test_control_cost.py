@@ -30,7 +30,8 @@ def fuzzy():
 
 def test_f_at_table_2_7_initial_values_is_near_the_thesis(fuzzy):
     # thesis 2.3.4: F_init = 0.1049. Ours, SI units on the 2 s step profile: 0.1122 (+7 %); the 5 %
-    # target is not met (docs/control-cost.md: 2.0 s steps from Table 2.5, F = 0.105 needs 2.2 s).
+    # target is not met (docs/control-cost.md section 3: the run length after the last step is not in
+    # the text, and 8.5 s instead of 8 s would meet it; see the next-but-one test).
     ev = fuzzy(fuzzy.defaults)
     assert ev.status == "ok"
     assert ev.fitness == pytest.approx(0.1049, rel=0.08)
@@ -51,6 +52,23 @@ def test_thesis_tuned_values_improve_f_by_about_the_thesis_ratio(fuzzy):
     assert ev.status == "ok"  # the thesis's tuned controller meets the thesis's requirements
     assert 0.30 < 1 - ev.fitness / f0 < 0.55
 
+
+
+def test_run_length_moves_f_init_across_the_band_but_not_the_tuned_ratio():
+    """Why F_init misses 5 % (docs/control-cost.md section 3): the thesis states the step values, not how
+    long the run lasts after the last step, and F (means over the run) scales with it: 2 s steps run for
+    8.5 s instead of 8 s land within 5 % of 0.1049. The ratio F(thesis's tuned values) / F_init does
+    not move with the run length (0.60 at 8 and 10 s; thesis 0.532), so no run length matches both."""
+    prof = {"steps": [{"t": 2.0 * i, "v": v, "yaw_rate_deg_s": w}
+                      for i, (v, w) in enumerate(zip((0.4, 0.0, -0.2, 0.0), (30.0, 0.0, -70.0, 0.0)))]}
+    tuned = {k: v for k, v in THESIS_OPTIMISED.items() if k != "p13"}
+    ratio, f_init = {}, {}
+    for t_end in (8.0, 8.5, 10.0):
+        obj = _objective("wmp_fuzzy_protective.yaml", profile=dict(prof, duration_s=t_end), duration_s=t_end)
+        f_init[t_end] = obj(obj.defaults).fitness
+        ratio[t_end] = obj(dict(obj.defaults, **tuned)).fitness / f_init[t_end]
+    assert f_init[8.0] / 0.1049 - 1 > 0.05 and abs(f_init[8.5] / 0.1049 - 1) < 0.05
+    assert ratio[8.0] == pytest.approx(ratio[10.0], rel=0.01) and ratio[8.0] > 0.532 * 1.1
 
 def test_rise_time_closed_form_first_order_lag():
     ts, tau = 0.01, 0.2

@@ -38,7 +38,9 @@ def measured_angles(acc, mag, roll_pitch_fallback=None):
     return roll, pitch, yaw
 
 
-def complementary_ref(gyr, acc, mag, dt, euler0, alpha, kp, ki):
+def complementary_ref(gyr, acc, mag, dt, euler0, alpha, kp, ki, static=False):
+    """Euler estimates (N, 3). ``static``: eq. (14) as written, x_hat = alpha x + (1 - alpha) x_a with the
+    integrator x driven by the gyro and the PI on x_a - x_hat (the blend is not fed back)."""
     x = np.array(euler0, float)
     integ = np.zeros(3)
     out = np.empty((len(gyr), 3))
@@ -56,6 +58,8 @@ def complementary_ref(gyr, acc, mag, dt, euler0, alpha, kp, ki):
             e = wrap(xa - x)
             if yaw is None:
                 e[2] = 0.0
+            if static:
+                e = wrap(xa - (x + (1 - alpha) * e))  # x_a - x_hat, x_hat at the integrator's last value
             integ = integ + ki * e * dt
             rate = rate + kp * e
         rate = rate + integ
@@ -64,11 +68,16 @@ def complementary_ref(gyr, acc, mag, dt, euler0, alpha, kp, ki):
             pred = np.array([pred[0] + np.pi, np.pi - pred[1], pred[2] + np.pi])
         elif pred[1] < -np.pi / 2:
             pred = np.array([pred[0] + np.pi, -np.pi - pred[1], pred[2] + np.pi])
+        blend = np.zeros(3)
         if ok:
             blend = (1 - alpha) * wrap(xa - pred)
             if yaw is None:
                 blend[2] = 0.0
+        if static:
+            x = np.array([wrap(pred[0]), pred[1], wrap(pred[2])])
+            out[i] = np.array([wrap(pred[0] + blend[0]), pred[1] + blend[1], wrap(pred[2] + blend[2])])
+        else:
             pred = pred + blend
-        x = np.array([wrap(pred[0]), pred[1], wrap(pred[2])])
-        out[i] = x
+            x = np.array([wrap(pred[0]), pred[1], wrap(pred[2])])
+            out[i] = x
     return out

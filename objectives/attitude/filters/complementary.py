@@ -44,6 +44,26 @@ uses ``alpha_eff = tau / (tau + dt)`` at the recording's ``dt`` (equal to ``alph
 continuous-time gains and rate-independent. The paper's grid (Tables 1-2) is ``Kp`` in
 {0.1, 1, 25, 75} and ``Ki`` in {0.01, 0.1, 1}, with ``alpha = 0.7`` for CCF.
 
+alpha_mode (LCF, CCF; option, default ``per_sample``):
+
+- ``per_sample``: the seed's behaviour above, bit for bit: the blend of eq. (8) is fed back into the
+  state every sample, so ``alpha`` is a per-sample weight (with ``alpha_rate_hz``, one defined at
+  ``f_ref``);
+- ``tau``: the same recursive blend parametrised by the time constant ``tau_s`` of eq. (9),
+  ``alpha = tau / (tau + dt)`` at the recording's ``dt`` (the backward-Euler form of ``1 / (1 + tau
+  s)``), and ``Kp`` applied as ``(1 - exp(-Kp dt)) / dt`` (:func:`tau_gains`). The filter then
+  means the same at every rate and stays stable for every ``tau_s > 0``, ``Kp >= 0``: the per-sample
+  correction is below the error (``alpha`` in (0, 1), ``Kp`` step below 1), while the plain ``Kp dt``
+  of eq. (10) overshoots without bound above ``Kp = 2 / dt``. ``alpha`` is not used;
+- ``static``: eq. (14) read as written. ``alpha`` multiplies the integrator's output
+  ``x_int = (1/s) [x_g' + (Kp + Ki/s)(x_a - x_hat)]`` and ``(1 - alpha)`` the measurement angles,
+  ``x_hat = alpha x_int + (1 - alpha) x_a``, with no feedback of the blend into the integrator other
+  than through the PI error ``x_a - x_hat = alpha (x_a - x_int)``. This is what eq. (15) transforms:
+  ``s^2 + alpha Kp s + alpha Ki`` in the denominator and a direct feed-through ``(1 - alpha)`` of
+  ``x_a``. ``alpha`` is then a dimensionless weight of a continuous-time filter, independent of
+  the sampling rate (the paper's own definition; the paper states no rate). The state carries
+  ``x_int``; the Euler-rate kinematics are evaluated at ``x_int``; at ``alpha = 1`` it is the NCF.
+
 Angle wrap: every angle error and every estimate is wrapped to (-pi, pi]; a pitch that leaves
 [-pi/2, pi/2] after a gyro step is mapped to the equivalent ZYX triple
 ``(phi + pi, pi - theta, psi + pi)``.
@@ -78,7 +98,8 @@ from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, UNIT_CLOSED, Interval, Param, ParamSet, check_number, imu_arrays
 
-__all__ = ["LCF", "NCF", "CCF", "complementary_batch", "quat_from_euler_zyx", "euler_zyx_from_quat"]
+__all__ = ["LCF", "NCF", "CCF", "ALPHA_MODES", "complementary_batch", "quat_from_euler_zyx", "euler_zyx_from_quat",
+           "tau_gains"]
 
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
@@ -90,6 +111,47 @@ def _wrap(a):
     return a - _TWO_PI * math.floor((a + _PI) / _TWO_PI)
 
 
+@njit(cache=True, inline="always")
+def _read_mag(mag, i, use_mag):
+    """Row ``i`` of the magnetometer as ``(mx, my, mz, ok)``; ``ok`` False when unused or unusable."""
+    if use_mag:
+        mx, my, mz, _ = read_vec(mag, i)
+        _, ok = sq_norm_ok(mx, my, mz)
+        return mx, my, mz, ok
+    return 0.0, 0.0, 0.0, False
+
+
+@njit(cache=True, inline="always")
+def _mag_yaw(mx, my, mz, sphi, cphi, sth, cth):
+    """Tilt-compensated magnetometer yaw of eq. (6) at roll/pitch given by their sines and cosines."""
+    return math.atan2(mz * sphi - my * cphi, mx * cth + my * sth * sphi + mz * sth * cphi)
+
+
+@njit(cache=True, inline="always")
+def _pi_step(e, integ, rate, kp, ki, dt):
+    """Eqs. (10), (12) for one angle: ``(I + Ki e dt, rate + Kp e)``."""
+    return integ + ki * e * dt, rate + kp * e
+
+
+@njit(cache=True, inline="always")
+def _blend(x, target, w):
+    """Eqs. (8), (14): ``x + w wrap(target - x)``."""
+    return x + w * _wrap(target - x)
+
+
+@njit(cache=True, inline="always")
+def _quat_zyx(phi, th, psi):
+    """``q = q_z(psi) q_y(theta) q_x(phi)`` as ``(w, x, y, z)``."""
+    c1 = math.cos(0.5 * phi)
+    s1 = math.sin(0.5 * phi)
+    c2 = math.cos(0.5 * th)
+    s2 = math.sin(0.5 * th)
+    c3 = math.cos(0.5 * psi)
+    s3 = math.sin(0.5 * psi)
+    return (c1 * c2 * c3 + s1 * s2 * s3, s1 * c2 * c3 - c1 * s2 * s3,
+            c1 * s2 * c3 + s1 * c2 * s3, c1 * c2 * s3 - s1 * s2 * c3)
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
     """LCF / NCF / CCF over whole arrays (see module docstring for the equations).
@@ -98,34 +160,31 @@ def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
     ----------
     gyr, acc, mag : (N, 3) float64
         rad/s, any unit, any unit; ``mag`` may be (0, 3).
-    coef : (5,) or (7,) float64
+    coef : (5,), (7,) or (8,) float64
         ``dt`` s, ``alpha`` (1 = no LCF blend), ``Kp`` 1/s, ``Ki`` 1/s^2, ``use_mag`` (0/1); optional
         ``acc_gate`` (inf: off) and ``g`` (gravity in acc units): samples with
-        ``| |acc| - g | > acc_gate g`` are treated as unusable accelerometer samples.
+        ``| |acc| - g | > acc_gate g`` are treated as unusable accelerometer samples; optional
+        ``static`` (0: the blend is fed back per sample, eq. (8) discretised; 1: eq. (14) read as
+        written, a static output weight, the state being the integrator of eq. (14)).
     state : (6,) float64
         Read and written: roll, pitch, yaw, rad (ZYX, NED), and the integrals ``I``, rad/s; in: before
-        the first sample, out: after the last (for streaming).
+        the first sample, out: after the last (for streaming). With ``static`` the angles are the
+        integrator's, not the output's.
     out : (N, 4) float64
         Written: sensor-to-earth quaternion (NED) of the estimate after each sample.
     euler_out, bias_out : (N, 3) or (0, 3) float64
         Written when not empty: the Euler estimate, rad; the Euler-rate bias estimate ``-I``, rad/s.
     """
-    dt = coef[0]
-    alpha = coef[1]
-    kp = coef[2]
-    ki = coef[3]
+    dt, alpha, kp, ki = coef[0], coef[1], coef[2], coef[3]
     use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
     gate = coef[5] if coef.shape[0] > 5 else math.inf
     g_ref = coef[6] if coef.shape[0] > 6 else 1.0
+    static = coef.shape[0] > 7 and coef[7] != 0.0
     w_euler = euler_out.shape[0] == gyr.shape[0]
     w_bias = bias_out.shape[0] == gyr.shape[0]
     blend = 1.0 - alpha
-    phi = state[0]
-    th = state[1]
-    psi = state[2]
-    i0 = state[3]
-    i1 = state[4]
-    i2 = state[5]
+    phi, th, psi = state[0], state[1], state[2]
+    i0, i1, i2 = state[3], state[4], state[5]
     for i in range(gyr.shape[0]):
         p, q, r = read_rate(gyr, i)
         sp = math.sin(phi)
@@ -138,27 +197,18 @@ def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
         d0 = p + u * math.sin(th) / ct
         d1 = q * cp - r * sp
         d2 = u / ct
-        # measurement angles, eqs. (4)-(6)
+        # measurement angles, eqs. (4)-(6); without a usable accelerometer sample no angle is corrected
         dx = -acc[i, 0]
         dy = -acc[i, 1]
         dz = -acc[i, 2]
         an, acc_ok = sq_norm_ok(dx, dy, dz)
         if acc_ok and gate < math.inf:
             acc_ok = abs(math.sqrt(an) - g_ref) <= gate * g_ref
-        mx = 0.0
-        my = 0.0
-        mz = 0.0
-        mag_ok = False
-        if use_mag:
-            mx, my, mz, _ = read_vec(mag, i)
-            _, mag_ok = sq_norm_ok(mx, my, mz)
-        yaw_ok = False
+        mx, my, mz, mag_ok = _read_mag(mag, i, use_mag)
+        yaw_ok = acc_ok and mag_ok
         phi_a = 0.0
         th_a = 0.0
         psi_m = 0.0
-        e0 = 0.0
-        e1 = 0.0
-        e2 = 0.0
         if acc_ok:
             phi_a = math.atan2(dy, dz)
             spa = math.sin(phi_a)
@@ -166,28 +216,20 @@ def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
             th_a = math.atan2(-dx, dy * spa + dz * cpa)
             e0 = _wrap(phi_a - phi)
             e1 = _wrap(th_a - th)
-            if mag_ok:
-                sta = math.sin(th_a)
-                cta = math.cos(th_a)
-                psi_m = math.atan2(mz * spa - my * cpa, mx * cta + my * sta * spa + mz * sta * cpa)
+            e2 = 0.0
+            if yaw_ok:
+                psi_m = _mag_yaw(mx, my, mz, spa, cpa, math.sin(th_a), math.cos(th_a))
                 e2 = _wrap(psi_m - psi)
-                yaw_ok = True
-        elif mag_ok:
-            st = math.sin(th)
-            ct2 = math.cos(th)
-            psi_m = math.atan2(mz * sp - my * cp, mx * ct2 + my * st * sp + mz * st * cp)
-            e2 = _wrap(psi_m - psi)
-            yaw_ok = True
-        if acc_ok:
+            if static:
+                # eq. (14): the PI acts on x_a - x_hat = alpha (x_a - integrator)
+                e0 *= alpha
+                e1 *= alpha
+                e2 *= alpha
             # eqs. (10), (12): PI on the angle error (roll, pitch; yaw when observed)
-            i0 += ki * e0 * dt
-            i1 += ki * e1 * dt
+            i0, d0 = _pi_step(e0, i0, d0, kp, ki, dt)
+            i1, d1 = _pi_step(e1, i1, d1, kp, ki, dt)
             if yaw_ok:
-                i2 += ki * e2 * dt
-            d0 += kp * e0
-            d1 += kp * e1
-            if yaw_ok:
-                d2 += kp * e2
+                i2, d2 = _pi_step(e2, i2, d2, kp, ki, dt)
         d0 += i0
         d1 += i1
         d2 += i2
@@ -207,35 +249,27 @@ def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
             th = -_PI - th
             phi += _PI
             psi += _PI
-        # eqs. (8), (14): linear blend with the measurement angles
+        # eqs. (8), (14): linear blend with the measurement angles, fed back (per sample) or static
+        o0, o1, o2 = phi, th, psi
         if acc_ok and blend != 0.0:
-            phi += blend * _wrap(phi_a - phi)
-            th += blend * _wrap(th_a - th)
+            o0 = _blend(phi, phi_a, blend)
+            o1 = _blend(th, th_a, blend)
             if yaw_ok:
-                psi += blend * _wrap(psi_m - psi)
-        phi = _wrap(phi)
-        psi = _wrap(psi)
+                o2 = _blend(psi, psi_m, blend)
+        o0 = _wrap(o0)
+        o2 = _wrap(o2)
+        if static:
+            phi = _wrap(phi)
+            psi = _wrap(psi)
+        else:
+            phi, th, psi = o0, o1, o2
         if w_euler:
-            euler_out[i, 0] = phi
-            euler_out[i, 1] = th
-            euler_out[i, 2] = psi
-        # q = q_z(psi) q_y(theta) q_x(phi)
-        c1 = math.cos(0.5 * phi)
-        s1 = math.sin(0.5 * phi)
-        c2 = math.cos(0.5 * th)
-        s2 = math.sin(0.5 * th)
-        c3 = math.cos(0.5 * psi)
-        s3 = math.sin(0.5 * psi)
-        out[i, 0] = c1 * c2 * c3 + s1 * s2 * s3
-        out[i, 1] = s1 * c2 * c3 - c1 * s2 * s3
-        out[i, 2] = c1 * s2 * c3 + s1 * c2 * s3
-        out[i, 3] = c1 * c2 * s3 - s1 * s2 * c3
-    state[0] = phi
-    state[1] = th
-    state[2] = psi
-    state[3] = i0
-    state[4] = i1
-    state[5] = i2
+            euler_out[i, 0] = o0
+            euler_out[i, 1] = o1
+            euler_out[i, 2] = o2
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = _quat_zyx(o0, o1, o2)
+    state[0], state[1], state[2] = phi, th, psi
+    state[3], state[4], state[5] = i0, i1, i2
 
 
 def quat_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
@@ -260,7 +294,7 @@ def euler_zyx_from_quat(q: np.ndarray) -> np.ndarray:
 
 def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp: float = 0.0,
                         ki: float = 0.0, detailed: bool = False, acc_gate: float = math.inf,
-                        g_ref: float = 9.80665):
+                        g_ref: float = 9.80665, static: bool = False):
     """Run the complementary-filter kernel on raw arrays (NED working frame).
 
     ``alpha < 1, kp = ki = 0`` is the LCF, ``alpha = 1`` the NCF, both the CCF.
@@ -286,6 +320,9 @@ def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp
         inf (default): never, as the paper.
     g_ref : float > 0
         Gravity in the accelerometer's unit.
+    static : bool
+        False (default): the blend is fed back each sample (``alpha`` per sample); True: eq. (14) as
+        written, ``x_hat = alpha x_int + (1 - alpha) x_a`` with the PI driven by ``x_a - x_hat``.
 
     Returns
     -------
@@ -302,12 +339,14 @@ def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp
     x0 = np.asarray(euler0, dtype=np.float64).reshape(-1)
     if x0.shape != (3,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"{own}: euler0 must be a finite (3,) array of radians, got {euler0!r}")
-    return _run_arrays(gyr, acc, mag, _coef(dt, alpha, kp, ki, mag.shape[0] > 0, acc_gate, g_ref), x0, detailed)
+    return _run_arrays(gyr, acc, mag, _coef(dt, alpha, kp, ki, mag.shape[0] > 0, acc_gate, g_ref, bool(static)),
+                       x0, detailed)
 
 
-def _coef(dt: float, alpha: float, kp: float, ki: float, has_mag: bool, acc_gate: float, g_ref: float) -> np.ndarray:
+def _coef(dt: float, alpha: float, kp: float, ki: float, has_mag: bool, acc_gate: float, g_ref: float,
+          static: bool = False) -> np.ndarray:
     """The kernel's coefficient array (the only place it is built)."""
-    return np.array([dt, alpha, kp, ki, 1.0 if has_mag else 0.0, acc_gate, g_ref])
+    return np.array([dt, alpha, kp, ki, 1.0 if has_mag else 0.0, acc_gate, g_ref, 1.0 if static else 0.0])
 
 
 def _run_arrays(gyr, acc, mag, coef: np.ndarray, euler0: np.ndarray, detailed: bool):
@@ -332,6 +371,12 @@ _KI = dict(bounds=(1e-3, 10.0), scale="log", unit="1/s^2", doc="integral gain of
            allowed=NONNEG)
 _ALPHA_RATE = Param("alpha_rate_hz", 0.0, unit="Hz", allowed=NONNEG,
                     doc="rate at which alpha is a per-sample weight (0: the recording's rate)")
+#: how ``alpha`` enters: see the module docstring, section "alpha_mode"
+ALPHA_MODES = ("per_sample", "tau", "static")
+_ALPHA_MODE = Param("alpha_mode", "per_sample", choices=ALPHA_MODES,
+                    doc="per_sample: alpha weights each sample (seed); tau: time constant tau_s; static: eq. (14)-(15)")
+_TAU = Param("tau_s", 0.1, unit="s", allowed=POSITIVE, eq="eq. (9)",
+             doc="time constant of the blend, eq. (9) (alpha_mode tau): alpha = tau / (tau + dt) per sample")
 
 
 def alpha_at_rate(alpha: float, alpha_rate_hz: float, dt: float) -> float:
@@ -344,6 +389,18 @@ def alpha_at_rate(alpha: float, alpha_rate_hz: float, dt: float) -> float:
         return alpha
     tau_s = alpha / (alpha_rate_hz * (1.0 - alpha))
     return tau_s / (tau_s + dt)
+
+
+def tau_gains(tau_s: float, kp: float, dt: float) -> tuple[float, float]:
+    """Per-sample blend weight and proportional gain of ``alpha_mode: tau`` at step ``dt`` (s).
+
+    ``alpha = tau / (tau + dt)``: the recursive LCF of eq. (8) is then the backward-Euler discretisation of
+    eq. (9)'s ``1 / (1 + tau s)`` at every rate, ``0 < alpha < 1`` for every ``tau > 0``. ``Kp`` (1/s) is
+    applied as ``(1 - exp(-Kp dt)) / dt``, the exact per-sample decay of ``x' = -Kp x``: the per-sample
+    correction stays below the whole error at any rate (the plain ``Kp dt`` exceeds 2, and the loop
+    oscillates without bound, above ``Kp = 2 / dt``: 100 1/s at 50 Hz).
+    """
+    return tau_s / (tau_s + dt), -math.expm1(-kp * dt) / dt
 
 
 _USE_MAG = Param("use_mag", True, doc="yaw from the magnetometer (true) or gyro only (false)")
@@ -366,8 +423,17 @@ class _ComplementaryBase(AttitudeFilter):
 
     def _coef(self, has_mag: bool, g_ref: float, dt: float) -> np.ndarray:
         alpha, kp, ki = self._gains()
-        alpha = alpha_at_rate(alpha, float(self.values.get("alpha_rate_hz", 0.0)), dt)
-        return _coef(dt, alpha, kp, ki, has_mag, float(self.values.get("acc_gate", math.inf)), g_ref)
+        mode = self.values.get("alpha_mode", "per_sample")
+        rate_hz = float(self.values.get("alpha_rate_hz", 0.0))
+        if mode != "per_sample" and rate_hz != 0.0:
+            raise ValueError(f"{self.name}: alpha_rate_hz={rate_hz} applies to alpha_mode per_sample only, "
+                             f"got alpha_mode {mode!r} (set alpha_rate_hz: 0)")
+        if mode == "tau":
+            alpha, kp = tau_gains(float(self.values["tau_s"]), kp, dt)
+        else:
+            alpha = alpha_at_rate(alpha, rate_hz, dt)
+        return _coef(dt, alpha, kp, ki, has_mag, float(self.values.get("acc_gate", math.inf)), g_ref,
+                     static=mode == "static")
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         from objectives.attitude.filters.ekf import gravity_in_units
@@ -401,7 +467,7 @@ class LCF(_ComplementaryBase):
     """Linear complementary filter, eq. (8). Parameter ``alpha`` (default 0.98), ``use_mag``."""
 
     name = "lcf"
-    decl = ParamSet("lcf", (Param("alpha", 0.98, (0.5, 0.9999), **_ALPHA), _USE_MAG, _ALPHA_RATE))
+    decl = ParamSet("lcf", (Param("alpha", 0.98, (0.5, 0.9999), **_ALPHA), _USE_MAG, _ALPHA_RATE, _ALPHA_MODE, _TAU))
 
     def _gains(self):
         return float(self.values["alpha"]), 0.0, 0.0
@@ -422,7 +488,7 @@ class CCF(_ComplementaryBase):
 
     name = "ccf"
     decl = ParamSet("ccf", (Param("alpha", 0.7, (0.5, 0.9999), **_ALPHA), Param("Kp", 25.0, **_KP),
-                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE, _ALPHA_RATE))
+                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE, _ALPHA_RATE, _ALPHA_MODE, _TAU))
 
     def _gains(self):
         v = self.values
