@@ -76,6 +76,10 @@ def test_run_directory_contents(tmp_path):
     assert cfg["parallel"] == {"backend": "serial", "n_jobs": 2, "address": None}
     best = yaml.safe_load((d / "best.yaml").read_text())
     assert best["fitness"] == res.best_fitness and set(best["params"]) == {"x0", "x1", "x2", "x3"}
+    # the result holds that best point; its best_* views derive from it
+    assert res.best.params == best["params"] == res.best_params and res.best.metrics == res.best_metrics
+    assert (best["found"]["stage"], best["found"]["generation"], best["found"]["eval"]) == \
+        (res.best.stage, res.best.generation, res.best.eval)
     with pytest.raises(Exception, match="exists and is not empty"):
         run(job(tmp_path), run_dir=d, quiet=True)
 
