@@ -32,7 +32,7 @@ import numpy as np
 
 from tuner.config import ConfigError, RunConfig, config_from_dict
 from tuner.evaluate import EvalRecord, Evaluator
-from tuner.loop import Generation, SeededCall, minimize
+from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
 from tuner.rundir import (
@@ -55,17 +55,46 @@ __all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best
 
 @dataclass(frozen=True)
 class RunResult:
-    """What a finished (or interrupted) run produced."""
+    """What a finished (or interrupted) run produced.
+
+    Attributes
+    ----------
+    run_dir : Path
+        The run directory.
+    status : str
+        ``meta.json``'s status (``finished``, ``interrupted``, ...).
+    best : BestPoint or None
+        The best successful evaluation (as ``best.yaml`` holds it); None when none succeeded.
+    n_evals, generations : int
+        Evaluations and generations done.
+    stop_reason : str
+        Why the run stopped.
+    extra : dict
+        What the objective's finalisation returned.
+    """
 
     run_dir: Path
     status: str
-    best_params: dict[str, Any]
-    best_fitness: float
-    best_metrics: dict[str, Any]
+    best: BestPoint | None
     n_evals: int
     generations: int
     stop_reason: str
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def best_params(self) -> dict[str, Any]:
+        """Physical values of the best point (empty when none succeeded)."""
+        return dict(self.best.params) if self.best else {}
+
+    @property
+    def best_fitness(self) -> float:
+        """Its fitness (inf when none succeeded)."""
+        return self.best.fitness if self.best else math.inf
+
+    @property
+    def best_metrics(self) -> dict[str, Any]:
+        """Its metrics (empty when none succeeded)."""
+        return dict(self.best.metrics) if self.best else {}
 
 
 def read_meta(run_dir: Path) -> dict[str, Any]:
@@ -373,9 +402,7 @@ class Run:
                 self.progress(f"warning: live report not written: {type(exc).__name__}: {exc}")
 
     def _result(self, status: str, n_evals: int, gens: int, reason: str, extra=None) -> RunResult:
-        b = self.best
-        return RunResult(self.dir, status, dict(b.params) if b else {}, b.fitness if b else math.inf,
-                         dict(b.metrics) if b else {}, n_evals, gens, reason, dict(extra or {}))
+        return RunResult(self.dir, status, self.best, n_evals, gens, reason, dict(extra or {}))
 
 
 def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | None):

@@ -1,4 +1,14 @@
-"""A small rastrigin job for the run and run-directory tests."""
+"""Small jobs for the run and run-directory tests, and the pieces of a run killed and resumed from the CLI."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import yaml
 
 from tuner.config import config_from_dict
 
@@ -12,3 +22,46 @@ def rastrigin_job(tmp_path, dim: int, population: int, generations: int, **over)
     for k, v in over.items():
         raw[k] = {**raw.get(k, {}), **v} if isinstance(v, dict) else v
     return config_from_dict(raw, source=str(tmp_path / "job.yaml"), base_dir=tmp_path)
+
+
+def write_function_job(tmp_path, name: str, seed: int, objective: dict, optimizer: dict) -> Path:
+    """Write ``<tmp_path>/<name>.yaml``: a serial run of a test-function objective; returns its path."""
+    cfg = {"name": name, "seed": seed, "objective": {"kind": "function", **objective}, "optimizer": optimizer,
+           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
+    p = tmp_path / f"{name}.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+def load_job(path, tmp_path):
+    """The config of a job file written by :func:`write_function_job`."""
+    return config_from_dict(yaml.safe_load(Path(path).read_text()), base_dir=tmp_path)
+
+
+def start_cli_run(job_file, run_dir, **popen) -> subprocess.Popen:
+    """``python -m tuner run <job_file> --run-dir <run_dir> -q`` in a child process (output discarded
+    unless ``popen`` says otherwise)."""
+    kw = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, **popen}
+    return subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
+                            **kw)
+
+
+def kill_after_generations(proc: subprocess.Popen, run_dir, generations: int, timeout_s: float = 60.0) -> None:
+    """SIGKILL ``proc`` once the checkpoint of ``run_dir`` counts ``generations`` (or after ``timeout_s``)."""
+    ck = Path(run_dir) / "checkpoint.json"
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        try:
+            if json.loads(ck.read_text())["generations"] >= generations:
+                break
+        except (OSError, ValueError, KeyError):  # not written yet, or caught mid-replace
+            pass
+        time.sleep(0.02)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+
+
+def resume_cli(run_dir, *args: str) -> subprocess.CompletedProcess:
+    """``python -m tuner resume <run_dir> [args]`` to completion, output captured."""
+    return subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), *args], capture_output=True,
+                          text=True, timeout=120)

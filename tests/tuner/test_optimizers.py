@@ -91,6 +91,21 @@ def test_state_round_trip_continues_identically(method):
     assert a.best_f == b.best_f
 
 
+@pytest.mark.parametrize("method", sorted(OPTIMIZERS))
+def test_state_of_another_class_or_untagged_is_refused(method):
+    """A state names its class; ``from_state`` of another optimiser, or of a state without the tag,
+    raises ValueError instead of building a half-filled object. The keys survive in order."""
+    state = OPTIMIZERS[method](3, np.random.default_rng(1), population=6, generations=5).state()
+    assert list(state)[-1] == "class" and state["class"] == OPTIMIZERS[method].__name__
+    other = next(cls for name, cls in sorted(OPTIMIZERS.items()) if cls.__name__ != state["class"])
+    with pytest.raises(ValueError, match=f"not of a {other.__name__}"):
+        other.from_state(state)
+    with pytest.raises(ValueError, match="not of a"):
+        OPTIMIZERS[method].from_state({k: v for k, v in state.items() if k != "class"})
+    again = OPTIMIZERS[method].from_state(state).state()
+    assert list(again) == list(state)
+
+
 def test_pso_update_matches_equation():
     """One step of the seed PSO equation computed by hand with the same random numbers."""
     rng = np.random.default_rng(5)

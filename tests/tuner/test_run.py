@@ -1,10 +1,8 @@
 """Runs end to end: reproducibility across backends, kill and resume, failures recorded, refinement."""
 
 import json
-import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -13,8 +11,14 @@ import pandas as pd
 import pytest
 import yaml
 
-from tests.tuner.jobs import rastrigin_job
-from tuner.config import config_from_dict
+from tests.tuner.jobs import (
+    kill_after_generations,
+    load_job,
+    rastrigin_job,
+    resume_cli,
+    start_cli_run,
+    write_function_job,
+)
 from tuner.objective import PENALTY
 from tuner.run import resume, run
 
@@ -72,6 +76,10 @@ def test_run_directory_contents(tmp_path):
     assert cfg["parallel"] == {"backend": "serial", "n_jobs": 2, "address": None}
     best = yaml.safe_load((d / "best.yaml").read_text())
     assert best["fitness"] == res.best_fitness and set(best["params"]) == {"x0", "x1", "x2", "x3"}
+    # the result holds that best point; its best_* views derive from it
+    assert res.best.params == best["params"] == res.best_params and res.best.metrics == res.best_metrics
+    assert (best["found"]["stage"], best["found"]["generation"], best["found"]["eval"]) == \
+        (res.best.stage, res.best.generation, res.best.eval)
     with pytest.raises(Exception, match="exists and is not empty"):
         run(job(tmp_path), run_dir=d, quiet=True)
 
@@ -94,40 +102,20 @@ def test_refinement_stages_narrow_bounds(tmp_path):
 
 
 def _write_job(tmp_path, name, **objective):
-    cfg = {"name": name, "seed": 11,
-           "objective": {"kind": "function", "function": "rosenbrock", "dim": 3, **objective},
-           "optimizer": {"method": "de", "population": 6, "generations": 12},
-           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
-    p = tmp_path / f"{name}.yaml"
-    p.write_text(yaml.safe_dump(cfg))
-    return p
+    return write_function_job(tmp_path, name, 11, {"function": "rosenbrock", "dim": 3, **objective},
+                              {"method": "de", "population": 6, "generations": 12})
 
 
 def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
-    ref = run(config_from_dict(yaml.safe_load(_write_job(tmp_path, "ref").read_text()), base_dir=tmp_path),
-              run_dir=tmp_path / "ref", quiet=True)
-    job_file = _write_job(tmp_path, "killed", sleep_s=0.02)
+    ref = run(load_job(_write_job(tmp_path, "ref"), tmp_path), run_dir=tmp_path / "ref", quiet=True)
     run_dir = tmp_path / "killed"
-    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    kill_after_generations(start_cli_run(_write_job(tmp_path, "killed", sleep_s=0.02), run_dir), run_dir, 3)
     ck = run_dir / "checkpoint.json"
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        if ck.exists():
-            try:
-                if json.loads(ck.read_text())["generations"] >= 3:
-                    break
-            except Exception:
-                pass
-        time.sleep(0.02)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
     done = json.loads(ck.read_text())["n_evals"]
     assert 0 < done < 72, "the run must have been killed part-way"
     meta = yaml.safe_load((run_dir / "meta.json").read_text())
     assert meta["status"] == "running"  # killed: no chance to say otherwise
-    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q"], capture_output=True,
-                         text=True, timeout=120)
+    out = resume_cli(run_dir, "-q")
     assert out.returncode == 0, out.stderr
     res = yaml.safe_load((run_dir / "best.yaml").read_text())
     assert res["params"] == ref.best_params and res["fitness"] == ref.best_fitness
@@ -138,8 +126,7 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
 def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     job_file = _write_job(tmp_path, "int", sleep_s=0.05)
     run_dir = tmp_path / "int"
-    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = start_cli_run(job_file, run_dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     ck = run_dir / "checkpoint.json"
     deadline = time.time() + 60
     while not ck.exists() and time.time() < deadline:
@@ -150,5 +137,5 @@ def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     assert yaml.safe_load((run_dir / "meta.json").read_text())["status"] == "interrupted"
     res = resume(run_dir, quiet=True)
     assert res.status == "finished" and res.n_evals == 72
-    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir)], capture_output=True, text=True)
+    out = resume_cli(run_dir)
     assert out.returncode == 2 and "already finished" in out.stderr

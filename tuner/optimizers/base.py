@@ -169,23 +169,32 @@ class Optimizer:
     # --- state --------------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
         """Everything needed to resume, RNG state included (a picklable dict)."""
-        d = {k: copy.deepcopy(v) for k, v in self.__dict__.items() if k != "rng"}
-        d["rng"] = copy.deepcopy(self.rng.bit_generator.state)
-        d["rng_class"] = type(self.rng.bit_generator).__name__
-        d["class"] = type(self).__name__
-        return d
+        fields = {k: copy.deepcopy(v) for k, v in self.__dict__.items() if k != "rng"}
+        return self._tagged(fields, rng=copy.deepcopy(self.rng.bit_generator.state),
+                            rng_class=type(self.rng.bit_generator).__name__)
 
     @classmethod
     def from_state(cls, state: dict[str, Any]) -> Optimizer:
-        state = dict(state)
-        if state.pop("class") != cls.__name__:
-            raise ValueError(f"state is not of a {cls.__name__}")
-        bitgen = getattr(np.random, state.pop("rng_class"))()
-        bitgen.state = state.pop("rng")
-        obj = cls.__new__(cls)
-        obj.__dict__.update(state)
+        obj = cls._bare(state, without=("rng", "rng_class"))
+        bitgen = getattr(np.random, state["rng_class"])()
+        bitgen.state = state["rng"]
         obj.rng = np.random.Generator(bitgen)
         obj._restore()
+        return obj
+
+    def _tagged(self, fields: dict[str, Any], **extra: Any) -> dict[str, Any]:
+        """``fields`` (the instance's own, as :meth:`state` keeps them), then ``extra``, then the class tag
+        that :meth:`_bare` checks."""
+        return {**fields, **extra, "class": type(self).__name__}
+
+    @classmethod
+    def _bare(cls, state: dict[str, Any], without: tuple[str, ...] = ()) -> Any:
+        """An instance made without ``__init__`` whose fields are ``state``'s, less its class tag and the
+        keys ``without``; ValueError when the tag names another class."""
+        if state.get("class") != cls.__name__:
+            raise ValueError(f"state is not of a {cls.__name__}")
+        obj = cls.__new__(cls)
+        obj.__dict__.update({k: v for k, v in state.items() if k != "class" and k not in without})
         return obj
 
     def _restore(self) -> None:
@@ -197,10 +206,8 @@ class WrapperOptimizer(Optimizer):
     fields plus the inner optimiser's state; subclasses name the inner class of a state."""
 
     def state(self) -> dict[str, Any]:
-        d = {k: v for k, v in self.__dict__.items() if k not in ("rng", "inner")}
-        d["inner"] = self.inner.state()
-        d["class"] = type(self).__name__
-        return d
+        fields = {k: v for k, v in self.__dict__.items() if k not in ("rng", "inner")}
+        return self._tagged(fields, inner=self.inner.state())
 
     @classmethod
     def _inner_class(cls, fields: dict[str, Any]) -> type:  # pragma: no cover - abstract
@@ -208,11 +215,7 @@ class WrapperOptimizer(Optimizer):
 
     @classmethod
     def from_state(cls, state: dict[str, Any]) -> WrapperOptimizer:
-        state = dict(state)
-        if state.pop("class") != cls.__name__:
-            raise ValueError(f"state is not of a {cls.__name__}")
-        obj = cls.__new__(cls)
-        obj.__dict__.update(state)
-        obj.inner = cls._inner_class(state).from_state(state["inner"])
+        obj = cls._bare(state)
+        obj.inner = cls._inner_class(obj.__dict__).from_state(state["inner"])
         obj.rng = obj.inner.rng
         return obj

@@ -100,18 +100,12 @@ class CMAES(Optimizer):
 
     def state(self) -> dict[str, Any]:
         # the strategy (with our generator inside) as bytes; the generator is kept in sync with it
-        d = {k: v for k, v in self.__dict__.items() if k not in ("rng", "es")}
-        d["es"] = pickle.dumps(self.es)
-        d["class"] = type(self).__name__
-        return d
+        fields = {k: v for k, v in self.__dict__.items() if k not in ("rng", "es")}
+        return self._tagged(fields, es=pickle.dumps(self.es))
 
     @classmethod
     def from_state(cls, state: dict[str, Any]) -> CMAES:
-        state = dict(state)
-        if state.pop("class") != cls.__name__:
-            raise ValueError(f"state is not of a {cls.__name__}")
-        obj = cls.__new__(cls)
-        obj.__dict__.update(state)
+        obj = cls._bare(state)
         obj.es = pickle.loads(state["es"])
         obj.rng = obj.es.opts["randn"].rng
         return obj

@@ -9,13 +9,32 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 import numpy as np
+from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters._scalar import read_unit
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import POSITIVE, ParamSet, check_number, imu_arrays, unit_quaternion
 
-__all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays"]
+__all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag"]
+
+
+@njit(cache=True, inline="always")
+def io_flags(use_mag_coef, gyr, mag, bias_out):
+    """The kernels' ``(use_mag, write_bias)``: the magnetometer is used when its coefficient is not 0 and
+    it has a row per gyro sample; the bias is written when ``bias_out`` has a row per sample."""
+    n = gyr.shape[0]
+    return use_mag_coef != 0.0 and mag.shape[0] == n, bias_out.shape[0] == n
+
+
+@njit(cache=True, inline="always")
+def read_mag(mag, i, use_mag):
+    """The kernels' magnetometer sample ``i``: ``(x, y, z, ok)``, the unit field when ``use_mag`` and the
+    row is usable (:func:`~objectives.attitude.filters._scalar.read_unit`), else ``(0, 0, 0, False)``."""
+    if use_mag:
+        return read_unit(mag, i)
+    return 0.0, 0.0, 0.0, False
 
 
 def run_bias_kernel(kernel: Any, coef: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,
@@ -44,8 +63,10 @@ def batch_on_arrays(decl: ParamSet, kernel: Any, coef: Any, values: dict, gyr, a
 class BiasKernelFilter(AttitudeFilter):
     """Base of Madgwick and Mahony (NWU working frame, ``gyr_bias`` diagnostic when the bias is on).
 
-    Subclasses set ``kernel`` and ``coef`` (as staticmethods: ``coef(values, dt, has_mag) -> array``)
-    and ``bias_param``, the parameter whose positive value turns the bias estimate on.
+    Subclasses name, as class keywords, their ``kernel``, ``coef`` (``coef(values, dt, has_mag) -> array``)
+    and ``bias_param``, the parameter whose positive value turns the bias estimate on::
+
+        class Madgwick(BiasKernelFilter, kernel=_madgwick_kernel, coef=_coef, bias_param="zeta"): ...
     """
 
     working_frame = "NWU"
@@ -53,6 +74,14 @@ class BiasKernelFilter(AttitudeFilter):
     kernel: ClassVar[Any]
     coef: ClassVar[Any]
     bias_param: ClassVar[str]
+
+    def __init_subclass__(cls, kernel: Any = None, coef: Any = None, bias_param: str | None = None,
+                          **kwargs: Any) -> None:
+        if kernel is not None:
+            cls.kernel = staticmethod(kernel)
+            cls.coef = staticmethod(coef)
+            cls.bias_param = bias_param
+        super().__init_subclass__(**kwargs)
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         v = self.values

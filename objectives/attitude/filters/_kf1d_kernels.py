@@ -86,6 +86,28 @@ def _step(q0, q2, w, dt, exact):
     return q0 - h * q2, q2 + h * q0
 
 
+@njit(cache=True, inline="always")
+def _unit_acc(acc_x, acc_z, up_sign, k):
+    """Sample ``k``'s specific force in the x-z plane (times ``up_sign``), normalised, and whether it is
+    usable (norm > 0; otherwise returned as read)."""
+    ax = up_sign * acc_x[k]
+    az = up_sign * acc_z[k]
+    nrm = math.sqrt(ax * ax + az * az)
+    if nrm > 0.0:
+        return ax / nrm, az / nrm, True
+    return ax, az, False
+
+
+@njit(cache=True, inline="always")
+def _emit_tilt(q0, q2, out_theta, i):
+    """Normalise ``(q0, q2)``, write its angle ``2 atan2(q2, q0)`` (rad) as ``out_theta[i]``, return it."""
+    inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
+    q0 *= inv
+    q2 *= inv
+    out_theta[i] = 2.0 * math.atan2(q2, q0)
+    return q0, q2
+
+
 @njit(cache=True)
 def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, state, exact, out_theta, out_bias):
     """Mahony's IMU update (sample code) restricted to rotations about y; see the module docstring.
@@ -100,12 +122,8 @@ def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, state, exact, out_
     integ = state[2]
     for k in range(n - 1):
         w = gyr_y[k]
-        ax = up_sign * acc_x[k]
-        az = up_sign * acc_z[k]
-        nrm = math.sqrt(ax * ax + az * az)
-        if nrm > 0.0:
-            ax /= nrm
-            az /= nrm
+        ax, az, acc_ok = _unit_acc(acc_x, acc_z, up_sign, k)
+        if acc_ok:
             vx = -2.0 * q0 * q2           # estimated up direction (sample code: halfv * 2)
             vz = q0 * q0 - q2 * q2
             e = az * vx - ax * vz          # y component of a x v
@@ -116,10 +134,7 @@ def mahony1d_kernel(gyr_y, acc_x, acc_z, up_sign, kp, ki, dt, state, exact, out_
                 integ = 0.0
             w += kp * e
         q0, q2 = _step(q0, q2, w, dt, exact)
-        inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
-        q0 *= inv
-        q2 *= inv
-        out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
+        q0, q2 = _emit_tilt(q0, q2, out_theta, k + 1)
         out_bias[k + 1] = -integ
     state[0] = q0
     state[1] = q2
@@ -137,14 +152,10 @@ def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, state, exact, out_
     q2 = state[1]
     for k in range(n - 1):
         w = gyr_y[k]
-        ax = up_sign * acc_x[k]
-        az = up_sign * acc_z[k]
-        nrm = math.sqrt(ax * ax + az * az)
+        ax, az, acc_ok = _unit_acc(acc_x, acc_z, up_sign, k)
         d0 = 0.0
         d2 = 0.0
-        if nrm > 0.0:
-            ax /= nrm
-            az /= nrm
+        if acc_ok:
             # gradient J^T f of the sample code with q1 = q3 = 0 and ay = 0
             s0 = 4.0 * q0 * q2 * q2 + 2.0 * q2 * ax
             s2 = 4.0 * q0 * q0 * q2 + 2.0 * q0 * ax - 4.0 * q2 + 8.0 * q2 * q2 * q2 + 4.0 * q2 * az
@@ -158,10 +169,7 @@ def madgwick1d_kernel(gyr_y, acc_x, acc_z, up_sign, beta, dt, state, exact, out_
             q2 += d2 * dt
         else:
             q0, q2 = q0 + (-0.5 * q2 * w + d0) * dt, q2 + (0.5 * q0 * w + d2) * dt
-        inv = 1.0 / math.sqrt(q0 * q0 + q2 * q2)
-        q0 *= inv
-        q2 *= inv
-        out_theta[k + 1] = 2.0 * math.atan2(q2, q0)
+        q0, q2 = _emit_tilt(q0, q2, out_theta, k + 1)
     state[0] = q0
     state[1] = q2
 

@@ -80,6 +80,20 @@ _FM = {"nsz", "arcp", "contract", "reassoc"}
 
 
 # ----------------------------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+def _put3(D, j, dx, dy, dz):
+    """``D[j, :3] = (dx, dy, dz)``."""
+    D[j, 0] = dx
+    D[j, 1] = dy
+    D[j, 2] = dz
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+def _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz):
+    """The six second-moment sums (xx, xy, xz, yy, yz, zz) plus the outer product of ``(dx, dy, dz)``."""
+    return cxx + dx * dx, cxy + dx * dy, cxz + dx * dz, cyy + dy * dy, cyz + dy * dz, czz + dz * dz
+
+
 @njit(cache=True, error_model="numpy", fastmath=_FM)
 def _wmean_cov(Y, m, r0, r1, r2, r3, D):
     """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3) and covariance.
@@ -100,18 +114,11 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D):
         cxx = cxy = cxz = cyy = cyz = czz = 0.0
         for j in range(m):
             dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
-            D[j, 0] = dx
-            D[j, 1] = dy
-            D[j, 2] = dz
+            _put3(D, j, dx, dy, dz)
             sx += dx
             sy += dy
             sz += dz
-            cxx += dx * dx
-            cxy += dx * dy
-            cxz += dx * dz
-            cyy += dy * dy
-            cyz += dy * dz
-            czz += dz * dz
+            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
         sx *= w
         sy *= w
         sz *= w
@@ -127,15 +134,8 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D):
             for j in range(m):
                 dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
                 dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
-                D[j, 0] = dx
-                D[j, 1] = dy
-                D[j, 2] = dz
-                cxx += dx * dx
-                cxy += dx * dy
-                cxz += dx * dz
-                cyy += dy * dy
-                cyz += dy * dz
-                czz += dz * dz
+                _put3(D, j, dx, dy, dz)
+                cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
             break
     return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
 

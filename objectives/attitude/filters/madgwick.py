@@ -34,18 +34,8 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays
-from objectives.attitude.filters._scalar import (
-    FASTMATH,
-    load_q_bias,
-    normalized_q,
-    read_rate,
-    read_unit,
-    rotate_sensor_to_earth,
-    store_q_bias,
-    write_q,
-    write_vec,
-)
+from objectives.attitude.filters import _scalar as sc
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays, io_flags, read_mag
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
@@ -55,7 +45,7 @@ VARIANTS = {"paper": 2.0, "original_c": 1.0}
 
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, fastmath=sc.FASTMATH)
 def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
 
@@ -74,17 +64,13 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     bias_out : (N, 3) or (0, 3) float64
         Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample.
     """
-    dt = coef[0]
-    beta = coef[1]
-    zeta = coef[2]
-    k = coef[3]
-    use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
-    write_bias = bias_out.shape[0] == gyr.shape[0]
-    q0_, q1, q2, q3, bx_, by_, bz_ = load_q_bias(state)
+    dt, beta, zeta, k = coef[0], coef[1], coef[2], coef[3]
+    use_mag, write_bias = io_flags(coef[4], gyr, mag, bias_out)
+    q0_, q1, q2, q3, bx_, by_, bz_ = sc.load_q_bias(state)
     for i in range(gyr.shape[0]):
-        gx, gy, gz = read_rate(gyr, i)
+        gx, gy, gz = sc.read_rate(gyr, i)
         if write_bias:
-            write_vec(bias_out, i, bx_, by_, bz_)
+            sc.write_vec(bias_out, i, bx_, by_, bz_)
         # eq. 49: bias-compensated rate
         gx -= bx_
         gy -= by_
@@ -95,7 +81,7 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
         qd2 = 0.5 * (q0_ * gy - q1 * gz + q3 * gx)
         qd3 = 0.5 * (q0_ * gz + q1 * gy - q2 * gx)
 
-        ax, ay, az, acc_ok = read_unit(acc, i)
+        ax, ay, az, acc_ok = sc.read_unit(acc, i)
         if acc_ok:
             # eq. 25: f_g = R(q)^T (0, 0, 1) - a
             f1 = 2.0 * (q1 * q3 - q0_ * q2) - ax
@@ -106,15 +92,10 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
             s1 = 2.0 * q3 * f1 + 2.0 * q0_ * f2 - 4.0 * q1 * f3
             s2 = -2.0 * q0_ * f1 + 2.0 * q3 * f2 - 4.0 * q2 * f3
             s3 = 2.0 * q1 * f1 + 2.0 * q2 * f2
-            mx = 0.0
-            my = 0.0
-            mz = 0.0
-            mag_ok = False
-            if use_mag:
-                mx, my, mz, mag_ok = read_unit(mag, i)
+            mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
             if mag_ok:
                 # eq. 45: h = q (x) m (x) q*
-                hx, hy, hz = rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
+                hx, hy, hz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
                 # eq. 46 (paper: k = 2) or the C code's half-length field (k = 1)
                 tbx = k * math.sqrt(hx * hx + hy * hy)  # 2 b_x
                 tbz = k * hz  # 2 b_z
@@ -151,9 +132,9 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
         n1 = q1 + qd1 * dt
         n2 = q2 + qd2 * dt
         n3 = q3 + qd3 * dt
-        q0_, q1, q2, q3 = normalized_q(n0, n1, n2, n3)
-        write_q(out, i, q0_, q1, q2, q3)
-    store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
+        q0_, q1, q2, q3 = sc.normalized_q(n0, n1, n2, n3)
+        sc.write_q(out, i, q0_, q1, q2, q3)
+    sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
 
 
 #: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)
@@ -199,7 +180,7 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
     return batch_on_arrays(DECL, _madgwick_kernel, _coef, values, gyr, acc, mag, dt, q0, with_bias)
 
 
-class Madgwick(BiasKernelFilter):
+class Madgwick(BiasKernelFilter, kernel=_madgwick_kernel, coef=_coef, bias_param="zeta"):
     """Madgwick's gradient-descent filter; output sensor-to-earth in the recording's frame.
 
     Parameters
@@ -220,6 +201,3 @@ class Madgwick(BiasKernelFilter):
 
     name = "madgwick"
     decl = DECL
-    kernel = staticmethod(_madgwick_kernel)
-    coef = staticmethod(_coef)
-    bias_param = "zeta"

@@ -34,24 +34,14 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays
-from objectives.attitude.filters._scalar import (
-    FASTMATH,
-    load_q_bias,
-    normalized_q,
-    read_rate,
-    read_unit,
-    rotate_sensor_to_earth,
-    store_q_bias,
-    write_q,
-    write_vec,
-)
+from objectives.attitude.filters import _scalar as sc
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays, io_flags, read_mag
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Mahony", "mahony_batch", "DECL"]
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, fastmath=sc.FASTMATH)
 def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Mahony filter over whole arrays (see module docstring).
 
@@ -69,15 +59,12 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     bias_out : (N, 3) or (0, 3) float64
         Written when not empty: gyro bias estimate ``b = -I`` used at each sample, rad/s.
     """
-    dt = coef[0]
-    kp = coef[1]
-    ki = coef[2]
-    use_mag = coef[3] != 0.0 and mag.shape[0] == gyr.shape[0]
-    write_bias = bias_out.shape[0] == gyr.shape[0]
-    q0_, q1, q2, q3, ix, iy, iz = load_q_bias(state)
+    dt, kp, ki = coef[0], coef[1], coef[2]
+    use_mag, write_bias = io_flags(coef[3], gyr, mag, bias_out)
+    q0_, q1, q2, q3, ix, iy, iz = sc.load_q_bias(state)
     for i in range(gyr.shape[0]):
-        gx, gy, gz = read_rate(gyr, i)
-        ax, ay, az, acc_ok = read_unit(acc, i)
+        gx, gy, gz = sc.read_rate(gyr, i)
+        ax, ay, az, acc_ok = sc.read_unit(acc, i)
         if acc_ok:
             # predicted gravity direction v_hat = R(q)^T (0, 0, 1)
             vx = 2.0 * (q1 * q3 - q0_ * q2)
@@ -87,15 +74,10 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
             ex = ay * vz - az * vy
             ey = az * vx - ax * vz
             ez = ax * vy - ay * vx
-            mx = 0.0
-            my = 0.0
-            mz = 0.0
-            mag_ok = False
-            if use_mag:
-                mx, my, mz, mag_ok = read_unit(mag, i)
+            mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
             if mag_ok:
                 # earth-field reference b = (|h_xy|, 0, h_z), h = q (x) m (x) q*
-                hx, hy, bz = rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
+                hx, hy, bz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
                 bx = math.sqrt(hx * hx + hy * hy)
                 # predicted field direction w_hat = R(q)^T (bx, 0, bz)
                 wx = 2.0 * (bx * (0.5 - q2 * q2 - q3 * q3) + bz * (q1 * q3 - q0_ * q2))
@@ -116,7 +98,7 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
             gy += kp * ey
             gz += kp * ez
         if write_bias:
-            write_vec(bias_out, i, -ix, -iy, -iz)
+            sc.write_vec(bias_out, i, -ix, -iy, -iz)
         gx += ix
         gy += iy
         gz += iz
@@ -128,9 +110,9 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
         n1 = q1 + (q0_ * gx + q2 * gz - q3 * gy)
         n2 = q2 + (q0_ * gy - q1 * gz + q3 * gx)
         n3 = q3 + (q0_ * gz + q1 * gy - q2 * gx)
-        q0_, q1, q2, q3 = normalized_q(n0, n1, n2, n3)
-        write_q(out, i, q0_, q1, q2, q3)
-    store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
+        q0_, q1, q2, q3 = sc.normalized_q(n0, n1, n2, n3)
+        sc.write_q(out, i, q0_, q1, q2, q3)
+    sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
 
 
 #: the one declaration of Mahony's parameters (defaults, search space, validation, docs)
@@ -169,7 +151,7 @@ def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
     return batch_on_arrays(DECL, _mahony_kernel, _coef, {"Kp": kp, "Ki": ki}, gyr, acc, mag, dt, q0, with_bias)
 
 
-class Mahony(BiasKernelFilter):
+class Mahony(BiasKernelFilter, kernel=_mahony_kernel, coef=_coef, bias_param="Ki"):
     """Mahony's explicit complementary filter; output sensor-to-earth in the recording's frame.
 
     Parameters
@@ -187,6 +169,3 @@ class Mahony(BiasKernelFilter):
 
     name = "mahony"
     decl = DECL
-    kernel = staticmethod(_mahony_kernel)
-    coef = staticmethod(_coef)
-    bias_param = "Ki"

@@ -132,6 +132,13 @@ def _qexp_into(vx, vy, vz, out, i):
     out[i, 3] = s * vz
 
 
+@njit(cache=True)
+def _qexp_kernel(v, out):
+    """:func:`_qexp_into` for each row of ``v`` (N, 3) into ``out`` (N, 4)."""
+    for i in range(v.shape[0]):
+        _qexp_into(v[i, 0], v[i, 1], v[i, 2], out, i)
+
+
 @njit(cache=True, inline="always")
 def _qlog_into(w, x, y, z, out, i):
     if w < 0.0:  # q and -q are the same rotation: take the one with angle in [0, pi]
@@ -170,12 +177,6 @@ def qlog(q):
     out = np.empty((1, 3))
     _qlog_into(q[0], q[1], q[2], q[3], out, 0)
     return out[0]
-
-
-@njit(cache=True)
-def _qexp_kernel(v, out):
-    for i in range(v.shape[0]):
-        _qexp_into(v[i, 0], v[i, 1], v[i, 2], out, i)
 
 
 def qexp_batch(v: np.ndarray) -> np.ndarray:
