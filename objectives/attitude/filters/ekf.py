@@ -98,6 +98,7 @@ from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_robust_kernel, ekf_steps
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
+from objectives.attitude.filters.robust_params import ROBUST_SWITCHES, robust_decl
 from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import fuzzify, grid_rules, sugeno_mu
 from objectives.params import ANY_REAL, POSITIVE, Interval, Param, ParamSet
@@ -248,26 +249,8 @@ _EKF_DECL: tuple[Param, ...] = (
 )
 
 #: robust blocks (objectives.attitude.filters.robust) in the EKF kernel; all off by default = the paper's EKF
-_ROBUST_DECL: tuple[Param, ...] = (
-    Param("acc_lp_tau_s", 0.0, unit="s", allowed=Interval(0.0),
-          doc="time constant of the earth-frame accelerometer low-pass feeding the TRIAD (robust block c; "
-              "0: raw accelerometer, as the paper); 3-5 s keeps inclination through fast translation"),
-    Param("mag_rejection", False, choices=(True, False),
-          doc="magnetic disturbance rejection (robust block a): field norm and dip against a reference "
-              "learned when undisturbed; a rejected field leaves the heading to the gyro"),
-    Param("mag_max_rejection_s", 60.0, unit="s", allowed=POSITIVE,
-          doc="longest full rejection of a disturbed field before a new field is accepted (mag_rejection)"),
-    Param("mag_norm_th", 0.1, unit="1", allowed=POSITIVE,
-          doc="relative field-norm deviation beyond which the field is disturbed (mag_rejection)"),
-    Param("mag_dip_th_deg", 10.0, unit="deg", allowed=POSITIVE,
-          doc="dip-angle deviation beyond which the field is disturbed (mag_rejection)"),
-    Param("rest_bias", False, choices=(True, False),
-          doc="gyro bias estimation at rest (robust block b): at detected rest the low-passed gyro "
-              "measures the bias state"),
-    Param("rest_bias_var", 3e-6, unit="(rad/s)^2", allowed=POSITIVE,
-          doc="variance of the rest bias pseudo-measurement (rest_bias)"),
-)
-_ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "rest_bias")
+_ROBUST_DECL = robust_decl("the TRIAD", "a rejected field leaves the heading to the gyro")
+_ROBUST_NAMES = ROBUST_SWITCHES
 
 
 def gravity_in_units(rec: Recording) -> float:

@@ -80,6 +80,7 @@ from objectives.attitude.filters._ukf_kernels import new_state, new_work, ukf_ch
 from objectives.attitude.filters._ukf_robust import ukf_robust_run
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
+from objectives.attitude.filters.robust_params import ROBUST_SWITCHES, robust_decl
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["QUKF", "QRAUKF", "run_ukf"]
@@ -172,26 +173,8 @@ _KERNEL_KEYS = ("sigma_gyr", "sigma_acc", "sigma_mag", "bias_rw", "att_rw", "p0_
 
 #: robust blocks of the QRAUKF (objectives.attitude.filters.robust, driver _ukf_robust); all off by default
 #: = the paper's QRAUKF, bit for bit
-_ROBUST_DECL: tuple[Param, ...] = (
-    Param("acc_lp_tau_s", 0.0, unit="s", allowed=Interval(0.0),
-          doc="time constant of the earth-frame accelerometer low-pass feeding the pseudo-measurement (robust "
-              "block c; 0: raw accelerometer, as the paper); 3-5 s keeps inclination through fast translation"),
-    Param("mag_rejection", False, choices=(True, False),
-          doc="magnetic disturbance rejection (robust block a): field norm and dip against a reference learned "
-              "when undisturbed; a rejected field is replaced by the predicted heading direction"),
-    Param("mag_max_rejection_s", 60.0, unit="s", allowed=POSITIVE,
-          doc="longest full rejection of a disturbed field before a new field is accepted (mag_rejection)"),
-    Param("mag_norm_th", 0.1, unit="1", allowed=POSITIVE,
-          doc="relative field-norm deviation beyond which the field is disturbed (mag_rejection)"),
-    Param("mag_dip_th_deg", 10.0, unit="deg", allowed=POSITIVE,
-          doc="dip-angle deviation beyond which the field is disturbed (mag_rejection)"),
-    Param("rest_bias", False, choices=(True, False),
-          doc="gyro bias estimation at rest (robust block b): at detected rest the low-passed gyro measures the "
-              "bias state"),
-    Param("rest_bias_var", 3e-6, unit="(rad/s)^2", allowed=POSITIVE,
-          doc="variance of the rest bias pseudo-measurement (rest_bias)"),
-)
-_BLOCK_SWITCHES = ("acc_lp_tau_s", "mag_rejection", "rest_bias")
+_ROBUST_DECL = robust_decl("the pseudo-measurement", "a rejected field is replaced by the predicted heading direction")
+_BLOCK_SWITCHES = ROBUST_SWITCHES
 _BLOCK_KEYS = tuple(p.name for p in _ROBUST_DECL)
 
 
