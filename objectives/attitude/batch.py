@@ -1,0 +1,293 @@
+"""Population evaluation of the filter objective in one numba kernel (``backend: threads``).
+
+:meth:`FilterObjective.evaluate_batch` comes here. For every (candidate, recording) pair the Python
+side builds what the serial path would hand the filter kernel (the validated filter, its coefficient
+array, the initial state, the FAEKF's fuzzy tables); one ``@njit(parallel=True)`` kernel then runs,
+for every pair, the filter's own per-recording kernel, the frame conversion of
+:func:`objectives.attitude.quaternion.to_frame` and the one-pass error sums of
+:mod:`objectives.attitude.fused_errors`, threads sharing the recordings (see
+:mod:`objectives.batch_threads` for lanes and buffers). The sums are combined per candidate by the
+objective's own code (``_combine`` and ``_evaluation``), so each result equals what ``__call__``
+returns for the same parameters, bit for bit (tests/attitude/test_batch.py).
+
+Batched: Madgwick and Mahony (any options) and EKF / FAEKF without the robust blocks, on recordings
+that all have truth, with any metric but ``mse_1d`` (it needs the filter's diagnostics). For any other
+configuration :func:`evaluate_batch` returns None and the engine evaluates serially.
+
+The kernels are not cached (``cache=False``): they call kernels of other modules, whose changes
+numba's cache would not see (the rule of :mod:`objectives.control.wmp`); they compile once per
+process, on the first batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numba import njit, prange
+from numba.typed import List
+
+from objectives.attitude.filters._ekf_kernel import ekf_kernel
+from objectives.attitude.filters.base import initial_quaternion
+from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale, gravity_in_units
+from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel
+from objectives.attitude.filters.mahony import Mahony, _mahony_kernel
+from objectives.attitude.fused_errors import ErrorSums, _error_sums
+from objectives.attitude.quaternion.algebra import _qmul_kernel
+from objectives.attitude.quaternion.conversions import frame_rotation
+from objectives.batch_threads import lanes, use_threads
+from tuner.objective import Score
+
+__all__ = ["evaluate_batch", "batchable"]
+
+#: kernel family of each batched filter class (exact class: a subclass may change ``_run``)
+_FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3}
+_N_SUMS = 11
+
+
+@njit(cache=False, parallel=True)
+def _bias_batch(family, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag, coefs, states, order, start,
+                qbuf, cbuf, sums):
+    """Madgwick (family 0) or Mahony (1) on every pair, error sums into ``sums[pair]``.
+
+    gyrs, accs, mags, trues, masks : typed lists, one array per recording (``mags[r]`` (0, 3) without one).
+    rots : (R, 5) frame rotation quaternion to the recording's frame, and 1.0 when a conversion is needed.
+    pair_rec, pair_mag : (P,) recording of each pair; 1 when it uses the magnetometer.
+    coefs, states : (P, 5), (P, 7) each pair's coefficients (Mahony's 4 padded with a zero) and initial state.
+    order, start : lanes (:func:`objectives.batch_threads.lanes`).
+    qbuf, cbuf : (lanes, N_max, 4) per-lane output buffers.  sums : (P, 11) out.
+    """
+    for lane in prange(start.shape[0] - 1):
+        no_bias = np.empty((0, 3))
+        no_mag = np.empty((0, 3))
+        for j in range(start[lane], start[lane + 1]):
+            p = order[j]
+            r = pair_rec[p]
+            n = gyrs[r].shape[0]
+            q = qbuf[lane, :n]
+            mag = mags[r] if pair_mag[p] != 0 else no_mag
+            if family == 0:
+                _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
+            else:
+                _mahony_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
+            if rots[r, 4] != 0.0:
+                c = cbuf[lane, :n]
+                _qmul_kernel(rots[r:r + 1, :4], q, c)
+                _error_sums(c, trues[r], masks[r], sums[p])
+            else:
+                _error_sums(q, trues[r], masks[r], sums[p])
+
+
+@njit(cache=False, parallel=True)
+def _ekf_batch(fuzzy, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag, coefs, states, order, start,
+               vibs, exts, mps, mf_kind, mf_params, rules, cons, qbuf, bbuf, cbuf, kbuf, sums):
+    """EKF (``fuzzy`` 0) or FAEKF (1, the fuzzy scale of eqs. 28-31 first) on every pair, as ``_bias_batch``.
+
+    vibs, exts, mps : typed lists of the FAEKF's disturbance measures per recording.
+    mf_params, cons : (P, 3, 3, 4), (P, 27) each pair's membership table and rule consequents.
+    bbuf, kbuf : (lanes, N_max, 3), (lanes, N_max) per-lane bias and fuzzy-scale buffers.
+    """
+    for lane in prange(start.shape[0] - 1):
+        no_mag = np.zeros((1, 3))
+        one = np.ones(1)
+        for j in range(start[lane], start[lane + 1]):
+            p = order[j]
+            r = pair_rec[p]
+            n = gyrs[r].shape[0]
+            q = qbuf[lane, :n]
+            mag = mags[r] if pair_mag[p] != 0 else no_mag
+            if fuzzy != 0:
+                k = kbuf[lane, :n]
+                fuzzy_scale(vibs[r], exts[r], mps[r], mf_kind, mf_params[p], rules, cons[p], k)
+                ekf_kernel(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
+            else:
+                ekf_kernel(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
+            if rots[r, 4] != 0.0:
+                c = cbuf[lane, :n]
+                _qmul_kernel(rots[r:r + 1, :4], q, c)
+                _error_sums(c, trues[r], masks[r], sums[p])
+            else:
+                _error_sums(q, trues[r], masks[r], sums[p])
+
+
+def batchable(obj: Any) -> bool:
+    """True when :func:`evaluate_batch` can evaluate this objective's configuration (module docstring)."""
+    fam = _FAMILY.get(obj._cls)
+    if fam is None or obj.metric == "mse_1d":
+        return False
+    if fam >= 2:
+        try:
+            if obj.make_filter({}).robust:
+                return False
+        except ValueError:
+            return False
+    recs = obj.recordings("train")
+    return bool(recs) and all(rec.quat is not None for rec in recs)
+
+
+class _Data:
+    """The recordings as the kernels read them (built once per objective, shared by every batch)."""
+
+    def __init__(self, obj: Any):
+        recs = obj.recordings("train")
+        self.recs = recs
+        c = np.ascontiguousarray
+        self.gyrs = List([c(r.gyr, dtype=np.float64) for r in recs])
+        self.accs = List([c(r.acc, dtype=np.float64) for r in recs])
+        self.mags = List([c(r.mag, dtype=np.float64) if r.mag is not None else np.empty((0, 3)) for r in recs])
+        self.trues = List([c(r.quat, dtype=np.float64) for r in recs])
+        self.masks = List([c(obj._mask(r), dtype=np.bool_) for r in recs])
+        self.n = np.array([r.n for r in recs], dtype=np.int64)
+        self.q0: dict[tuple, np.ndarray] = {}
+        self.gravity = [gravity_in_units(r) if obj._cls in (EKF, FAEKF) else 1.0 for r in recs]
+        frame = obj._cls.working_frame
+        self.rots = np.zeros((len(recs), 5))
+        for i, r in enumerate(recs):
+            self.rots[i, :4] = frame_rotation(frame, r.frame)
+            self.rots[i, 4] = 0.0 if frame.upper() == r.frame.upper() else 1.0
+        self.dist: list | None = None
+
+    def initial(self, obj: Any, flt: Any, i: int) -> np.ndarray:
+        """The start quaternion of ``flt`` on recording ``i`` (``AttitudeFilter._run_detailed``'s)."""
+        rec = self.recs[i]
+        if flt.needs_mag and flt.values.get("use_mag", True) and rec.mag is None:
+            raise ValueError(f"{flt.name}: recording {rec.name!r} has no magnetometer; set use_mag: false")
+        use_mag = bool(flt.values.get("use_mag", True)) and rec.mag is not None
+        init = flt.values.get("init", "auto")
+        how = obj.q0 if init == "auto" else init
+        key = (i, repr(how), use_mag)
+        if key not in self.q0:
+            self.q0[key] = initial_quaternion(rec, flt.working_frame, how, use_mag=use_mag)
+        return self.q0[key]
+
+
+def _data(obj: Any) -> _Data:
+    if "batch_data" not in obj._cache:
+        obj._cache["batch_data"] = _Data(obj)
+    return obj._cache["batch_data"]
+
+
+def _sums(out: np.ndarray) -> ErrorSums:
+    """:func:`objectives.attitude.fused_errors.error_sums`'s result from the kernel's sums."""
+    n = int(out[9])
+    if n == 0:
+        nan = np.full(3, np.nan)
+        return ErrorSums(0, 0, nan, nan.copy(), nan.copy())
+    return ErrorSums(n, int(out[10]), out[0:3] / n, out[3:6] / n, out[6:9] / n)
+
+
+def _score(obj: Any, recs: list, sums: list[ErrorSums]) -> Score:
+    """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth)."""
+    per: dict[str, dict[str, float]] = {}
+    failed = ""
+    for rec, es in zip(recs, sums):
+        if es.n == 0:
+            raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
+        if es.n_nonfinite and not failed:
+            failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
+        per[rec.name] = dict(es.as_dict())
+    fitness = obj._combine(sums, per, [r.name for r in recs], "train")
+    return Score(float(fitness), per, failed)
+
+
+def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str, Any]], results: list):
+    """Per pair: coefficients, initial state, magnetometer use (and fuzzy tables); failures into ``results``."""
+    rows: list[tuple[int, int, np.ndarray, np.ndarray, int, Any]] = []
+    for ci, params in enumerate(params_list):
+        try:
+            flt = obj.make_filter(params)
+            v = flt.values
+            pairs = []
+            for ri, rec in enumerate(data.recs):
+                q0 = data.initial(obj, flt, ri)
+                use_mag = bool(v["use_mag"]) and rec.mag is not None
+                state = np.zeros(7)
+                state[:4] = q0
+                if fam <= 1:
+                    coef = flt.coef(v, rec.dt, use_mag)
+                else:
+                    coef = flt.coefficients(rec.dt, use_mag, data.gravity[ri])
+                fz = None
+                if fam == 3:
+                    fz = (flt.membership_table(), faekf_rules(flt.singletons())[1], flt.values)
+                pairs.append((ci, ri, coef, state, int(use_mag), fz))
+            rows += pairs
+        except Exception as exc:  # this candidate fails as it would serially; the others go on
+            results[ci] = exc
+    return rows
+
+
+def _disturbances(obj: Any, data: _Data, flt: Any) -> tuple[List, List, List]:
+    """The FAEKF's fuzzy inputs per recording, from the objective's cache as its serial path uses them."""
+    from objectives.attitude.objective import _CONTEXT_KEYS
+
+    outs = ([], [], [])
+    for i, rec in enumerate(data.recs):
+        key = ("dist", ("train", i), tuple((k, flt.values.get(k)) for k in _CONTEXT_KEYS))
+        if key not in obj._cache:
+            obj._cache[key] = flt.disturbances(rec)
+        d = obj._cache[key]
+        d = flt._as_disturbances(rec, d.vib_freq_hz, d.ext_acc_g, d.mag_pert_nu)
+        for lst, a in zip(outs, (d.vib_freq_hz, d.ext_acc_g, d.mag_pert_nu)):
+            lst.append(a)
+    return List(outs[0]), List(outs[1]), List(outs[2])
+
+
+def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads: int) -> list[Any] | None:
+    """Evaluations of ``params_list`` equal to ``[obj(p) for p in params_list]`` (None: not batchable).
+
+    An item is the :class:`~tuner.objective.Evaluation` or the exception the serial call raises.
+    """
+    if not batchable(obj):
+        return None
+    fam = _FAMILY[obj._cls]
+    data = _data(obj)
+    results: list[Any] = [None] * len(params_list)
+    rows = _prepare(obj, data, fam, params_list, results)
+    n_lanes = use_threads(n_threads)
+    P = len(rows)
+    pair_rec = np.array([r[1] for r in rows], dtype=np.int64)
+    pair_mag = np.array([r[4] for r in rows], dtype=np.int64)
+    width = 5 if fam <= 1 else max([len(r[2]) for r in rows] or [12])
+    coefs = np.zeros((P, width))
+    states = np.zeros((P, 7))
+    for k, r in enumerate(rows):
+        coefs[k, :len(r[2])] = r[2]
+        states[k] = r[3]
+    order, start = lanes(data.n[pair_rec] if P else np.zeros(0), n_lanes)
+    n_max = int(data.n.max()) if len(data.n) else 0
+    qbuf = np.empty((n_lanes, n_max, 4))
+    cbuf = np.empty((n_lanes, n_max, 4))
+    sums = np.zeros((P, _N_SUMS))
+    if fam <= 1:
+        _bias_batch(fam, data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots, pair_rec, pair_mag,
+                    coefs, states, order, start, qbuf, cbuf, sums)
+    else:
+        bbuf = np.empty((n_lanes, n_max, 3))
+        kbuf = np.empty((n_lanes, n_max if fam == 3 else 0))
+        mf_kind = np.zeros((3, 3), dtype=np.int64)  # objectives.fuzzy.GAUSS, as FAEKF.scale
+        rules = faekf_rules(np.zeros(7))[0]
+        mf_params = np.zeros((P, 3, 3, 4))
+        cons = np.zeros((P, rules.shape[0]))
+        if fam == 3 and P:
+            flt = obj.make_filter(params_list[rows[0][0]])  # disturbances depend on fixed options only
+            vibs, exts, mps = _disturbances(obj, data, flt)
+            for k, r in enumerate(rows):
+                mf_params[k] = r[5][0]
+                cons[k] = r[5][1]
+        else:
+            empty = List([np.zeros(0) for _ in data.recs]) if data.recs else List([np.zeros(0)])
+            vibs = exts = mps = empty
+        _ekf_batch(1 if fam == 3 else 0, data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots, pair_rec,
+                   pair_mag, coefs, states, order, start, vibs, exts, mps, mf_kind, mf_params, rules, cons,
+                   qbuf, bbuf, cbuf, kbuf, sums)
+    per_cand: dict[int, list[ErrorSums]] = {}
+    for k, r in enumerate(rows):
+        per_cand.setdefault(r[0], []).append(_sums(sums[k]))
+    for ci, es in per_cand.items():
+        try:
+            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es))
+        except Exception as exc:
+            results[ci] = exc
+    return results
