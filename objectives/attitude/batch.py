@@ -10,9 +10,10 @@ for every pair, the filter's own per-recording kernel, the frame conversion of
 objective's own code (``_combine`` and ``_evaluation``), so each result equals what ``__call__``
 returns for the same parameters, bit for bit (tests/attitude/test_batch.py).
 
-Batched: Madgwick and Mahony (any options) and EKF / FAEKF without the robust blocks, on recordings
-that all have truth, with any metric but ``mse_1d`` (it needs the filter's diagnostics). For any other
-configuration :func:`evaluate_batch` returns None and the engine evaluates serially.
+Batched: Madgwick and Mahony (any options), EKF / FAEKF without the robust blocks and the thesis
+1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
+have truth. For any other configuration :func:`evaluate_batch` returns None and the engine evaluates
+serially.
 
 The kernels are not cached (``cache=False``): they call kernels of other modules, whose changes
 numba's cache would not see (the rule of :mod:`objectives.control.wmp`); they compile once per
@@ -29,8 +30,10 @@ from numba import njit, prange
 from numba.typed import List
 
 from objectives.attitude.filters._ekf_kernel import ekf_kernel
-from objectives.attitude.filters.base import initial_quaternion
+from objectives.attitude.filters._kf1d_kernels import kf1d_kernel
+from objectives.attitude.filters.base import FilterResult, initial_quaternion
 from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale, gravity_in_units
+from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt, _up_sign, tilt_from_quat
 from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel
 from objectives.attitude.filters.mahony import Mahony, _mahony_kernel
 from objectives.attitude.fused_errors import ErrorSums, _error_sums
@@ -42,7 +45,7 @@ from tuner.objective import Score
 __all__ = ["evaluate_batch", "batchable"]
 
 #: kernel family of each batched filter class (exact class: a subclass may change ``_run``)
-_FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3}
+_FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3, KF1D: 4}
 _N_SUMS = 11
 
 
@@ -111,12 +114,32 @@ def _ekf_batch(fuzzy, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag, 
                 _error_sums(q, trues[r], masks[r], sums[p])
 
 
+@njit(cache=False, parallel=True)
+def _kf1d_batch(gys, axs, azs, trues, masks, up, pair_rec, coefs, states, order, start, theta, bbuf, qbuf, sums):
+    """The thesis 1-D tilt KF on every pair: the angle into ``theta[pair, :n]`` (for ``mse_1d``), the
+    error sums of its quaternion (:func:`objectives.attitude.filters.kf1d.quat_from_tilt`, already in the
+    recording's frame) into ``sums[pair]``. ``gys``, ``axs``, ``azs``: per recording the rate about y and
+    the specific force along x and z; ``up``: (R,) the kernel's ``up_sign`` per recording;
+    ``coefs``, ``states``: (P, 4), (P, 5)."""
+    for lane in prange(start.shape[0] - 1):
+        one = np.ones(1)
+        for j in range(start[lane], start[lane + 1]):
+            p = order[j]
+            r = pair_rec[p]
+            n = gys[r].shape[0]
+            th = theta[p, :n]
+            kf1d_kernel(gys[r], axs[r], azs[r], up[r], coefs[p], one, states[p], 1, th, bbuf[lane, :n])
+            q = qbuf[lane, :n]
+            _quat_from_tilt(th, q)
+            _error_sums(q, trues[r], masks[r], sums[p])
+
+
 def batchable(obj: Any) -> bool:
     """True when :func:`evaluate_batch` can evaluate this objective's configuration (module docstring)."""
     fam = _FAMILY.get(obj._cls)
-    if fam is None or obj.metric == "mse_1d":
+    if fam is None or (obj.metric == "mse_1d" and fam != 4):
         return False
-    if fam >= 2:
+    if fam in (2, 3):
         try:
             if obj.make_filter({}).robust:
                 return False
@@ -177,16 +200,20 @@ def _sums(out: np.ndarray) -> ErrorSums:
     return ErrorSums(n, int(out[10]), out[0:3] / n, out[3:6] / n, out[6:9] / n)
 
 
-def _score(obj: Any, recs: list, sums: list[ErrorSums]) -> Score:
-    """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth)."""
+def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = None) -> Score:
+    """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth);
+    ``angles``: the 1-D filters' angle per recording, for ``mse_1d``."""
     per: dict[str, dict[str, float]] = {}
     failed = ""
-    for rec, es in zip(recs, sums):
+    for i, (rec, es) in enumerate(zip(recs, sums)):
         if es.n == 0:
             raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
         if es.n_nonfinite and not failed:
             failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
         per[rec.name] = dict(es.as_dict())
+        if obj.metric == "mse_1d":
+            res = FilterResult(np.empty((0, 4)), rec.frame, {"angle": angles[i]})
+            per[rec.name]["mse_1d"] = obj._mse_1d(rec, res, obj._mask(rec))
     fitness = obj._combine(sums, per, [r.name for r in recs], "train")
     return Score(float(fitness), per, failed)
 
@@ -201,10 +228,13 @@ def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str,
             pairs = []
             for ri, rec in enumerate(data.recs):
                 q0 = data.initial(obj, flt, ri)
-                use_mag = bool(v["use_mag"]) and rec.mag is not None
+                use_mag = bool(v.get("use_mag", False)) and rec.mag is not None
                 state = np.zeros(7)
                 state[:4] = q0
-                if fam <= 1:
+                if fam == 4:
+                    coef = flt._coef(rec.dt)
+                    state = flt._state0(tilt_from_quat(q0, rec.frame, flt.working_frame))
+                elif fam <= 1:
                     coef = flt.coef(v, rec.dt, use_mag)
                 else:
                     coef = flt.coefficients(rec.dt, use_mag, data.gravity[ri])
@@ -249,9 +279,9 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     P = len(rows)
     pair_rec = np.array([r[1] for r in rows], dtype=np.int64)
     pair_mag = np.array([r[4] for r in rows], dtype=np.int64)
-    width = 5 if fam <= 1 else max([len(r[2]) for r in rows] or [12])
+    width = {0: 5, 1: 5, 4: 4}.get(fam) or max([len(r[2]) for r in rows] or [12])
     coefs = np.zeros((P, width))
-    states = np.zeros((P, 7))
+    states = np.zeros((P, 5 if fam == 4 else 7))
     for k, r in enumerate(rows):
         coefs[k, :len(r[2])] = r[2]
         states[k] = r[3]
@@ -260,7 +290,16 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     qbuf = np.empty((n_lanes, n_max, 4))
     cbuf = np.empty((n_lanes, n_max, 4))
     sums = np.zeros((P, _N_SUMS))
-    if fam <= 1:
+    theta = None
+    if fam == 4:
+        theta = np.empty((P, n_max))
+        up = np.array([_up_sign(r.frame) for r in data.recs])
+        c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
+        cols = [List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
+                for a, k in (("gyr", 1), ("acc", 0), ("acc", 2))]
+        _kf1d_batch(*cols, data.trues, data.masks, up, pair_rec, coefs, states, order, start, theta,
+                    np.empty((n_lanes, n_max)), qbuf, sums)
+    elif fam <= 1:
         _bias_batch(fam, data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots, pair_rec, pair_mag,
                     coefs, states, order, start, qbuf, cbuf, sums)
     else:
@@ -283,11 +322,14 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
                    pair_mag, coefs, states, order, start, vibs, exts, mps, mf_kind, mf_params, rules, cons,
                    qbuf, bbuf, cbuf, kbuf, sums)
     per_cand: dict[int, list[ErrorSums]] = {}
+    angles: dict[int, list[np.ndarray]] = {}
     for k, r in enumerate(rows):
         per_cand.setdefault(r[0], []).append(_sums(sums[k]))
+        if theta is not None:
+            angles.setdefault(r[0], []).append(theta[k, :data.n[r[1]]])
     for ci, es in per_cand.items():
         try:
-            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es))
+            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es, angles.get(ci)))
         except Exception as exc:
             results[ci] = exc
     return results

@@ -17,6 +17,7 @@ from tuner.run import run
 BENCH = {"synthetic": {"generator": "bench6dof", "duration_s": 4, "seed": 1}}
 BENCH2 = {"synthetic": {"generator": "bench6dof", "duration_s": 3, "seed": 2}}
 TILT = {"synthetic": {"generator": "tilt1d", "duration_s": 4, "seed": 1}}
+TILT2 = {"synthetic": {"generator": "tilt1d", "duration_s": 3, "seed": 2}}
 FAEKF_FIXED = {"window": 200, "fft_length": 256, "f_thr": 10.0, "omega_thr": 0.26}
 
 
@@ -50,9 +51,12 @@ def _serial(obj, params):
     ("mahony", {}, {"metric": "broad_total_rmse", "warmup_s": 0.5}),
     ("ekf", {}, {"q0": "truth"}),
     ("faekf", FAEKF_FIXED, {"metric": "euler_rmse_mean", "metric_options": {"aggregate": "median"}}),
+    ("kf1d", {}, {"metric": "mse_1d", "data": [TILT, TILT2]}),
+    ("kf1d", {}, {"metric": "euler_rmse_mean", "data": [TILT]}),
 ])
 def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
-    obj = FilterObjective(flt, [BENCH, BENCH2], fixed=dict(fixed), **extra)
+    extra = dict(extra)
+    obj = FilterObjective(flt, extra.pop("data", [BENCH, BENCH2]), fixed=dict(fixed), **extra)
     params = _candidates(obj, 7)
     assert batchable(obj)
     _same(obj.evaluate_batch(params, 2), _serial(obj, params))
@@ -74,7 +78,7 @@ def test_an_empty_batch_prepares_and_returns_nothing():
     assert obj.evaluate_batch([], 2) == []
 
 
-@pytest.mark.parametrize("flt, section", [("kf1d", {"data": [TILT], "metric": "mse_1d"}),
+@pytest.mark.parametrize("flt, section", [("akf1d", {"data": [TILT], "metric": "mse_1d"}),
                                           ("madgwick", {"data": [TILT], "metric": "mse_1d"}),
                                           ("ekf", {"data": [BENCH], "fixed": {"mag_rejection": True}}),
                                           ("vqf", {"data": [BENCH]})])
