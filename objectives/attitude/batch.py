@@ -8,7 +8,7 @@ for every pair, the filter's own per-recording kernel, the frame conversion of
 :mod:`objectives.attitude.fused_errors`, threads sharing the recordings (see
 :mod:`objectives.batch_threads` for lanes and buffers). The sums are combined per candidate by the
 objective's own code (``_combine`` and ``_evaluation``), so each result equals what ``__call__``
-returns for the same parameters, bit for bit (tests/attitude/test_batch.py).
+returns for the same parameters, bit for bit (tests/attitude/test_filter_batch.py).
 
 Batched: Madgwick and Mahony (any options), EKF / FAEKF without the robust blocks and the thesis
 1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
@@ -49,18 +49,32 @@ _FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3, KF1D: 4}
 _N_SUMS = 11
 
 
-@njit(cache=False, parallel=True)
-def _bias_batch(family, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag, coefs, states, order, start,
-                qbuf, cbuf, sums):
-    """Madgwick (family 0) or Mahony (1) on every pair, error sums into ``sums[pair]``.
+@njit(cache=False)
+def _pair_sums(q, c, rots, r, true, mask, out):
+    """Error sums of the estimate ``q`` of recording ``r`` (converted into ``c`` to its frame if needed)."""
+    if rots[r, 4] != 0.0:
+        _qmul_kernel(rots[r:r + 1, :4], q, c)
+        _error_sums(c, true, mask, out)
+    else:
+        _error_sums(q, true, mask, out)
 
-    gyrs, accs, mags, trues, masks : typed lists, one array per recording (``mags[r]`` (0, 3) without one).
-    rots : (R, 5) frame rotation quaternion to the recording's frame, and 1.0 when a conversion is needed.
-    pair_rec, pair_mag : (P,) recording of each pair; 1 when it uses the magnetometer.
-    coefs, states : (P, 5), (P, 7) each pair's coefficients (Mahony's 4 padded with a zero) and initial state.
-    order, start : lanes (:func:`objectives.batch_threads.lanes`).
-    qbuf, cbuf : (lanes, N_max, 4) per-lane output buffers.  sums : (P, 11) out.
+
+@njit(cache=False, parallel=True)
+def _bias_batch(family, data, pairs, lanes_, bufs, sums):
+    """Madgwick (family 0) or Mahony (1) on every pair, error sums into ``sums[pair]`` (P, 11).
+
+    data : ``(gyrs, accs, mags, trues, masks, rots)``: typed lists, one array per recording (``mags[r]``
+        (0, 3) without one), and ``rots`` (R, 5): the rotation quaternion to the recording's frame and
+        1.0 when a conversion is needed.
+    pairs : ``(rec, use_mag, coefs, states)``: (P,) recording of each pair, 1 when it uses the
+        magnetometer, (P, 5) coefficients (Mahony's 4 padded with a zero), (P, 7) initial states.
+    lanes_ : ``(order, start)`` (:func:`objectives.batch_threads.lanes`).
+    bufs : ``(qbuf, cbuf)``: (lanes, N_max, 4) per-lane output buffers.
     """
+    gyrs, accs, mags, trues, masks, rots = data
+    pair_rec, pair_mag, coefs, states = pairs
+    order, start = lanes_
+    qbuf, cbuf = bufs
     for lane in prange(start.shape[0] - 1):
         no_bias = np.empty((0, 3))
         no_mag = np.empty((0, 3))
@@ -74,23 +88,25 @@ def _bias_batch(family, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag
                 _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             else:
                 _mahony_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
-            if rots[r, 4] != 0.0:
-                c = cbuf[lane, :n]
-                _qmul_kernel(rots[r:r + 1, :4], q, c)
-                _error_sums(c, trues[r], masks[r], sums[p])
-            else:
-                _error_sums(q, trues[r], masks[r], sums[p])
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
 
 
 @njit(cache=False, parallel=True)
-def _ekf_batch(fuzzy, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag, coefs, states, order, start,
-               vibs, exts, mps, mf_kind, mf_params, rules, cons, qbuf, bbuf, cbuf, kbuf, sums):
-    """EKF (``fuzzy`` 0) or FAEKF (1, the fuzzy scale of eqs. 28-31 first) on every pair, as ``_bias_batch``.
+def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
+    """EKF (``fuzzy`` 0) or FAEKF (1: the fuzzy scale of eqs. 28-31 first) on every pair, as ``_bias_batch``
+    (``coefs`` (P, 12)).
 
-    vibs, exts, mps : typed lists of the FAEKF's disturbance measures per recording.
-    mf_params, cons : (P, 3, 3, 4), (P, 27) each pair's membership table and rule consequents.
-    bbuf, kbuf : (lanes, N_max, 3), (lanes, N_max) per-lane bias and fuzzy-scale buffers.
+    fz : ``(vibs, exts, mps, mf_kind, mf_params, rules, cons)``: typed lists of the FAEKF's disturbance
+        measures per recording, the (3, 3) set kinds, (P, 3, 3, 4) each pair's membership table, the
+        (27, 3) rules and (P, 27) each pair's rule consequents.
+    bufs : ``(qbuf, bbuf, cbuf, kbuf)``: per-lane quaternion (lanes, N_max, 4), bias (lanes, N_max, 3),
+        converted quaternion and fuzzy-scale (lanes, N_max) buffers.
     """
+    gyrs, accs, mags, trues, masks, rots = data
+    pair_rec, pair_mag, coefs, states = pairs
+    order, start = lanes_
+    vibs, exts, mps, mf_kind, mf_params, rules, cons = fz
+    qbuf, bbuf, cbuf, kbuf = bufs
     for lane in prange(start.shape[0] - 1):
         no_mag = np.zeros((1, 3))
         one = np.ones(1)
@@ -106,21 +122,23 @@ def _ekf_batch(fuzzy, gyrs, accs, mags, trues, masks, rots, pair_rec, pair_mag, 
                 ekf_kernel(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
             else:
                 ekf_kernel(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
-            if rots[r, 4] != 0.0:
-                c = cbuf[lane, :n]
-                _qmul_kernel(rots[r:r + 1, :4], q, c)
-                _error_sums(c, trues[r], masks[r], sums[p])
-            else:
-                _error_sums(q, trues[r], masks[r], sums[p])
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
 
 
 @njit(cache=False, parallel=True)
-def _kf1d_batch(gys, axs, azs, trues, masks, up, pair_rec, coefs, states, order, start, theta, bbuf, qbuf, sums):
+def _kf1d_batch(data, pairs, lanes_, theta, bufs, sums):
     """The thesis 1-D tilt KF on every pair: the angle into ``theta[pair, :n]`` (for ``mse_1d``), the
     error sums of its quaternion (:func:`objectives.attitude.filters.kf1d.quat_from_tilt`, already in the
-    recording's frame) into ``sums[pair]``. ``gys``, ``axs``, ``azs``: per recording the rate about y and
-    the specific force along x and z; ``up``: (R,) the kernel's ``up_sign`` per recording;
-    ``coefs``, ``states``: (P, 4), (P, 5)."""
+    recording's frame) into ``sums[pair]``.
+
+    data : ``(gys, axs, azs, trues, masks, up)``: per recording the rate about y, the specific force
+        along x and z, truth and mask (typed lists), and (R,) the kernel's ``up_sign``.
+    pairs : ``(rec, coefs, states)``: (P,), (P, 4), (P, 5).  bufs : ``(bbuf, qbuf)`` per lane.
+    """
+    gys, axs, azs, trues, masks, up = data
+    pair_rec, coefs, states = pairs
+    order, start = lanes_
+    bbuf, qbuf = bufs
     for lane in prange(start.shape[0] - 1):
         one = np.ones(1)
         for j in range(start[lane], start[lane + 1]):
@@ -291,36 +309,42 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     cbuf = np.empty((n_lanes, n_max, 4))
     sums = np.zeros((P, _N_SUMS))
     theta = None
+    lanes_ = (order, start)
     if fam == 4:
         theta = np.empty((P, n_max))
         up = np.array([_up_sign(r.frame) for r in data.recs])
         c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
-        cols = [List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
-                for a, k in (("gyr", 1), ("acc", 0), ("acc", 2))]
-        _kf1d_batch(*cols, data.trues, data.masks, up, pair_rec, coefs, states, order, start, theta,
-                    np.empty((n_lanes, n_max)), qbuf, sums)
-    elif fam <= 1:
-        _bias_batch(fam, data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots, pair_rec, pair_mag,
-                    coefs, states, order, start, qbuf, cbuf, sums)
+        cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
+                     for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
+        _kf1d_batch((*cols, data.trues, data.masks, up), (pair_rec, coefs, states), lanes_, theta,
+                    (np.empty((n_lanes, n_max)), qbuf), sums)
+        return _results(obj, data, params_list, rows, sums, theta, results)
+    recs = (data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots)
+    pairs = (pair_rec, pair_mag, coefs, states)
+    if fam <= 1:
+        _bias_batch(fam, recs, pairs, lanes_, (qbuf, cbuf), sums)
+        return _results(obj, data, params_list, rows, sums, None, results)
+    mf_kind = np.zeros((3, 3), dtype=np.int64)  # objectives.fuzzy.GAUSS, as FAEKF.scale
+    rules = faekf_rules(np.zeros(7))[0]
+    mf_params = np.zeros((P, 3, 3, 4))
+    cons = np.zeros((P, rules.shape[0]))
+    if fam == 3 and P:
+        flt = obj.make_filter(params_list[rows[0][0]])  # disturbances depend on fixed options only
+        vibs, exts, mps = _disturbances(obj, data, flt)
+        for k, r in enumerate(rows):
+            mf_params[k] = r[5][0]
+            cons[k] = r[5][1]
     else:
-        bbuf = np.empty((n_lanes, n_max, 3))
-        kbuf = np.empty((n_lanes, n_max if fam == 3 else 0))
-        mf_kind = np.zeros((3, 3), dtype=np.int64)  # objectives.fuzzy.GAUSS, as FAEKF.scale
-        rules = faekf_rules(np.zeros(7))[0]
-        mf_params = np.zeros((P, 3, 3, 4))
-        cons = np.zeros((P, rules.shape[0]))
-        if fam == 3 and P:
-            flt = obj.make_filter(params_list[rows[0][0]])  # disturbances depend on fixed options only
-            vibs, exts, mps = _disturbances(obj, data, flt)
-            for k, r in enumerate(rows):
-                mf_params[k] = r[5][0]
-                cons[k] = r[5][1]
-        else:
-            empty = List([np.zeros(0) for _ in data.recs]) if data.recs else List([np.zeros(0)])
-            vibs = exts = mps = empty
-        _ekf_batch(1 if fam == 3 else 0, data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots, pair_rec,
-                   pair_mag, coefs, states, order, start, vibs, exts, mps, mf_kind, mf_params, rules, cons,
-                   qbuf, bbuf, cbuf, kbuf, sums)
+        vibs = exts = mps = List([np.zeros(0) for _ in data.recs])
+    bufs = (qbuf, np.empty((n_lanes, n_max, 3)), cbuf, np.empty((n_lanes, n_max if fam == 3 else 0)))
+    _ekf_batch(1 if fam == 3 else 0, recs, pairs, lanes_, (vibs, exts, mps, mf_kind, mf_params, rules, cons), bufs,
+               sums)
+    return _results(obj, data, params_list, rows, sums, None, results)
+
+
+def _results(obj: Any, data: _Data, params_list: Sequence[Mapping[str, Any]], rows: list, sums: np.ndarray,
+             theta: np.ndarray | None, results: list) -> list[Any]:
+    """Each candidate's evaluation from its pairs' sums (and angles), by the objective's own code."""
     per_cand: dict[int, list[ErrorSums]] = {}
     angles: dict[int, list[np.ndarray]] = {}
     for k, r in enumerate(rows):

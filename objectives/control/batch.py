@@ -6,7 +6,7 @@ controller parameter array (a design that cannot be built fails as in the serial
 for every candidate, threads sharing the reference profile and the sensor noise, candidates dealt to
 lanes (:mod:`objectives.batch_threads`). The responses are scored by the objective's own
 ``_evaluation``, so each result equals what ``__call__`` returns, bit for bit
-(tests/control/test_batch.py).
+(tests/control/test_closed_loop_batch.py).
 
 Not cached (``cache=False``), like the driver it calls (see :mod:`objectives.control.wmp`): the kernel
 compiles once per process, on the first batch.
@@ -29,11 +29,17 @@ __all__ = ["evaluate_batch"]
 
 
 @njit(cache=False, parallel=True)
-def _closed_loop_batch(x0, c, sc, ref, noise, kind, cps, state_size, n_sub, fall_limit, order, start,
-                       x_out, y_out, m_out, u_out, status):
-    """``_simulate`` for every candidate ``p`` (controller parameters ``cps[p]``, a zeroed state of
-    ``state_size``) into ``x_out[p]``, ``y_out[p]``, ``m_out[p]``, ``u_out[p]``; ``status[p]`` is
-    ``(status code, samples done)``. ``order``/``start``: lanes (objectives.batch_threads.lanes)."""
+def _closed_loop_batch(loop, kind, cps, state_size, lanes_, outs, status):
+    """``_simulate`` for every candidate ``p``: controller ``kind`` with parameters ``cps[p]`` and a zeroed
+    state of ``state_size``; ``status[p]`` is ``(status code, samples done)``.
+
+    loop : ``(x0, c, sc, ref, noise, n_sub, fall_limit)``, the arguments of ``_simulate`` every candidate shares.
+    lanes_ : ``(order, start)`` (objectives.batch_threads.lanes).
+    outs : ``(x_out, y_out, m_out, u_out)``: (P, N, 8), (P, N, 5), (P, N, 5), (P, N, 2), NaN-filled.
+    """
+    x0, c, sc, ref, noise, n_sub, fall_limit = loop
+    order, start = lanes_
+    x_out, y_out, m_out, u_out = outs
     for lane in prange(start.shape[0] - 1):
         for j in range(start[lane], start[lane + 1]):
             p = order[j]
@@ -76,10 +82,11 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     u_out = np.full((P, n, 2), np.nan)
     status = np.zeros((P, 2), dtype=np.int64)
     order, start = lanes(np.ones(P), n_lanes)
-    _closed_loop_batch(np.zeros(8), obj._plant.coeffs(), obj._sensors.coeffs(obj._plant.u_max_V),
-                       np.ascontiguousarray(ref, dtype=float), np.ascontiguousarray(noise, dtype=float),
-                       int(obj._cls.kind), cps, int(obj._cls.state_size), int(obj.n_sub),
-                       math.radians(obj.fall_limit_deg), order, start, x_out, y_out, m_out, u_out, status)
+    loop = (np.zeros(8), obj._plant.coeffs(), obj._sensors.coeffs(obj._plant.u_max_V),
+            np.ascontiguousarray(ref, dtype=float), np.ascontiguousarray(noise, dtype=float), int(obj.n_sub),
+            math.radians(obj.fall_limit_deg))
+    _closed_loop_batch(loop, int(obj._cls.kind), cps, int(obj._cls.state_size), (order, start),
+                       (x_out, y_out, m_out, u_out), status)
     for k, (i, _) in enumerate(rows):
         st = int(status[k, 0])
         sim = {"outputs": y_out[k], "references": ref, "n_done": int(status[k, 1]), "status": st,
