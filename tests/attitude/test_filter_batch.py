@@ -139,3 +139,10 @@ def test_threads_backend_uses_the_kernel_for_the_filter_objective():
         recs = ev(params)
         assert ev.notes == []
     _same([r.evaluation for r in recs], _serial(obj, params))
+
+
+def test_with_a_timeout_the_batch_runs_in_a_forked_child_with_the_same_history(tmp_path):
+    objective = {"kind": "filter", "filter": "mahony", "data": [BENCH]}
+    ref = _run(tmp_path, objective, "serial", "serial")
+    got = _run(tmp_path, {**objective, "timeout_s": 120.0}, "threads", "threads")
+    assert got == ref
