@@ -56,6 +56,7 @@ def test_fallen_and_undesignable_candidates_fail_as_in_serial():
     got = obj.evaluate_batch(params, 2)
     assert got == ref
     assert ref[1].status == "failed" and ref[1].error.startswith("controller design failed")
+    assert ref[2].status == "failed" and "fell" in ref[2].error and ref[2].metrics["status_code"] == 1.0
 
 
 def _history(rd):
