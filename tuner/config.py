@@ -39,7 +39,7 @@ TOP_KEYS = {
     "objective": "what to minimise: {kind: function|filter|closed_loop|python, ...}",
     "parameters": "search space: {name: {low, high, scale, integer} | {fixed: value}}",
     "optimizer": "{method: pso|cmaes|de|random, population, generations, ...options}",
-    "parallel": "{backend: serial|loky|dask, n_jobs, address}",
+    "parallel": "{backend: serial|loky|dask|threads, n_jobs, address}",
     "output": "directory holding the run directories (default: runs)",
     "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, select: {top_k, holdout}}",
 }
@@ -385,8 +385,8 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     if bad:
         raise ConfigError(f, f"parallel.{bad[0]}", "unknown key; allowed: backend, n_jobs, address")
     backend = _get(par, "backend", str, f, "parallel.", default="loky")
-    if backend not in ("serial", "loky", "dask"):
-        raise ConfigError(f, "parallel.backend", f"unknown backend {backend!r}; allowed: serial, loky, dask")
+    if backend not in ("serial", "loky", "dask", "threads"):
+        raise ConfigError(f, "parallel.backend", f"unknown backend {backend!r}; allowed: serial, loky, dask, threads")
     n_jobs = _get(par, "n_jobs", int, f, "parallel.", default=2)
     if n_jobs < 1:
         raise ConfigError(f, "parallel.n_jobs", f"must be >= 1, got {n_jobs}")

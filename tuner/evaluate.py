@@ -1,4 +1,5 @@
-"""Evaluation of a batch of candidates: serially, on local processes (joblib/loky) or on a Dask cluster.
+"""Evaluation of a batch of candidates: serially, on local processes (joblib/loky), on a Dask cluster, or
+in this process on threads through the objective's ``evaluate_batch`` hook.
 
 The whole contract is ``evaluator(params_list) == [objective(p) for p in params_list]``, results
 in the order asked, whatever the backend (pycma's ``eval_all``). Each evaluation is guarded: an
@@ -11,6 +12,15 @@ the process (the user's Ctrl-C) still stops the run. With ``objective.timeout_s`
 loky worker that dies takes no result with it: its candidates are re-run one at a time and those that
 kill a worker again are recorded as failed.
 
+The ``threads`` backend hands the whole population to the objective's ``evaluate_batch`` hook (one
+numba kernel over candidates x recordings, threads sharing the data: no pickling, no worker
+processes, one copy of the data); an objective without the hook, or one whose hook returns None for
+its configuration, is evaluated serially with a one-line note. With ``objective.timeout_s`` the batch
+runs in one forked child with a deadline of ``timeout_s`` per round of ``n_jobs`` candidates; when it
+does not answer in time, the batch is re-run one candidate at a time, each in its own child with its
+own timeout, so the failures recorded are the serial backend's. A Ctrl-C is handled when the
+running batch returns (a kernel cannot be interrupted).
+
 Objectives are shipped to workers once: each worker process keeps the first copy it receives in a
 module-level cache keyed by a token, so lazy state (loaded recordings, compiled kernels) is built once
 per worker, not per evaluation.
@@ -21,6 +31,7 @@ from __future__ import annotations
 import math
 import os
 import signal
+import sys
 import threading
 import time
 import traceback
@@ -28,11 +39,11 @@ import uuid
 from dataclasses import dataclass, field
 from typing import Any
 
-from tuner.objective import Evaluation, as_evaluation
+from tuner.objective import Evaluation, as_evaluation, hook
 
 __all__ = ["Evaluator", "EvalRecord", "BACKENDS", "evaluate_one", "TimedObjective"]
 
-BACKENDS = ("serial", "loky", "dask")
+BACKENDS = ("serial", "loky", "dask", "threads")
 
 _WORKER_CACHE: dict[str, Any] = {}
 
@@ -142,11 +153,9 @@ class TimedObjective:
     def __call__(self, params: dict[str, Any]) -> Any:
         return self.objective(params)
 
-    def call_with_timeout(self, params: Any, call: Any = None) -> tuple[Evaluation, bool]:
-        """Evaluate ``(call or self.objective)(params)`` in a forked child killed after ``timeout_s``."""
-        import multiprocessing as mp
-
-        if not self._prepared:  # load data once in this process, so every child inherits it
+    def prepare(self) -> None:
+        """Load the data once in this process (``preflight`` hook), so every forked child inherits it."""
+        if not self._prepared:
             self._prepared = True
             prep = getattr(self.objective, "preflight", None)
             if callable(prep):
@@ -154,6 +163,12 @@ class TimedObjective:
                     prep()
                 except Exception:  # pragma: no cover - the driver's preflight reported it already
                     pass
+
+    def call_with_timeout(self, params: Any, call: Any = None) -> tuple[Evaluation, bool]:
+        """Evaluate ``(call or self.objective)(params)`` in a forked child killed after ``timeout_s``."""
+        import multiprocessing as mp
+
+        self.prepare()
         ctx = mp.get_context("fork")
         recv, send = ctx.Pipe(duplex=False)
         child = ctx.Process(target=_child, args=(call or self.objective, params, send), daemon=True)
@@ -194,6 +209,57 @@ def _child(objective: Any, params: dict[str, Any], send: Any) -> None:
         os._exit(code)
 
 
+def _batch_child(fn: Any, args: tuple, send: Any) -> None:
+    """In a forked child: send ``(True, fn(*args))`` or ``(False, why)``; never return to the caller."""
+    code = 0
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            out = (True, fn(*args))
+        except BaseException as exc:
+            out = (False, f"{type(exc).__name__}: {exc}")
+        send.send(out)
+    except BaseException:  # pragma: no cover
+        code = 1
+    finally:
+        os._exit(code)
+
+
+def _in_child(fn: Any, args: tuple, timeout_s: float) -> tuple[bool, Any]:
+    """``fn(*args)`` in a forked child killed after ``timeout_s``: ``(True, value)`` or ``(False, why)``."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_batch_child, args=(fn, args, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        if not recv.poll(timeout_s):
+            return False, f"no result after {timeout_s:g} s"
+        try:
+            return recv.recv()
+        except EOFError:
+            return False, "the evaluation process died"
+    finally:
+        if child.is_alive():
+            child.kill()
+        child.join()
+        recv.close()
+
+
+def _batch_records(batch: Any, params: list[dict[str, Any]], n_threads: int,
+                   seeds: list[int] | None) -> list[tuple[Evaluation, bool]] | None:
+    """The hook's results as ``(evaluation, raised)`` pairs (None when it cannot batch this objective)."""
+    out = batch(params, n_threads) if seeds is None else batch(params, n_threads, seeds=seeds)
+    if out is None:
+        return None
+    out = list(out)
+    if len(out) != len(params):
+        raise RuntimeError(f"evaluate_batch returned {len(out)} results for {len(params)} candidates")
+    return [(_failure(v), True) if isinstance(v, BaseException) else (as_evaluation(v), False) for v in out]
+
+
 def _eval_chunk(token: str, objective: Any, chunk: list[dict[str, Any]]) -> list[EvalRecord]:
     """Worker side: reuse this process's first copy of the objective (its lazy state survives)."""
     obj = _WORKER_CACHE.get(token)
@@ -223,12 +289,14 @@ class Evaluator:
     ----------
     objective : callable
         Picklable ``objective(params) -> Evaluation | float | (float, dict)``.
-    backend : {"serial", "loky", "dask"}
+    backend : {"serial", "loky", "dask", "threads"}
         ``serial`` is a plain loop in this process (the debugging path); ``loky`` uses joblib's
         process pool; ``dask`` uses a ``distributed`` client: ``address`` of a running scheduler, or a
-        LocalCluster of ``n_jobs`` single-threaded worker processes on 127.0.0.1.
+        LocalCluster of ``n_jobs`` single-threaded worker processes on 127.0.0.1; ``threads`` hands the
+        whole batch to the objective's ``evaluate_batch`` hook in this process (``n_jobs`` threads),
+        serial for an objective without it.
     n_jobs : int
-        Worker processes for loky and the local Dask cluster (default 2).
+        Worker processes for loky and the local Dask cluster, threads for ``threads`` (default 2).
     address : str, optional
         Dask scheduler address, e.g. ``tcp://10.0.0.5:8786``.
     chunks_per_worker : int
@@ -252,6 +320,9 @@ class Evaluator:
         self._client = None
         self._cluster = None
         self._remote_obj = None
+        #: one-line notes about this evaluator's choices (fallbacks), each printed once to stderr
+        self.notes: list[str] = []
+        self._prepared = False
 
     # --- lifecycle ----------------------------------------------------------------------------
     def __enter__(self) -> Evaluator:
@@ -276,6 +347,8 @@ class Evaluator:
             return "serial"
         if self.backend == "loky":
             return f"loky, {self.n_jobs} workers"
+        if self.backend == "threads":
+            return f"threads, {self.n_jobs} in this process (objective's evaluate_batch)"
         return f"dask, {self.address or f'LocalCluster({self.n_jobs} workers)'}"
 
     # --- mapping ------------------------------------------------------------------------------
@@ -284,12 +357,62 @@ class Evaluator:
             return []
         if self.backend == "serial":
             return _eval_chunk(self.token, self.objective, list(params_list))
+        if self.backend == "threads":
+            return self._run_threads(list(params_list))
         chunks = _chunks(list(params_list), self.n_jobs * self.chunks_per_worker)
         if self.backend == "loky":
             results = self._run_loky(chunks)
         else:
             results = self._run_dask(chunks)
         return [r for chunk in results for r in chunk]
+
+    def _note(self, text: str) -> None:
+        if text not in self.notes:
+            self.notes.append(text)
+            print(f"note: {text}", file=sys.stderr, flush=True)
+
+    def _run_threads(self, items: list[Any]) -> list[EvalRecord]:
+        """The whole batch through ``evaluate_batch`` (see the module docstring); serial without it."""
+        from tuner.loop import SeededCall
+
+        seeded = isinstance(self.objective, SeededCall)
+        inner = self.objective.objective if seeded else self.objective
+        timed = inner if isinstance(inner, TimedObjective) and inner.timeout_s else None
+        batch = hook(inner, "evaluate_batch")
+        if batch is None:
+            self._note(f"backend threads: {type(getattr(inner, 'objective', inner)).__name__} has no "
+                       "evaluate_batch hook; its candidates are evaluated serially")
+            return _eval_chunk(self.token, self.objective, items)
+        params = [it[0] for it in items] if seeded else items
+        seeds = [int(it[1]) for it in items] if seeded and getattr(inner, "takes_seed", False) else None
+        t0 = time.perf_counter()
+        try:
+            if timed is None:
+                recs = _batch_records(batch, params, self.n_jobs, seeds)
+            else:
+                if not self._prepared:  # data loaded and kernels compiled here, inherited by every child
+                    self._prepared = True
+                    timed.prepare()
+                    batch([], self.n_jobs)
+                rounds = -(-len(params) // self.n_jobs)
+                ok, recs = _in_child(_batch_records, (batch, params, self.n_jobs, seeds), timed.timeout_s * rounds)
+                if not ok:
+                    self._note(f"backend threads: a batch gave {recs} ({rounds} x objective.timeout_s); its "
+                               "candidates were re-run one at a time with their own timeout")
+                    return _eval_chunk(self.token, self.objective, items)
+        except Exception as exc:  # the hook itself failed: the serial path still scores every candidate
+            self._note(f"backend threads: evaluate_batch raised {type(exc).__name__}: {exc}; that batch was "
+                       "evaluated serially")
+            return _eval_chunk(self.token, self.objective, items)
+        if recs is None:
+            self._note(f"backend threads: {type(getattr(inner, 'objective', inner)).__name__} cannot batch this "
+                       "configuration; its candidates are evaluated serially")
+            return _eval_chunk(self.token, self.objective, items)
+        # per-candidate time is not observable inside one kernel: each gets its share of the batch's
+        # thread-seconds, so the seconds column still sums to the work done
+        share = (time.perf_counter() - t0) * min(self.n_jobs, len(params)) / len(params)
+        worker = f"{os.getpid()}"
+        return [EvalRecord(ev, share, worker, raised) for ev, raised in recs]
 
     def _pool(self):
         from joblib import Parallel

@@ -18,7 +18,7 @@ Objective *kinds* that can be named in YAML (``objective.kind``) are registered 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
@@ -141,6 +141,17 @@ class TunableObjective(Objective, Protocol):
         """Cross-validation folds for ``tuner cv``: ``[(name, train_objective, test_objective)]``, each
         objective on part of the data (e.g. leave one recording group out; ``k`` folds if given)."""
 
+    def evaluate_batch(self, params_list: Sequence[Mapping[str, Any]], n_threads: int,
+                       seeds: Sequence[int] | None = None) -> list[Any] | None:
+        """Evaluate a whole population in this process on ``n_threads`` threads (``backend: threads``).
+
+        Returns one item per candidate, in order: what ``__call__`` would return (each must equal
+        the serial call's result exactly), or the exception that candidate raised (recorded as a failed
+        evaluation with its message, as the serial backend records it). Returns None when this
+        configuration cannot be batched (the engine then evaluates serially). ``seeds`` is given only to
+        objectives with ``takes_seed = True``: the seed of each candidate. An empty ``params_list``
+        prepares (loads data, compiles kernels) and returns ``[]``."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
@@ -148,7 +159,7 @@ class TunableObjective(Objective, Protocol):
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "parameter_names", "preflight", "score", "has_test_data",
-         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "finalize")
+         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

@@ -500,7 +500,17 @@ class FilterObjective:
         return prior_penalty(full, space, center, self.prior["strength"])
 
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
-        s = self.score(params, "train")
+        return self._evaluation(params, self.score(params, "train"))
+
+    def evaluate_batch(self, params_list: list[Mapping[str, Any]], n_threads: int) -> list[Any] | None:
+        """A population in one numba kernel on ``n_threads`` threads, equal to ``[self(p) for p in
+        params_list]`` (``backend: threads``); None where not batched (see objectives.attitude.batch)."""
+        from objectives.attitude.batch import evaluate_batch
+
+        return evaluate_batch(self, params_list, n_threads)
+
+    def _evaluation(self, params: Mapping[str, Any], s: Score) -> Evaluation:
+        """The evaluation of ``params`` from its train :class:`Score` (shared by the batch path)."""
         metrics = {}
         recs = s.recordings
         for name, m in recs.items():

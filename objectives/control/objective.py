@@ -300,6 +300,17 @@ class ClosedLoopObjective:
             sim = self.simulate(params)
         except ValueError as exc:  # a design that cannot be built (e.g. Riccati without solution)
             return Evaluation.failed(f"controller design failed: {exc}")
+        return self._evaluation(sim)
+
+    def evaluate_batch(self, params_list: list[Mapping[str, Any]], n_threads: int) -> list[Any]:
+        """A population in one numba kernel on ``n_threads`` threads, equal to ``[self(p) for p in
+        params_list]`` (``backend: threads``; objectives.control.batch)."""
+        from objectives.control.batch import evaluate_batch
+
+        return evaluate_batch(self, params_list, n_threads)
+
+    def _evaluation(self, sim: Mapping[str, Any]) -> Evaluation:
+        """Score one simulation (the dict of :meth:`simulate`) with eq. 2.39 and the requirements."""
         y, ref, n = sim["outputs"], sim["references"], sim["n_done"]
         ts = self._sensors.Ts_s
         peak = {

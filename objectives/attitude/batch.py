@@ -1,0 +1,359 @@
+"""Population evaluation of the filter objective in one numba kernel (``backend: threads``).
+
+:meth:`FilterObjective.evaluate_batch` comes here. For every (candidate, recording) pair the Python
+side builds what the serial path would hand the filter kernel (the validated filter, its coefficient
+array, the initial state, the FAEKF's fuzzy tables); one ``@njit(parallel=True)`` kernel then runs,
+for every pair, the filter's own per-recording kernel, the frame conversion of
+:func:`objectives.attitude.quaternion.to_frame` and the one-pass error sums of
+:mod:`objectives.attitude.fused_errors`, threads sharing the recordings (see
+:mod:`objectives.batch_threads` for lanes and buffers). The sums are combined per candidate by the
+objective's own code (``_combine`` and ``_evaluation``), so each result equals what ``__call__``
+returns for the same parameters, bit for bit (tests/attitude/test_filter_batch.py).
+
+Batched: Madgwick and Mahony (any options), EKF / FAEKF without the robust blocks and the thesis
+1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
+have truth. For any other configuration :func:`evaluate_batch` returns None and the engine evaluates
+serially.
+
+The kernels are not cached (``cache=False``): they call kernels of other modules, whose changes
+numba's cache would not see (the rule of :mod:`objectives.control.wmp`); they compile once per
+process, on the first batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numba import njit, prange
+from numba.typed import List
+
+from objectives.attitude.filters._ekf_kernel import ekf_kernel
+from objectives.attitude.filters._kf1d_kernels import kf1d_kernel
+from objectives.attitude.filters.base import FilterResult, initial_quaternion
+from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale, gravity_in_units
+from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt, _up_sign, tilt_from_quat
+from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel
+from objectives.attitude.filters.mahony import Mahony, _mahony_kernel
+from objectives.attitude.fused_errors import ErrorSums, _error_sums
+from objectives.attitude.quaternion.algebra import _qmul_kernel
+from objectives.attitude.quaternion.conversions import frame_rotation
+from objectives.batch_threads import lanes, use_threads
+from tuner.objective import Score
+
+__all__ = ["evaluate_batch", "batchable"]
+
+#: kernel family of each batched filter class (exact class: a subclass may change ``_run``)
+_FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3, KF1D: 4}
+_N_SUMS = 11
+
+
+@njit(cache=False)
+def _pair_sums(q, c, rots, r, true, mask, out):
+    """Error sums of the estimate ``q`` of recording ``r`` (converted into ``c`` to its frame if needed)."""
+    if rots[r, 4] != 0.0:
+        _qmul_kernel(rots[r:r + 1, :4], q, c)
+        _error_sums(c, true, mask, out)
+    else:
+        _error_sums(q, true, mask, out)
+
+
+@njit(cache=False, parallel=True)
+def _bias_batch(family, data, pairs, lanes_, bufs, sums):
+    """Madgwick (family 0) or Mahony (1) on every pair, error sums into ``sums[pair]`` (P, 11).
+
+    data : ``(gyrs, accs, mags, trues, masks, rots)``: typed lists, one array per recording (``mags[r]``
+        (0, 3) without one), and ``rots`` (R, 5): the rotation quaternion to the recording's frame and
+        1.0 when a conversion is needed.
+    pairs : ``(rec, use_mag, coefs, states)``: (P,) recording of each pair, 1 when it uses the
+        magnetometer, (P, 5) coefficients (Mahony's 4 padded with a zero), (P, 7) initial states.
+    lanes_ : ``(order, start)`` (:func:`objectives.batch_threads.lanes`).
+    bufs : ``(qbuf, cbuf)``: (lanes, N_max, 4) per-lane output buffers.
+    """
+    gyrs, accs, mags, trues, masks, rots = data
+    pair_rec, pair_mag, coefs, states = pairs
+    order, start = lanes_
+    qbuf, cbuf = bufs
+    for lane in prange(start.shape[0] - 1):
+        no_bias = np.empty((0, 3))
+        no_mag = np.empty((0, 3))
+        for j in range(start[lane], start[lane + 1]):
+            p = order[j]
+            r = pair_rec[p]
+            n = gyrs[r].shape[0]
+            q = qbuf[lane, :n]
+            mag = mags[r] if pair_mag[p] != 0 else no_mag
+            if family == 0:
+                _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
+            else:
+                _mahony_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
+
+
+@njit(cache=False, parallel=True)
+def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
+    """EKF (``fuzzy`` 0) or FAEKF (1: the fuzzy scale of eqs. 28-31 first) on every pair, as ``_bias_batch``
+    (``coefs`` (P, 12)).
+
+    fz : ``(vibs, exts, mps, mf_kind, mf_params, rules, cons)``: typed lists of the FAEKF's disturbance
+        measures per recording, the (3, 3) set kinds, (P, 3, 3, 4) each pair's membership table, the
+        (27, 3) rules and (P, 27) each pair's rule consequents.
+    bufs : ``(qbuf, bbuf, cbuf, kbuf)``: per-lane quaternion (lanes, N_max, 4), bias (lanes, N_max, 3),
+        converted quaternion and fuzzy-scale (lanes, N_max) buffers.
+    """
+    gyrs, accs, mags, trues, masks, rots = data
+    pair_rec, pair_mag, coefs, states = pairs
+    order, start = lanes_
+    vibs, exts, mps, mf_kind, mf_params, rules, cons = fz
+    qbuf, bbuf, cbuf, kbuf = bufs
+    for lane in prange(start.shape[0] - 1):
+        no_mag = np.zeros((1, 3))
+        one = np.ones(1)
+        for j in range(start[lane], start[lane + 1]):
+            p = order[j]
+            r = pair_rec[p]
+            n = gyrs[r].shape[0]
+            q = qbuf[lane, :n]
+            mag = mags[r] if pair_mag[p] != 0 else no_mag
+            if fuzzy != 0:
+                k = kbuf[lane, :n]
+                fuzzy_scale(vibs[r], exts[r], mps[r], mf_kind, mf_params[p], rules, cons[p], k)
+                ekf_kernel(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
+            else:
+                ekf_kernel(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
+
+
+@njit(cache=False, parallel=True)
+def _kf1d_batch(data, pairs, lanes_, theta, bufs, sums):
+    """The thesis 1-D tilt KF on every pair: the angle into ``theta[pair, :n]`` (for ``mse_1d``), the
+    error sums of its quaternion (:func:`objectives.attitude.filters.kf1d.quat_from_tilt`, already in the
+    recording's frame) into ``sums[pair]``.
+
+    data : ``(gys, axs, azs, trues, masks, up)``: per recording the rate about y, the specific force
+        along x and z, truth and mask (typed lists), and (R,) the kernel's ``up_sign``.
+    pairs : ``(rec, coefs, states)``: (P,), (P, 4), (P, 5).  bufs : ``(bbuf, qbuf)`` per lane.
+    """
+    gys, axs, azs, trues, masks, up = data
+    pair_rec, coefs, states = pairs
+    order, start = lanes_
+    bbuf, qbuf = bufs
+    for lane in prange(start.shape[0] - 1):
+        one = np.ones(1)
+        for j in range(start[lane], start[lane + 1]):
+            p = order[j]
+            r = pair_rec[p]
+            n = gys[r].shape[0]
+            th = theta[p, :n]
+            kf1d_kernel(gys[r], axs[r], azs[r], up[r], coefs[p], one, states[p], 1, th, bbuf[lane, :n])
+            q = qbuf[lane, :n]
+            _quat_from_tilt(th, q)
+            _error_sums(q, trues[r], masks[r], sums[p])
+
+
+def batchable(obj: Any) -> bool:
+    """True when :func:`evaluate_batch` can evaluate this objective's configuration (module docstring)."""
+    fam = _FAMILY.get(obj._cls)
+    if fam is None or (obj.metric == "mse_1d" and fam != 4):
+        return False
+    if fam in (2, 3):
+        try:
+            if obj.make_filter({}).robust:
+                return False
+        except ValueError:
+            return False
+    recs = obj.recordings("train")
+    return bool(recs) and all(rec.quat is not None for rec in recs)
+
+
+class _Data:
+    """The recordings as the kernels read them (built once per objective, shared by every batch)."""
+
+    def __init__(self, obj: Any):
+        recs = obj.recordings("train")
+        self.recs = recs
+        c = np.ascontiguousarray
+        self.gyrs = List([c(r.gyr, dtype=np.float64) for r in recs])
+        self.accs = List([c(r.acc, dtype=np.float64) for r in recs])
+        self.mags = List([c(r.mag, dtype=np.float64) if r.mag is not None else np.empty((0, 3)) for r in recs])
+        self.trues = List([c(r.quat, dtype=np.float64) for r in recs])
+        self.masks = List([c(obj._mask(r), dtype=np.bool_) for r in recs])
+        self.n = np.array([r.n for r in recs], dtype=np.int64)
+        self.q0: dict[tuple, np.ndarray] = {}
+        self.gravity = [gravity_in_units(r) if obj._cls in (EKF, FAEKF) else 1.0 for r in recs]
+        frame = obj._cls.working_frame
+        self.rots = np.zeros((len(recs), 5))
+        for i, r in enumerate(recs):
+            self.rots[i, :4] = frame_rotation(frame, r.frame)
+            self.rots[i, 4] = 0.0 if frame.upper() == r.frame.upper() else 1.0
+        self.dist: list | None = None
+
+    def initial(self, obj: Any, flt: Any, i: int) -> np.ndarray:
+        """The start quaternion of ``flt`` on recording ``i`` (``AttitudeFilter._run_detailed``'s)."""
+        rec = self.recs[i]
+        if flt.needs_mag and flt.values.get("use_mag", True) and rec.mag is None:
+            raise ValueError(f"{flt.name}: recording {rec.name!r} has no magnetometer; set use_mag: false")
+        use_mag = bool(flt.values.get("use_mag", True)) and rec.mag is not None
+        init = flt.values.get("init", "auto")
+        how = obj.q0 if init == "auto" else init
+        key = (i, repr(how), use_mag)
+        if key not in self.q0:
+            self.q0[key] = initial_quaternion(rec, flt.working_frame, how, use_mag=use_mag)
+        return self.q0[key]
+
+
+def _data(obj: Any) -> _Data:
+    if "batch_data" not in obj._cache:
+        obj._cache["batch_data"] = _Data(obj)
+    return obj._cache["batch_data"]
+
+
+def _sums(out: np.ndarray) -> ErrorSums:
+    """:func:`objectives.attitude.fused_errors.error_sums`'s result from the kernel's sums."""
+    n = int(out[9])
+    if n == 0:
+        nan = np.full(3, np.nan)
+        return ErrorSums(0, 0, nan, nan.copy(), nan.copy())
+    return ErrorSums(n, int(out[10]), out[0:3] / n, out[3:6] / n, out[6:9] / n)
+
+
+def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = None) -> Score:
+    """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth);
+    ``angles``: the 1-D filters' angle per recording, for ``mse_1d``."""
+    per: dict[str, dict[str, float]] = {}
+    failed = ""
+    for i, (rec, es) in enumerate(zip(recs, sums)):
+        if es.n == 0:
+            raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
+        if es.n_nonfinite and not failed:
+            failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
+        per[rec.name] = dict(es.as_dict())
+        if obj.metric == "mse_1d":
+            res = FilterResult(np.empty((0, 4)), rec.frame, {"angle": angles[i]})
+            per[rec.name]["mse_1d"] = obj._mse_1d(rec, res, obj._mask(rec))
+    fitness = obj._combine(sums, per, [r.name for r in recs], "train")
+    return Score(float(fitness), per, failed)
+
+
+def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str, Any]], results: list):
+    """Per pair: coefficients, initial state, magnetometer use (and fuzzy tables); failures into ``results``."""
+    rows: list[tuple[int, int, np.ndarray, np.ndarray, int, Any]] = []
+    for ci, params in enumerate(params_list):
+        try:
+            flt = obj.make_filter(params)
+            v = flt.values
+            pairs = []
+            for ri, rec in enumerate(data.recs):
+                q0 = data.initial(obj, flt, ri)
+                use_mag = bool(v.get("use_mag", False)) and rec.mag is not None
+                state = np.zeros(7)
+                state[:4] = q0
+                if fam == 4:
+                    coef = flt._coef(rec.dt)
+                    state = flt._state0(tilt_from_quat(q0, rec.frame, flt.working_frame))
+                elif fam <= 1:
+                    coef = flt.coef(v, rec.dt, use_mag)
+                else:
+                    coef = flt.coefficients(rec.dt, use_mag, data.gravity[ri])
+                fz = None
+                if fam == 3:
+                    fz = (flt.membership_table(), faekf_rules(flt.singletons())[1], flt.values)
+                pairs.append((ci, ri, coef, state, int(use_mag), fz))
+            rows += pairs
+        except Exception as exc:  # this candidate fails as it would serially; the others go on
+            results[ci] = exc
+    return rows
+
+
+def _disturbances(obj: Any, data: _Data, flt: Any) -> tuple[List, List, List]:
+    """The FAEKF's fuzzy inputs per recording, from the objective's cache as its serial path uses them."""
+    from objectives.attitude.objective import _CONTEXT_KEYS
+
+    outs = ([], [], [])
+    for i, rec in enumerate(data.recs):
+        key = ("dist", ("train", i), tuple((k, flt.values.get(k)) for k in _CONTEXT_KEYS))
+        if key not in obj._cache:
+            obj._cache[key] = flt.disturbances(rec)
+        d = obj._cache[key]
+        d = flt._as_disturbances(rec, d.vib_freq_hz, d.ext_acc_g, d.mag_pert_nu)
+        for lst, a in zip(outs, (d.vib_freq_hz, d.ext_acc_g, d.mag_pert_nu)):
+            lst.append(a)
+    return List(outs[0]), List(outs[1]), List(outs[2])
+
+
+def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads: int) -> list[Any] | None:
+    """Evaluations of ``params_list`` equal to ``[obj(p) for p in params_list]`` (None: not batchable).
+
+    An item is the :class:`~tuner.objective.Evaluation` or the exception the serial call raises.
+    """
+    if not batchable(obj):
+        return None
+    fam = _FAMILY[obj._cls]
+    data = _data(obj)
+    results: list[Any] = [None] * len(params_list)
+    rows = _prepare(obj, data, fam, params_list, results)
+    n_lanes = use_threads(n_threads)
+    P = len(rows)
+    pair_rec = np.array([r[1] for r in rows], dtype=np.int64)
+    pair_mag = np.array([r[4] for r in rows], dtype=np.int64)
+    width = {0: 5, 1: 5, 4: 4}.get(fam) or max([len(r[2]) for r in rows] or [12])
+    coefs = np.zeros((P, width))
+    states = np.zeros((P, 5 if fam == 4 else 7))
+    for k, r in enumerate(rows):
+        coefs[k, :len(r[2])] = r[2]
+        states[k] = r[3]
+    order, start = lanes(data.n[pair_rec] if P else np.zeros(0), n_lanes)
+    n_max = int(data.n.max()) if len(data.n) else 0
+    qbuf = np.empty((n_lanes, n_max, 4))
+    cbuf = np.empty((n_lanes, n_max, 4))
+    sums = np.zeros((P, _N_SUMS))
+    theta = None
+    lanes_ = (order, start)
+    if fam == 4:
+        theta = np.empty((P, n_max))
+        up = np.array([_up_sign(r.frame) for r in data.recs])
+        c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
+        cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
+                     for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
+        _kf1d_batch((*cols, data.trues, data.masks, up), (pair_rec, coefs, states), lanes_, theta,
+                    (np.empty((n_lanes, n_max)), qbuf), sums)
+        return _results(obj, data, params_list, rows, sums, theta, results)
+    recs = (data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots)
+    pairs = (pair_rec, pair_mag, coefs, states)
+    if fam <= 1:
+        _bias_batch(fam, recs, pairs, lanes_, (qbuf, cbuf), sums)
+        return _results(obj, data, params_list, rows, sums, None, results)
+    mf_kind = np.zeros((3, 3), dtype=np.int64)  # objectives.fuzzy.GAUSS, as FAEKF.scale
+    rules = faekf_rules(np.zeros(7))[0]
+    mf_params = np.zeros((P, 3, 3, 4))
+    cons = np.zeros((P, rules.shape[0]))
+    if fam == 3 and P:
+        flt = obj.make_filter(params_list[rows[0][0]])  # disturbances depend on fixed options only
+        vibs, exts, mps = _disturbances(obj, data, flt)
+        for k, r in enumerate(rows):
+            mf_params[k] = r[5][0]
+            cons[k] = r[5][1]
+    else:
+        vibs = exts = mps = List([np.zeros(0) for _ in data.recs])
+    bufs = (qbuf, np.empty((n_lanes, n_max, 3)), cbuf, np.empty((n_lanes, n_max if fam == 3 else 0)))
+    _ekf_batch(1 if fam == 3 else 0, recs, pairs, lanes_, (vibs, exts, mps, mf_kind, mf_params, rules, cons), bufs,
+               sums)
+    return _results(obj, data, params_list, rows, sums, None, results)
+
+
+def _results(obj: Any, data: _Data, params_list: Sequence[Mapping[str, Any]], rows: list, sums: np.ndarray,
+             theta: np.ndarray | None, results: list) -> list[Any]:
+    """Each candidate's evaluation from its pairs' sums (and angles), by the objective's own code."""
+    per_cand: dict[int, list[ErrorSums]] = {}
+    angles: dict[int, list[np.ndarray]] = {}
+    for k, r in enumerate(rows):
+        per_cand.setdefault(r[0], []).append(_sums(sums[k]))
+        if theta is not None:
+            angles.setdefault(r[0], []).append(theta[k, :data.n[r[1]]])
+    for ci, es in per_cand.items():
+        try:
+            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es, angles.get(ci)))
+        except Exception as exc:
+            results[ci] = exc
+    return results

@@ -1,0 +1,148 @@
+"""Population kernel of the filter objective (backend: threads): results identical to the serial path."""
+
+import csv
+
+import numpy as np
+import pytest
+
+from objectives.attitude.batch import batchable
+from objectives.attitude.data.broad import default_broad_dir
+from objectives.attitude.objective import FilterObjective
+from objectives.batch_threads import lanes
+from tuner.config import config_from_dict
+from tuner.evaluate import Evaluator
+from tuner.objective import Evaluation
+from tuner.run import run
+
+BENCH = {"synthetic": {"generator": "bench6dof", "duration_s": 4, "seed": 1}}
+BENCH2 = {"synthetic": {"generator": "bench6dof", "duration_s": 3, "seed": 2}}
+TILT = {"synthetic": {"generator": "tilt1d", "duration_s": 4, "seed": 1}}
+TILT2 = {"synthetic": {"generator": "tilt1d", "duration_s": 3, "seed": 2}}
+FAEKF_FIXED = {"window": 200, "fft_length": 256, "f_thr": 10.0, "omega_thr": 0.26}
+
+
+def _candidates(obj, n, seed=0):
+    rng = np.random.default_rng(seed)
+    return obj.default_space().decode_batch(rng.random((n, obj.default_space().dim)))
+
+
+def _same(batch, serial):
+    assert len(batch) == len(serial)
+    for b, s in zip(batch, serial):
+        if isinstance(s, BaseException):
+            assert type(b) is type(s) and str(b) == str(s)
+        else:
+            assert isinstance(b, Evaluation) and b == s  # fitness and every metric bit for bit
+
+
+def _serial(obj, params):
+    out = []
+    for p in params:
+        try:
+            out.append(obj(p))
+        except Exception as exc:
+            out.append(exc)
+    return out
+
+
+@pytest.mark.parametrize("flt, fixed, extra", [
+    ("madgwick", {}, {}),
+    ("madgwick", {"use_mag": False, "zeta": 0.01}, {"metric": "euler_rmse_mean"}),
+    ("mahony", {}, {"metric": "broad_total_rmse", "warmup_s": 0.5}),
+    ("ekf", {}, {"q0": "truth"}),
+    ("faekf", FAEKF_FIXED, {"metric": "euler_rmse_mean", "metric_options": {"aggregate": "median"}}),
+    ("kf1d", {}, {"metric": "mse_1d", "data": [TILT, TILT2]}),
+    ("kf1d", {}, {"metric": "euler_rmse_mean", "data": [TILT]}),
+])
+def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
+    extra = dict(extra)
+    obj = FilterObjective(flt, extra.pop("data", [BENCH, BENCH2]), fixed=dict(fixed), **extra)
+    params = _candidates(obj, 7)
+    assert batchable(obj)
+    _same(obj.evaluate_batch(params, 2), _serial(obj, params))
+    _same(obj.evaluate_batch(params[:3], 1), _serial(obj, params[:3]))
+
+
+def test_a_bad_candidate_fails_alone_with_the_serial_message():
+    obj = FilterObjective("madgwick", [BENCH], prior={"strength": 1.0})
+    params = [{"beta": 0.05}, {"beta": -1.0}, {"beta": 0.2}]
+    got = obj.evaluate_batch(params, 2)
+    ref = _serial(obj, params)
+    assert isinstance(got[1], ValueError) and "beta" in str(got[1])
+    _same(got, ref)
+    assert got[0].metrics["prior_penalty"] >= 0
+
+
+def test_an_empty_batch_prepares_and_returns_nothing():
+    obj = FilterObjective("mahony", [BENCH])
+    assert obj.evaluate_batch([], 2) == []
+
+
+@pytest.mark.parametrize("flt, section", [("akf1d", {"data": [TILT], "metric": "mse_1d"}),
+                                          ("madgwick", {"data": [TILT], "metric": "mse_1d"}),
+                                          ("ekf", {"data": [BENCH], "fixed": {"mag_rejection": True}}),
+                                          ("vqf", {"data": [BENCH]})])
+def test_configurations_without_a_kernel_return_none(flt, section):
+    obj = FilterObjective.from_config({"kind": "filter", "filter": flt, **section})
+    assert not batchable(obj)
+    assert obj.evaluate_batch([obj.default_params()], 2) is None
+
+
+def test_lanes_balance_and_cover_every_item():
+    costs = np.array([5.0, 1.0, 4.0, 2.0, 3.0, 3.0])
+    order, start = lanes(costs, 2)
+    assert sorted(order.tolist()) == list(range(6)) and start.tolist()[0] == 0 and start[-1] == 6
+    loads = [costs[order[start[k]:start[k + 1]]].sum() for k in range(2)]
+    assert loads == [9.0, 9.0]
+    order, start = lanes(np.zeros(0), 3)
+    assert order.size == 0 and start.tolist() == [0, 0, 0, 0]
+
+
+def _history(rd):
+    with open(rd / "history.csv") as fh:
+        return [{k: v for k, v in row.items() if k != "seconds"} for row in csv.DictReader(fh)]
+
+
+def _run(tmp_path, objective, backend, name, parameters=None):
+    raw = {"name": name, "seed": 5, "objective": objective,
+           "optimizer": {"method": "pso", "population": 6, "generations": 2},
+           "parallel": {"backend": backend, "n_jobs": 2}, "output": str(tmp_path / "runs")}
+    if parameters:
+        raw["parameters"] = parameters
+    run(config_from_dict(raw, source=str(tmp_path / f"{name}.yaml"), base_dir=tmp_path), run_dir=tmp_path / name,
+        quiet=True)
+    return _history(tmp_path / name)
+
+
+def test_history_of_a_filter_run_is_identical_serial_and_threads(tmp_path):
+    objective = {"kind": "filter", "filter": "faekf", "data": [BENCH, BENCH2], "fixed": dict(FAEKF_FIXED),
+                 "metric": "euler_mse_geomean", "warmup_s": 0.5}
+    ref = _run(tmp_path, objective, "serial", "serial")
+    got = _run(tmp_path, objective, "threads", "threads")
+    assert len(ref) == 12 and got == ref
+
+
+@pytest.mark.skipif(not default_broad_dir().exists(), reason="BROAD data not found")
+def test_history_on_broad_is_identical_serial_and_threads(tmp_path):
+    objective = {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
+                 "data": [{"broad": {"dir": str(default_broad_dir()), "trial": "07_undisturbed_fast_rotation_B",
+                                     "stop_s": 35.0}}]}
+    ref = _run(tmp_path, objective, "serial", "serial", {"beta": {"low": 0.001, "high": 1.0, "scale": "log"}})
+    got = _run(tmp_path, objective, "threads", "threads", {"beta": {"low": 0.001, "high": 1.0, "scale": "log"}})
+    assert got == ref and all(r["status"] == "ok" for r in got)
+
+
+def test_threads_backend_uses_the_kernel_for_the_filter_objective():
+    obj = FilterObjective("madgwick", [BENCH])
+    params = _candidates(obj, 4, seed=3)
+    with Evaluator(obj, "threads", n_jobs=2) as ev:
+        recs = ev(params)
+        assert ev.notes == []
+    _same([r.evaluation for r in recs], _serial(obj, params))
+
+
+def test_with_a_timeout_the_batch_runs_in_a_forked_child_with_the_same_history(tmp_path):
+    objective = {"kind": "filter", "filter": "mahony", "data": [BENCH]}
+    ref = _run(tmp_path, objective, "serial", "serial")
+    got = _run(tmp_path, {**objective, "timeout_s": 120.0}, "threads", "threads")
+    assert got == ref
