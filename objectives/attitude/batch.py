@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, prange
 from numba.typed import List
 
+from objectives.attitude.divergence import N_SEGMENTS, _segment_ms, growth_verdict
 from objectives.attitude.filters._ekf_kernel import ekf_kernel
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel
 from objectives.attitude.filters.base import FilterResult, initial_quaternion
@@ -46,17 +47,20 @@ __all__ = ["evaluate_batch", "batchable"]
 
 #: kernel family of each batched filter class (exact class: a subclass may change ``_run``)
 _FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3, KF1D: 4}
-_N_SUMS = 11
+#: per pair: the 11 error sums of fused_errors, then the N_SEGMENTS mean squares and counts of divergence
+_N_ERR = 11
+_N_SUMS = _N_ERR + 2 * N_SEGMENTS
 
 
 @njit(cache=False)
 def _pair_sums(q, c, rots, r, true, mask, out):
-    """Error sums of the estimate ``q`` of recording ``r`` (converted into ``c`` to its frame if needed)."""
+    """Error sums and growth segments (``out``, :data:`_N_SUMS`) of the estimate ``q`` of recording ``r``
+    (converted into ``c`` to its frame if needed)."""
     if rots[r, 4] != 0.0:
         _qmul_kernel(rots[r:r + 1, :4], q, c)
-        _error_sums(c, true, mask, out)
-    else:
-        _error_sums(q, true, mask, out)
+        q = c
+    _error_sums(q, true, mask, out[:_N_ERR])
+    _segment_ms(q, true, mask, out[_N_ERR:])
 
 
 @njit(cache=False, parallel=True)
@@ -149,7 +153,8 @@ def _kf1d_batch(data, pairs, lanes_, theta, bufs, sums):
             kf1d_kernel(gys[r], axs[r], azs[r], up[r], coefs[p], one, states[p], 1, th, bbuf[lane, :n])
             q = qbuf[lane, :n]
             _quat_from_tilt(th, q)
-            _error_sums(q, trues[r], masks[r], sums[p])
+            _error_sums(q, trues[r], masks[r], sums[p, :_N_ERR])
+            _segment_ms(q, trues[r], masks[r], sums[p, _N_ERR:])
 
 
 def batchable(obj: Any) -> bool:
@@ -218,9 +223,11 @@ def _sums(out: np.ndarray) -> ErrorSums:
     return ErrorSums(n, int(out[10]), out[0:3] / n, out[3:6] / n, out[6:9] / n)
 
 
-def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = None) -> Score:
+def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = None,
+           segments: list | None = None) -> Score:
     """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth);
-    ``angles``: the 1-D filters' angle per recording, for ``mse_1d``."""
+    ``angles``: the 1-D filters' angle per recording, for ``mse_1d``; ``segments``: each recording's
+    growth segments (mean squares, counts) for the divergence check."""
     per: dict[str, dict[str, float]] = {}
     failed = ""
     for i, (rec, es) in enumerate(zip(recs, sums)):
@@ -228,6 +235,10 @@ def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = No
             raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
         if es.n_nonfinite and not failed:
             failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
+        elif not failed and segments is not None:  # finite but running away (objectives.attitude.divergence)
+            ms, count = segments[i]
+            why = growth_verdict(np.degrees(np.sqrt(ms)), count.astype(np.int64))
+            failed = f"filter diverged on {rec.name}: {why}" if why else ""
         per[rec.name] = dict(es.as_dict())
         if obj.metric == "mse_1d":
             res = FilterResult(np.empty((0, 4)), rec.frame, {"angle": angles[i]})
@@ -346,14 +357,16 @@ def _results(obj: Any, data: _Data, params_list: Sequence[Mapping[str, Any]], ro
              theta: np.ndarray | None, results: list) -> list[Any]:
     """Each candidate's evaluation from its pairs' sums (and angles), by the objective's own code."""
     per_cand: dict[int, list[ErrorSums]] = {}
+    segments: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
     angles: dict[int, list[np.ndarray]] = {}
     for k, r in enumerate(rows):
         per_cand.setdefault(r[0], []).append(_sums(sums[k]))
+        segments.setdefault(r[0], []).append((sums[k, _N_ERR:_N_ERR + N_SEGMENTS], sums[k, _N_ERR + N_SEGMENTS:]))
         if theta is not None:
             angles.setdefault(r[0], []).append(theta[k, :data.n[r[1]]])
     for ci, es in per_cand.items():
         try:
-            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es, angles.get(ci)))
+            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es, angles.get(ci), segments[ci]))
         except Exception as exc:
             results[ci] = exc
     return results

@@ -27,7 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["N_SEGMENTS", "GROWTH_RATIO", "GROWTH_LIMIT_DEG", "MIN_SEGMENT", "segment_rms_deg", "unbounded_growth"]
+__all__ = ["N_SEGMENTS", "GROWTH_RATIO", "GROWTH_LIMIT_DEG", "MIN_SEGMENT", "segment_rms_deg", "unbounded_growth",
+           "growth_verdict"]
 
 N_SEGMENTS = 4
 GROWTH_RATIO = 3.0
@@ -99,6 +100,13 @@ def unbounded_growth(q_est: np.ndarray, q_true: np.ndarray, mask: np.ndarray | N
                      limit_deg: float = GROWTH_LIMIT_DEG, ratio: float = GROWTH_RATIO) -> str:
     """Why the error grows without bound (module docstring), or ``""`` when it does not."""
     rms, count = segment_rms_deg(q_est, q_true, mask)
+    return growth_verdict(rms, count, limit_deg, ratio)
+
+
+def growth_verdict(rms: np.ndarray, count: np.ndarray, limit_deg: float = GROWTH_LIMIT_DEG,
+                   ratio: float = GROWTH_RATIO) -> str:
+    """:func:`unbounded_growth` from the segments' RMS errors (deg) and sample counts (as
+    :func:`segment_rms_deg` returns them; the population kernels compute them with ``_segment_ms``)."""
     if count.min() < MIN_SEGMENT:
         return ""
     growing = bool(np.all(np.diff(rms) >= 0.0))

@@ -146,3 +146,16 @@ def test_with_a_timeout_the_batch_runs_in_a_forked_child_with_the_same_history(t
     ref = _run(tmp_path, objective, "serial", "serial")
     got = _run(tmp_path, {**objective, "timeout_s": 120.0}, "threads", "threads")
     assert got == ref
+
+
+def test_a_runaway_error_fails_in_the_batch_as_serially():
+    # the EKF's candidates of the parametrised test above include one whose finite error runs away
+    # (objectives.attitude.divergence); the population kernel must flag it too, not score it
+    obj = FilterObjective("ekf", [BENCH, BENCH2], q0="truth")
+    params = _candidates(obj, 7)
+    ref = _serial(obj, params)
+    runaway = [i for i, e in enumerate(ref) if isinstance(e, Evaluation) and "grows without bound" in e.error]
+    assert runaway, "no runaway candidate: the check below would prove nothing"
+    got = obj.evaluate_batch(params, 2)
+    for i in runaway:
+        assert got[i].status == "failed" and got[i].error == ref[i].error
