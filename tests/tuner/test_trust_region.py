@@ -68,16 +68,22 @@ def test_beats_random_search_at_120_evaluations(name, dim):
     assert np.median(tr) < 0.2 * np.median(rs)
 
 
-def test_budget_is_exact_and_the_first_batch_is_the_hypercube():
+def test_budget_is_exact_and_the_start_is_one_hypercube_in_whole_batches():
     o = TrustRegion(3, np.random.default_rng(0), max_evals=50, generations=None)
-    first = o.ask()
-    assert len(first) == o.n_init == 10 + 3
-    # a Latin hypercube: one point per stratum on every axis
-    for j in range(3):
-        assert sorted(np.floor(first[:, j] * len(first)).astype(int)) == list(range(len(first)))
-    o.tell(first, np.sum(first**2, axis=1))
+    assert o.population == 4 and o.n_init == 16  # 10 coefficients + 3, rounded up to batches of 4
+    start = []
+    for _ in range(4):
+        u = o.ask()
+        assert len(u) == 4
+        start.append(u)
+        o.tell(u, np.sum(u**2, axis=1))
+    start = np.vstack(start)
+    for j in range(3):  # a Latin hypercube: one point per stratum on every axis
+        assert sorted(np.floor(start[:, j] * 16).astype(int)) == list(range(16))
     _, n = _drive(o, lambda u: float(np.sum(u**2)))
-    assert n + len(first) == 50 and o.n_evals == 50 and o.stop_reason == "50 evaluations"
+    assert n + 16 == 50 and o.n_evals == 50 and o.stop_reason == "50 evaluations"
+    with pytest.raises(OptionError, match="multiple of the population"):
+        TrustRegion(3, np.random.default_rng(0), population=4, n_init=10, max_evals=50)
 
 
 def test_collapsed_region_restarts_with_a_new_hypercube():
