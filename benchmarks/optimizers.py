@@ -395,6 +395,25 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR, problems: lis
         analyses[name] = a
         if kind == "problem":
             verdicts[name] = _verdict(a)
+    load_end = _load()
+    meta = {"real_budget": real_budget, "real_pop": real_pop, "fun_dim": fun_dim, "fun_budget": fun_budget,
+            "fun_pop": fun_pop, "n_seeds": len(seeds), "wall": wall, "n_jobs": n_jobs, "load_start": load_start,
+            "load_end": load_end, "missing": missing, "skipped": skipped, "methods": methods}
+    lines, targets, fun_cmp, n_pass = report(analyses, verdicts, meta)
+    for a in analyses.values():  # curves are in the PNGs; keep the JSON readable
+        for v in a["methods"].values():
+            for k in ("curve_median", "curve_q1", "curve_q3"):
+                c = np.asarray(v[k])
+                idx = np.unique(np.linspace(0, len(c) - 1, 25).round().astype(int))
+                v[k] = {"evals": (idx + 1).tolist(), "values": c[idx].tolist()}
+    return {"results": {"problems": analyses, "verdicts": verdicts, "functions_vs_pyswarms": fun_cmp,
+                        "missing_peers": missing, "skipped": skipped, "wall_s": wall, "n_pass_real": n_pass,
+                        "seeds": seeds, "methods": methods, "load_start": load_start, "load_end": load_end},
+            "figures": figures, "markdown": "\n".join(lines), "targets": targets}
+
+
+def report(analyses: dict[str, Any], verdicts: dict[str, Any], meta: dict[str, Any]):
+    """Markdown lines, targets, the test-function comparison and the number of real problems passed."""
     n_pass = sum(1 for v in verdicts.values() if v["pass"])
     fun_cmp = {}
     for name in FUNCTIONS:
@@ -404,12 +423,13 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR, problems: lis
             pso, ps = a["methods"]["pso"]["final_median"], a["methods"]["pyswarms_gbest"]["final_median"]
             fun_cmp[name] = {"pso": pso, "best_ours": ours_best, "pyswarms": ps, "pass_pso": pso <= ps,
                              "pass_best_ours": ours_best <= ps}
-    # tables
-    load_end = _load()
-    lines = [f"Budgets: real problems {real_budget} evaluations (population {real_pop} where a method has one), "
-             f"test functions {fun_dim}-D, {fun_budget} evaluations (population {fun_pop}); {len(seeds)} seeds. "
-             f"Wall time {wall:.0f} s on {n_jobs} processes; load average (1/5/15 min) at the start "
-             f"{_fmt_load(load_start)}, at the end {_fmt_load(load_end)}."]
+    mt = meta
+    lines = [f"Budgets: real problems {mt['real_budget']} evaluations (population {mt['real_pop']} where a method "
+             f"has one), test functions {mt['fun_dim']}-D, {mt['fun_budget']} evaluations (population "
+             f"{mt['fun_pop']}); {mt['n_seeds']} seeds. Wall time {mt['wall']:.0f} s on {mt['n_jobs']} processes; "
+             f"load average (1/5/15 min) at the start {_fmt_load(mt['load_start'])}, at the end "
+             f"{_fmt_load(mt['load_end'])}."]
+    missing, skipped, methods = mt["missing"], mt["skipped"], mt["methods"]
     if missing:
         lines.append(f"Missing peers (not installed): {', '.join(missing)}.")
     if skipped:
@@ -451,16 +471,7 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR, problems: lis
                         "value": f"{sum(v['pass_pso'] for v in fun_cmp.values())}/{len(fun_cmp)} "
                                  f"(best of ours: {sum(v['pass_best_ours'] for v in fun_cmp.values())}/{len(fun_cmp)})",
                         "pass": all(v["pass_pso"] for v in fun_cmp.values())})
-    for a in analyses.values():  # curves are in the PNGs; keep the JSON readable
-        for v in a["methods"].values():
-            for k in ("curve_median", "curve_q1", "curve_q3"):
-                c = np.asarray(v[k])
-                idx = np.unique(np.linspace(0, len(c) - 1, 25).round().astype(int))
-                v[k] = {"evals": (idx + 1).tolist(), "values": c[idx].tolist()}
-    return {"results": {"problems": analyses, "verdicts": verdicts, "functions_vs_pyswarms": fun_cmp,
-                        "missing_peers": missing, "skipped": skipped, "wall_s": wall, "n_pass_real": n_pass,
-                        "seeds": seeds, "methods": methods, "load_start": load_start, "load_end": load_end},
-            "figures": figures, "markdown": "\n".join(lines), "targets": targets}
+    return lines, targets, fun_cmp, n_pass
 
 
 def main(argv: list[str] | None = None) -> int:
