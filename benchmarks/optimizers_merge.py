@@ -45,6 +45,7 @@ def _load_analyses(data: dict[str, Any]) -> dict[str, Any]:
 def merge(runs: list[Path], out_dir: Path, functions_from: Path | None = None) -> dict[str, Any]:
     """The merged result (as :func:`benchmarks.optimizers.run` returns it); writes the curves to ``out_dir``."""
     datas = [json.loads(Path(p).read_text()) for p in runs]
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     analyses: dict[str, Any] = {}
     per_run = []
     for d in datas:
@@ -86,7 +87,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, required=True, help="directory for the merged optimizers.json and curves")
     ap.add_argument("--functions-from", type=Path, help="an earlier full optimizers.json whose test functions to keep")
     args = ap.parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
     res = merge(args.runs, args.out, args.functions_from)
     path = write_result("optimizers", {"mode": "full", **res}, args.out)
     print(res["markdown"])
