@@ -85,7 +85,8 @@ class TrustRegion(Optimizer):
     r0 : float
         Initial trust radius, a half-width in unit-cube coordinates (default 0.1: at 120 evaluations in 2-4
         dimensions it beat 0.2 on 9 of the 12 test-function rows of ``benchmarks/results/auto_rules.md`` and
-        reached 1 % on madgwick_broad in 59.5 evaluations (median of 10 seeds) against 73).
+        reached 1 % on madgwick_broad in 59.5 evaluations (median of 10 seeds) against 73, both measured
+        with the start in a single batch, before it was split into whole batches).
     r_min, r_max : float
         Radius under which the search restarts (default 1e-3) and the largest radius (default 0.5).
     full_dim : int
