@@ -9,10 +9,14 @@ evaluations needed to come within 1 % of the best fitness any method found in an
 (``f <= f* + 0.01 |f*|``; a seed that never gets there counts as not reached, and the median is
 "not reached" when half the seeds or more miss).
 
-Target (issue): on at least 4 of the real problems (the issue says 6 and names 7; all 7 are
-run), the best of our methods reaches the 1 % band with no more evaluations (median over seeds)
-than the best of pyswarms, Optuna (TPE, CMA-ES) and scipy DE. When no method of either side
-reaches it, the median final fitness decides.
+Targets (issue 16), on the 7 real problems at 120 evaluations: the best of our methods reaches the
+1 % band with no more evaluations (median over seeds) than the best of pyswarms, Optuna (TPE,
+CMA-ES) and scipy DE on 7 of 7 (when no method of either side reaches it, the median final fitness
+decides); ``auto`` reaches the band (median) on at least 5 of 7; one of our methods ends in the
+FAEKF's better basin (:data:`BASIN_FAEKF`) in at least 5 of 10 seeds.
+
+``python -m benchmarks.optimizers --real-only --problems NAME --methods ... --seeds ... --out DIR``
+runs a subset; :mod:`benchmarks.optimizers_merge` joins per-problem runs into one result.
 
 Peer settings: pyswarms ``GlobalBestPSO`` with the options of its documentation
 (``c1=0.5, c2=0.3, w=0.9``; it draws from NumPy's global RNG, seeded here per run); Optuna's
@@ -25,19 +29,26 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from benchmarks.common import RESULTS_DIR, fmt, md_table, peer
+from benchmarks.problems import FULL_PROBLEMS
 
 __all__ = ["run", "METHODS", "OURS", "PEERS_Q", "run_method", "Budget", "evals_to_band"]
 
-OURS = ["pso", "pso_constriction", "pso_linear", "pso_lowbudget", "cmaes", "cmaes_restart", "auto", "de"]
+OURS = ["pso", "pso_constriction", "pso_linear", "pso_lowbudget", "cmaes", "cmaes_restart", "trust_region", "auto",
+        "de"]
 PEERS_Q = ["pyswarms_gbest", "optuna_tpe", "optuna_cmaes", "scipy_de"]
 METHODS = OURS + PEERS_Q + ["random"]
 
 FUNCTIONS = ["sphere", "rosenbrock", "rastrigin", "ackley"]
+
+#: the FAEKF's better basin (issue 16): every method's median stays near 1.03e-3, 6.73e-4 was found once; a seed
+#: counts as in that basin when its final fitness is below the midpoint
+BASIN_FAEKF = 0.5 * (6.73e-4 + 1.03e-3)
 
 
 class Exhausted(Exception):
@@ -79,7 +90,7 @@ def _ours(method: str, fn: Budget, dim: int, pop: int, seed: int) -> None:
         name, opts = "pso", {"inertia": "linear", "w": 0.9, "w_end": 0.4, "c1": 1.5, "c2": 1.5}
     elif method == "pso_lowbudget":
         name, opts = "pso", {"preset": "lowbudget"}
-    if method in ("auto", "cmaes_restart"):  # they size their own population from the evaluation budget
+    if method in ("auto", "cmaes_restart", "trust_region"):  # they size their own population from the budget
         opt = get_optimizer(method)(dim, rng, generations=None, max_evals=fn.budget)
         space = Space(Real(f"u{i}", 0.0, 1.0) for i in range(dim))
         minimize(lambda p: fn(np.fromiter(p.values(), float, dim)), space, opt)
@@ -221,12 +232,26 @@ def _analyse(name: str, runs: list[dict], budget: int) -> dict[str, Any]:
         out["methods"][m] = {
             "final_median": float(np.median(final)), "final_q1": float(np.quantile(final, 0.25)),
             "final_q3": float(np.quantile(final, 0.75)), "evals_to_1pct_median": _median_evals(ev),
+            "finals": final.tolist(),
             "evals_to_1pct": ev, "reached": int(sum(math.isfinite(e) for e in ev)), "seeds": len(rs),
             "seconds_median": float(np.median([r["seconds"] for r in rs])),
             "errors": sorted({r["error"] for r in rs if r["error"]}),
             "curve_median": np.median(T, 0), "curve_q1": np.quantile(T, 0.25, 0), "curve_q3": np.quantile(T, 0.75, 0),
         }
     return out
+
+
+def _basin_seeds(a: dict[str, Any]) -> tuple[str, int, int]:
+    """Our method with the most seeds ending below :data:`BASIN_FAEKF`: (method, seeds in the basin, seeds)."""
+    best = ("-", 0, 0)
+    for m in OURS:
+        v = a["methods"].get(m)
+        if v is None:
+            continue
+        n = int(sum(f <= BASIN_FAEKF for f in v["finals"]))
+        if n > best[1] or best[0] == "-":
+            best = (m, n, v["seeds"])
+    return best
 
 
 def _verdict(a: dict[str, Any]) -> dict[str, Any]:
@@ -299,29 +324,49 @@ def _plot(name: str, a: dict[str, Any], out_dir) -> str | None:
 def replot(result_json=RESULTS_DIR / "optimizers.json", out_dir=RESULTS_DIR) -> list[str]:
     """Redraw the quality curves from a result file (its curves are subsampled to 25 points)."""
     import json
-    from pathlib import Path
 
     data = json.loads(Path(result_json).read_text())
     return [_plot(name, a, Path(out_dir)) for name, a in data["results"]["problems"].items()]
 
 
-def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR) -> dict[str, Any]:
+def _load() -> list[float] | None:
+    """The machine's load average (1/5/15 min), as ``uptime`` shows it (None where the OS has none)."""
+    import os
+
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except OSError:
+        return None
+
+
+def _fmt_load(load: list[float] | None) -> str:
+    return "unknown" if load is None else ", ".join(f"{x:.2f}" for x in load)
+
+
+def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR, problems: list[str] | None = None,
+        methods: list[str] | None = None, seeds: list[int] | None = None,
+        functions: list[str] | None = None) -> dict[str, Any]:
+    """The benchmark; ``problems``, ``methods``, ``seeds`` and ``functions`` restrict it (``None``: all of the
+    mode; ``functions=[]`` runs the real problems only)."""
     from joblib import Parallel, delayed
 
     from benchmarks.problems import problem_names
 
-    seeds = list(range(2 if smoke else 10))
+    seeds = list(range(2 if smoke else 10)) if seeds is None else list(seeds)
     real_budget, real_pop = (16, 4) if smoke else (120, 12)
     fun_dim, fun_budget, fun_pop = (3, 24, 6) if smoke else (5, 300, 20)
-    methods = [m for m in METHODS if available(m)]
-    missing = [m for m in METHODS if not available(m)]
-    real = problem_names(smoke)
+    wanted = METHODS if methods is None else [m for m in METHODS if m in methods]
+    methods = [m for m in wanted if available(m)]
+    missing = [m for m in wanted if not available(m)]
+    real = problem_names(smoke) if problems is None else list(problems)
+    load_start = _load()
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
     tasks = []
     for name in real:
         for m in methods:
             for s in seeds:
                 tasks.append(("problem", name, smoke, 0, m, real_budget, real_pop, s))
-    for name in FUNCTIONS[:2] if smoke else FUNCTIONS:
+    for name in (FUNCTIONS[:2] if smoke else FUNCTIONS) if functions is None else functions:
         for m in methods:
             for s in seeds:
                 tasks.append(("function", name, smoke, fun_dim, m, fun_budget, fun_pop, s))
@@ -354,6 +399,25 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR) -> dict[str, 
         analyses[name] = a
         if kind == "problem":
             verdicts[name] = _verdict(a)
+    load_end = _load()
+    meta = {"real_budget": real_budget, "real_pop": real_pop, "fun_dim": fun_dim, "fun_budget": fun_budget,
+            "fun_pop": fun_pop, "n_seeds": len(seeds), "wall": wall, "n_jobs": n_jobs, "load_start": load_start,
+            "load_end": load_end, "missing": missing, "skipped": skipped, "methods": methods}
+    lines, targets, fun_cmp, n_pass = report(analyses, verdicts, meta)
+    for a in analyses.values():  # curves are in the PNGs; keep the JSON readable
+        for v in a["methods"].values():
+            for k in ("curve_median", "curve_q1", "curve_q3"):
+                c = np.asarray(v[k])
+                idx = np.unique(np.linspace(0, len(c) - 1, 25).round().astype(int))
+                v[k] = {"evals": (idx + 1).tolist(), "values": c[idx].tolist()}
+    return {"results": {"problems": analyses, "verdicts": verdicts, "functions_vs_pyswarms": fun_cmp,
+                        "missing_peers": missing, "skipped": skipped, "wall_s": wall, "n_pass_real": n_pass,
+                        "seeds": seeds, "methods": methods, "load_start": load_start, "load_end": load_end},
+            "figures": figures, "markdown": "\n".join(lines), "targets": targets}
+
+
+def report(analyses: dict[str, Any], verdicts: dict[str, Any], meta: dict[str, Any]):
+    """Markdown lines, targets, the test-function comparison and the number of real problems passed."""
     n_pass = sum(1 for v in verdicts.values() if v["pass"])
     fun_cmp = {}
     for name in FUNCTIONS:
@@ -363,10 +427,13 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR) -> dict[str, 
             pso, ps = a["methods"]["pso"]["final_median"], a["methods"]["pyswarms_gbest"]["final_median"]
             fun_cmp[name] = {"pso": pso, "best_ours": ours_best, "pyswarms": ps, "pass_pso": pso <= ps,
                              "pass_best_ours": ours_best <= ps}
-    # tables
-    lines = [f"Budgets: real problems {real_budget} evaluations (population {real_pop} where a method has one), "
-             f"test functions {fun_dim}-D, {fun_budget} evaluations (population {fun_pop}); {len(seeds)} seeds. "
-             f"Wall time {wall:.0f} s on {n_jobs} processes."]
+    mt = meta
+    lines = [f"Budgets: real problems {mt['real_budget']} evaluations (population {mt['real_pop']} where a method "
+             f"has one), test functions {mt['fun_dim']}-D, {mt['fun_budget']} evaluations (population "
+             f"{mt['fun_pop']}); {mt['n_seeds']} seeds. Wall time {mt['wall']:.0f} s on {mt['n_jobs']} processes; "
+             f"load average (1/5/15 min) at the start {_fmt_load(mt['load_start'])}, at the end "
+             f"{_fmt_load(mt['load_end'])}."]
+    missing, skipped, methods = mt["missing"], mt["skipped"], mt["methods"]
     if missing:
         lines.append(f"Missing peers (not installed): {', '.join(missing)}.")
     if skipped:
@@ -393,20 +460,54 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir=RESULTS_DIR) -> dict[str, 
                                "best ours ok"],
                               [[k, v["pso"], v["best_ours"], v["pyswarms"], v["pass_pso"], v["pass_best_ours"]]
                                for k, v in fun_cmp.items()]))
-    targets = [{"target": "best of ours within 1 % with <= evaluations of the best peer on >= 4 real problems",
-                "value": f"{n_pass}/{len(verdicts)}", "pass": n_pass >= min(4, len(verdicts))}]
+    n_auto = sum(1 for k in verdicts if math.isfinite(analyses[k]["methods"].get("auto", {}).get(
+        "evals_to_1pct_median", math.inf)))
+    targets = [{"target": "best of ours within 1 % with <= evaluations of the best peer on 7 of 7 real problems",
+                "value": f"{n_pass}/{len(verdicts)}", "pass": n_pass == len(verdicts) == len(FULL_PROBLEMS)},
+               {"target": "auto within 1 % of the best-known (median) within the budget on >= 5 of 7 real problems",
+                "value": f"{n_auto}/{len(verdicts)}", "pass": n_auto >= 5}]
+    if "faekf_bench6dof" in analyses:
+        basin = _basin_seeds(analyses["faekf_bench6dof"])
+        targets.append({"target": f"FAEKF best-known basin (<= {BASIN_FAEKF:g}) in >= 5 of 10 seeds by one of ours",
+                        "value": f"{basin[1]}/{basin[2]} ({basin[0]})", "pass": basin[1] >= 5 and basin[2] >= 10})
     if fun_cmp:
         targets.append({"target": "our PSO median best fitness not worse than pyswarms on the test functions",
                         "value": f"{sum(v['pass_pso'] for v in fun_cmp.values())}/{len(fun_cmp)} "
                                  f"(best of ours: {sum(v['pass_best_ours'] for v in fun_cmp.values())}/{len(fun_cmp)})",
                         "pass": all(v["pass_pso"] for v in fun_cmp.values())})
-    for a in analyses.values():  # curves are in the PNGs; keep the JSON readable
-        for v in a["methods"].values():
-            for k in ("curve_median", "curve_q1", "curve_q3"):
-                c = np.asarray(v[k])
-                idx = np.unique(np.linspace(0, len(c) - 1, 25).round().astype(int))
-                v[k] = {"evals": (idx + 1).tolist(), "values": c[idx].tolist()}
-    return {"results": {"problems": analyses, "verdicts": verdicts, "functions_vs_pyswarms": fun_cmp,
-                        "missing_peers": missing, "skipped": skipped, "wall_s": wall, "n_pass_real": n_pass,
-                        "seeds": seeds, "methods": methods},
-            "figures": figures, "markdown": "\n".join(lines), "targets": targets}
+    return lines, targets, fun_cmp, n_pass
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m benchmarks.optimizers``: a cheap subset (problems, methods, seeds) to a directory of its own."""
+    import argparse
+
+    from benchmarks.common import write_result
+    from benchmarks.problems import PROBLEMS
+
+    ap = argparse.ArgumentParser(prog="python -m benchmarks.optimizers", description=__doc__.splitlines()[0])
+    ap.add_argument("--smoke", action="store_true", help="tiny sizes")
+    ap.add_argument("--problems", nargs="*", choices=sorted(PROBLEMS), help="real problems (default: all)")
+    ap.add_argument("--methods", nargs="+", choices=METHODS, help="methods (default: all)")
+    ap.add_argument("--seeds", type=int, nargs="+", help="seeds (default: 0-9, smoke 0-1)")
+    ap.add_argument("--functions", nargs="*", choices=FUNCTIONS, help="test functions (default: all; none: skip)")
+    ap.add_argument("--real-only", action="store_true", help="the real problems only (same as --functions)")
+    ap.add_argument("--n-jobs", type=int, default=2)
+    ap.add_argument("--out", type=Path, required=True, help="directory for optimizers.json and the curves")
+    args = ap.parse_args(argv)
+    functions = [] if args.real_only else args.functions
+    t0 = time.perf_counter()
+    res = run(smoke=args.smoke, n_jobs=args.n_jobs, out_dir=args.out, problems=args.problems, methods=args.methods,
+              seeds=args.seeds, functions=functions)
+    res["seconds"] = time.perf_counter() - t0
+    args.out.mkdir(parents=True, exist_ok=True)
+    path = write_result("optimizers", {"mode": "smoke" if args.smoke else "full", **res}, Path(args.out))
+    print(res["markdown"])
+    for t in res["targets"]:
+        print(f"{'pass' if t['pass'] else 'FAIL'}: {t['target']}: {t['value']}")
+    print(f"-> {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -9,9 +9,10 @@ from tuner.optimizers.cmaes_restart import CMAESRestart
 from tuner.optimizers.de import DE
 from tuner.optimizers.pso import PSO
 from tuner.optimizers.random_search import RandomSearch
+from tuner.optimizers.trust_region import TrustRegion
 
 __all__ = ["Optimizer", "OptionError", "OPTIMIZERS", "get_optimizer", "PSO", "CMAES", "CMAESRestart", "DE", "Auto",
-           "RandomSearch"]
+           "RandomSearch", "TrustRegion"]
 
 OPTIMIZERS: dict[str, type[Optimizer]] = {}
 
@@ -24,7 +25,7 @@ def register(cls: type[Optimizer]) -> type[Optimizer]:
     return cls
 
 
-for _cls in (PSO, CMAES, CMAESRestart, DE, RandomSearch, Auto):
+for _cls in (PSO, CMAES, CMAESRestart, DE, RandomSearch, Auto, TrustRegion):
     register(_cls)
 
 

@@ -1,0 +1,183 @@
+"""``trust_region``: exact on quadratics, better than random search, exact budget, resume and replay identity."""
+
+import pickle
+
+import numpy as np
+import pytest
+
+from objectives.functions import FUNCTIONS
+from tuner.optimizers import OPTIMIZERS, OptionError, RandomSearch, TrustRegion
+from tuner.optimizers.trust_region import _box_coordinate_descent, quadratic_features
+
+
+def _drive(opt, f, budget=None):
+    """Run ``opt`` on ``f`` (unit cube) until done; the best value within ``budget`` evaluations."""
+    best, n = np.inf, 0
+    while not opt.done:
+        u = opt.ask()
+        v = np.array([f(x) for x in u])
+        keep = v if budget is None else v[: max(0, budget - n)]
+        best = min(best, keep.min()) if len(keep) else best
+        n += len(u)
+        opt.tell(u, v)
+    return best, n
+
+
+def _scaled(name):
+    fun, (lo, hi) = FUNCTIONS[name]
+    return lambda u: float(fun(lo + (hi - lo) * np.asarray(u)))
+
+
+def test_registered_and_option_errors():
+    assert OPTIMIZERS["trust_region"] is TrustRegion
+    with pytest.raises(OptionError, match="r_min < r0"):
+        TrustRegion(2, np.random.default_rng(0), r0=0.0001, max_evals=10)
+    with pytest.raises(OptionError, match="n_candidates"):
+        TrustRegion(2, np.random.default_rng(0), n_candidates=0, max_evals=10)
+
+
+def test_model_features_reproduce_a_quadratic_exactly():
+    rng = np.random.default_rng(1)
+    z = rng.standard_normal((30, 3))
+    H = np.array([[2.0, 0.5, 0.0], [0.5, 1.0, -0.3], [0.0, -0.3, 3.0]])
+    g = np.array([0.1, -0.2, 0.3])
+    y = 1.5 + z @ g + 0.5 * np.einsum("ni,ij,nj->n", z, H, z)
+    coef, *_ = np.linalg.lstsq(quadratic_features(z, True), y, rcond=None)
+    zs = _box_coordinate_descent(coef, 3, True, np.zeros(3), np.full(3, -10.0), np.full(3, 10.0), sweeps=200)
+    np.testing.assert_allclose(zs, np.linalg.solve(H, -g), atol=1e-6)  # the closed-form minimiser
+    # a bound that cuts the minimiser off: the solution sits on it
+    zb = _box_coordinate_descent(coef, 3, True, np.zeros(3), np.full(3, -0.05), np.full(3, 0.05), sweeps=200)
+    assert np.all(np.abs(zb) <= 0.05 + 1e-12) and np.any(np.isclose(np.abs(zb), 0.05))
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_solves_a_shifted_quadratic_to_high_precision(dim):
+    # the model is exact on a quadratic, so a few batches after the start reach the minimum
+    c = np.linspace(0.23, 0.71, dim)
+    w = np.arange(1, dim + 1, dtype=float)
+    best, _ = _drive(TrustRegion(dim, np.random.default_rng(3), max_evals=60, generations=None),
+                     lambda u: float(np.sum(w * (u - c) ** 2)))
+    assert best < 1e-9
+
+
+@pytest.mark.parametrize("name, dim", [("rosenbrock", 2), ("ackley", 2), ("sphere", 3), ("rosenbrock", 3)])
+def test_beats_random_search_at_120_evaluations(name, dim):
+    f = _scaled(name)
+    tr = [_drive(TrustRegion(dim, np.random.default_rng(s), max_evals=120, generations=None), f)[0] for s in range(5)]
+    rs = [_drive(RandomSearch(dim, np.random.default_rng(s), population=12, generations=10), f)[0] for s in range(5)]
+    assert np.median(tr) < 0.2 * np.median(rs)
+
+
+def test_budget_is_exact_and_the_start_is_one_hypercube_in_whole_batches():
+    o = TrustRegion(3, np.random.default_rng(0), max_evals=50, generations=None)
+    assert o.population == 4 and o.n_init == 16  # 10 coefficients + 3, rounded up to batches of 4
+    start = []
+    for _ in range(4):
+        u = o.ask()
+        assert len(u) == 4
+        start.append(u)
+        o.tell(u, np.sum(u**2, axis=1))
+    start = np.vstack(start)
+    for j in range(3):  # a Latin hypercube: one point per stratum on every axis
+        assert sorted(np.floor(start[:, j] * 16).astype(int)) == list(range(16))
+    _, n = _drive(o, lambda u: float(np.sum(u**2)))
+    assert n + 16 == 50 and o.n_evals == 50 and o.stop_reason == "50 evaluations"
+    with pytest.raises(OptionError, match="multiple of the population"):
+        TrustRegion(3, np.random.default_rng(0), population=4, n_init=10, max_evals=50)
+
+
+def test_collapsed_region_restarts_with_a_new_hypercube():
+    o = TrustRegion(2, np.random.default_rng(0), max_evals=400, generations=None, r_min=0.01)
+    _drive(o, lambda u: float(np.sum((u - 0.4) ** 2)))  # converges, then the radius collapses
+    assert o.restarts >= 1
+    assert o.best_f < 1e-10
+
+
+def test_failed_evaluations_are_left_out_of_the_model():
+    def f(u):
+        return np.nan if u[0] > 0.8 else float(np.sum((u - 0.3) ** 2))
+
+    best, _ = _drive(TrustRegion(2, np.random.default_rng(5), max_evals=80, generations=None), f)
+    assert best < 1e-8
+
+
+def _steps(o, n, f):
+    for _ in range(n):
+        u = o.ask()
+        o.tell(u, np.array([f(x) for x in u]))
+    return o
+
+
+def test_state_round_trip_continues_identically():
+    f = _scaled("rastrigin")
+    a = _steps(TrustRegion(3, np.random.default_rng(7), max_evals=10**6, generations=None, r_min=0.05), 40, f)
+    b = TrustRegion(3, np.random.default_rng(7), max_evals=10**6, generations=None, r_min=0.05)
+    b = _steps(TrustRegion.from_state(pickle.loads(pickle.dumps(_steps(b, 17, f).state()))), 23, f)
+    assert a.restarts >= 1  # the round trip crossed a restart
+    np.testing.assert_array_equal(a.ask(), b.ask())
+    assert a.best_f == b.best_f and a.radius == b.radius and a.describe() == b.describe()
+
+
+def test_replaying_the_history_asks_the_same_points():
+    # how a run resumes: a fresh optimiser from the same seed, told the recorded fitness, asks the recorded points
+    f = _scaled("ackley")
+    live = TrustRegion(2, np.random.default_rng(11), max_evals=120, generations=None)
+    history = []
+    while not live.done:
+        u = live.ask()
+        v = np.array([f(x) for x in u])
+        history.append((u, v))
+        live.tell(u, v)
+    replay = TrustRegion(2, np.random.default_rng(11), max_evals=120, generations=None)
+    for u, v in history:
+        np.testing.assert_array_equal(replay.ask(), u)
+        replay.tell(u, v)
+    assert replay.best_f == live.best_f and replay.done
+
+
+def test_engine_run_killed_and_resumed_equals_the_uninterrupted_one(tmp_path):
+    # resume rebuilds the optimiser from the seed and replays tell() with the recorded fitness
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import pandas as pd
+    import yaml
+
+    from tuner.config import config_from_dict
+    from tuner.run import run
+
+    def job(name, **objective):
+        cfg = {"name": name, "seed": 3, "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs"),
+               "objective": {"kind": "function", "function": "rosenbrock", "dim": 3, **objective},
+               "optimizer": {"method": "trust_region", "generations": 30, "r_min": 0.02}}
+        p = tmp_path / f"{name}.yaml"
+        p.write_text(yaml.safe_dump(cfg))
+        return p
+
+    ref = run(config_from_dict(yaml.safe_load(job("ref").read_text()), base_dir=tmp_path), run_dir=tmp_path / "ref",
+              quiet=True)
+    h_ref = pd.read_csv(ref.run_dir / "history.csv", keep_default_na=False).drop(columns="seconds")
+    assert len(h_ref) == 30 * 4
+    run_dir = tmp_path / "killed"
+    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job("killed", sleep_s=0.01)), "--run-dir",
+                             str(run_dir), "-q"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        try:
+            if json.loads((run_dir / "checkpoint.json").read_text())["generations"] >= 12:  # past the hypercube
+                break
+        except Exception:
+            pass
+        time.sleep(0.02)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert len(pd.read_csv(run_dir / "history.csv")) < len(h_ref), "the run must be killed before its end"
+    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q"], capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    h_res = pd.read_csv(run_dir / "history.csv", keep_default_na=False).drop(columns="seconds")
+    pd.testing.assert_frame_equal(h_ref, h_res)
