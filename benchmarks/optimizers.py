@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.common import RESULTS_DIR, fmt, md_table, peer
+from benchmarks.common import RESULTS_DIR, fmt, md_table, peer, write_result
 from benchmarks.problems import FULL_PROBLEMS
 
 __all__ = ["run", "METHODS", "OURS", "PEERS_Q", "run_method", "Budget", "evals_to_band"]
@@ -482,7 +482,6 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m benchmarks.optimizers``: a cheap subset (problems, methods, seeds) to a directory of its own."""
     import argparse
 
-    from benchmarks.common import write_result
     from benchmarks.problems import PROBLEMS
 
     ap = argparse.ArgumentParser(prog="python -m benchmarks.optimizers", description=__doc__.splitlines()[0])
@@ -500,13 +499,19 @@ def main(argv: list[str] | None = None) -> int:
     res = run(smoke=args.smoke, n_jobs=args.n_jobs, out_dir=args.out, problems=args.problems, methods=args.methods,
               seeds=args.seeds, functions=functions)
     res["seconds"] = time.perf_counter() - t0
-    args.out.mkdir(parents=True, exist_ok=True)
-    path = write_result("optimizers", {"mode": "smoke" if args.smoke else "full", **res}, Path(args.out))
+    publish(res, Path(args.out), "smoke" if args.smoke else "full")
+    return 0
+
+
+def publish(res: dict[str, Any], out: Path, mode: str) -> Path:
+    """Write ``optimizers.json`` into ``out`` and print the report and the targets' verdicts."""
+    out.mkdir(parents=True, exist_ok=True)
+    path = write_result("optimizers", {"mode": mode, **res}, out)
     print(res["markdown"])
     for t in res["targets"]:
         print(f"{'pass' if t['pass'] else 'FAIL'}: {t['target']}: {t['value']}")
     print(f"-> {path}")
-    return 0
+    return path
 
 
 if __name__ == "__main__":

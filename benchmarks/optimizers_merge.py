@@ -18,8 +18,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from benchmarks.common import write_result
-from benchmarks.optimizers import FUNCTIONS, _fmt_load, _plot, _verdict, report
+from benchmarks.optimizers import FUNCTIONS, _fmt_load, _plot, _verdict, publish, report
 
 __all__ = ["merge"]
 
@@ -88,11 +87,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--functions-from", type=Path, help="an earlier full optimizers.json whose test functions to keep")
     args = ap.parse_args(argv)
     res = merge(args.runs, args.out, args.functions_from)
-    path = write_result("optimizers", {"mode": "full", **res}, args.out)
-    print(res["markdown"])
-    for t in res["targets"]:
-        print(f"{'pass' if t['pass'] else 'FAIL'}: {t['target']}: {t['value']}")
-    print(f"-> {path}")
+    publish(res, Path(args.out), "full")
     return 0
 
 

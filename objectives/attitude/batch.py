@@ -63,6 +63,16 @@ def _pair_sums(q, c, rots, r, true, mask, out):
     _segment_ms(q, true, mask, out[_N_ERR:])
 
 
+@njit(cache=False, inline="always")
+def _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag):
+    """The ``j``-th pair of the lane order: pair, recording, length, the lane's output view, magnetometer."""
+    p = order[j]
+    r = pair_rec[p]
+    n = gyrs[r].shape[0]
+    mag = mags[r] if pair_mag[p] != 0 else no_mag
+    return p, r, n, qbuf[lane, :n], mag
+
+
 @njit(cache=False, parallel=True)
 def _bias_batch(family, data, pairs, lanes_, bufs, sums):
     """Madgwick (family 0) or Mahony (1) on every pair, error sums into ``sums[pair]`` (P, 11).
@@ -83,11 +93,7 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
         no_bias = np.empty((0, 3))
         no_mag = np.empty((0, 3))
         for j in range(start[lane], start[lane + 1]):
-            p = order[j]
-            r = pair_rec[p]
-            n = gyrs[r].shape[0]
-            q = qbuf[lane, :n]
-            mag = mags[r] if pair_mag[p] != 0 else no_mag
+            p, r, n, q, mag = _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag)
             if family == 0:
                 _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             else:
@@ -115,11 +121,7 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
         no_mag = np.zeros((1, 3))
         one = np.ones(1)
         for j in range(start[lane], start[lane + 1]):
-            p = order[j]
-            r = pair_rec[p]
-            n = gyrs[r].shape[0]
-            q = qbuf[lane, :n]
-            mag = mags[r] if pair_mag[p] != 0 else no_mag
+            p, r, n, q, mag = _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag)
             if fuzzy != 0:
                 k = kbuf[lane, :n]
                 fuzzy_scale(vibs[r], exts[r], mps[r], mf_kind, mf_params[p], rules, cons[p], k)
