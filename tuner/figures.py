@@ -18,17 +18,25 @@ import pandas as pd
 
 from tuner.space import Space
 
-__all__ = ["convergence_table", "plot_convergence", "plot_fitness_vs_params", "plot_parallel_coordinates",
+__all__ = ["pyplot", "convergence_table", "plot_convergence", "plot_fitness_vs_params", "plot_parallel_coordinates",
            "sweep_figures", "WIDTH_IN", "DPI"]
 
 WIDTH_IN = 10.5
 DPI = 100
 
 
-def _plt():
+def pyplot():
+    """``matplotlib.pyplot`` on the Agg backend (files only, no display), quiet and with the house font sizes.
+
+    The font manager's "findfont: Font family ... not found" lines, which a fresh environment prints while
+    matplotlib builds its font cache, say nothing a user can act on: they are silenced.
+    """
+    import logging
+
     import matplotlib
 
     matplotlib.use("Agg")
+    logging.getLogger("matplotlib.font_manager").setLevel(logging.ERROR)
     import matplotlib.pyplot as plt
 
     plt.rcParams.update({"font.size": 10, "axes.titlesize": 10, "axes.labelsize": 10, "legend.fontsize": 9})
@@ -39,7 +47,7 @@ def _save(fig, path: Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI)
-    _plt().close(fig)
+    pyplot().close(fig)
     return path
 
 
@@ -90,7 +98,7 @@ def convergence_table(hist: pd.DataFrame) -> pd.DataFrame:
 
 def plot_convergence(run_dir: Path, path: Path | None = None) -> Path:
     """Best-so-far and generation median fitness against evaluations (``figures/convergence.png``)."""
-    plt = _plt()
+    plt = pyplot()
     run_dir = Path(run_dir)
     conv = convergence_table(load_history(run_dir))
     fig, ax = plt.subplots(figsize=(WIDTH_IN, 3.8))
@@ -109,7 +117,7 @@ def plot_convergence(run_dir: Path, path: Path | None = None) -> Path:
 
 
 def _grid(n: int, ncol_max: int = 3, row_in: float = 3.0):
-    plt = _plt()
+    plt = pyplot()
     ncol = min(ncol_max, max(n, 1))
     nrow = int(np.ceil(n / ncol))
     h = row_in * nrow + 0.6
@@ -172,7 +180,7 @@ def plot_fitness_vs_params(hist: pd.DataFrame, space: Space, best: dict[str, Any
 
 def parallel_coordinates_figure(hist: pd.DataFrame, space: Space, n_best: int = 30):
     """The figure of :func:`plot_parallel_coordinates`."""
-    plt = _plt()
+    plt = pyplot()
     ok = hist[hist["status"] == "ok"].sort_values("fitness")
     params = [p for p in space.free if p.name in hist.columns]
     top = ok.head(n_best)
@@ -220,7 +228,7 @@ def _job_space(job_dir: Path) -> Space | None:
 
 def best_params_unit_figure(sweep_dir: Path, done: pd.DataFrame):
     """Best parameters of every job in unit coordinates of its own bounds, one column per parameter."""
-    plt = _plt()
+    plt = pyplot()
     methods = sorted(done["method"].unique())
     colors = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
     names: list[str] = []
@@ -290,7 +298,7 @@ def responses_figure(sweep_dir: Path, done: pd.DataFrame):
     if not curves:
         return None
     labels = list(next(iter(curves.values()))[1])
-    plt = _plt()
+    plt = pyplot()
     colors = {m: plt.cm.tab10(i % 10) for i, m in enumerate(curves)}
     fig, axes = plt.subplots(len(labels), 1, figsize=(WIDTH_IN, 2.1 * len(labels) + 0.6), sharex=True, squeeze=False)
     axes = axes[:, 0]
@@ -321,7 +329,7 @@ def responses_figure(sweep_dir: Path, done: pd.DataFrame):
 def sweep_figures(sweep_dir: Path, df: pd.DataFrame) -> list[tuple[str, Path]]:
     """Sweep figures: convergence of every job, final fitness per method (box and points), per-axis errors
     per method (filter objectives), best parameters of every job in unit coordinates."""
-    plt = _plt()
+    plt = pyplot()
     figs_dir = Path(sweep_dir) / "figures"
     figs_dir.mkdir(parents=True, exist_ok=True)
     out: list[tuple[str, Path]] = []

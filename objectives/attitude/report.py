@@ -18,18 +18,11 @@ from typing import Any
 
 import numpy as np
 
+from tuner.figures import pyplot
+
 __all__ = ["filter_report", "summary_table"]
 
 _AX = ("roll", "pitch", "yaw")
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def _safe(name: str) -> str:
@@ -120,7 +113,7 @@ def _euler_deg(q: np.ndarray) -> np.ndarray:
 def _plot_traces(rec, res, figs: Path, name: str) -> None:
     from objectives.attitude.metrics import euler_errors
 
-    plt = _plt()
+    plt = pyplot()
     t = rec.time
     step = max(1, rec.n // 20000)  # plot at most ~20k points per line
     est = _euler_deg(res.quat[::step])
@@ -155,7 +148,7 @@ def _plot_traces(rec, res, figs: Path, name: str) -> None:
 
 
 def _plot_adaptation(rec, res, figs: Path, name: str) -> None:
-    plt = _plt()
+    plt = pyplot()
     d = res.diagnostics
     keys = [k for k in ("vib_freq_hz", "ext_acc", "mag_pert", "K") if k in d]
     fig, axes = plt.subplots(len(keys), 1, figsize=(8, 1.7 * len(keys) + 0.6), sharex=True, dpi=100)
@@ -180,7 +173,7 @@ def _plot_fuzzy_surface(flt, path: Path) -> None:
     """K_R over (vibration frequency, external acceleration) with no magnetic perturbation."""
     from objectives.attitude.filters.ekf import Disturbances
 
-    plt = _plt()
+    plt = pyplot()
     f = np.linspace(0, float(flt.values.get("f_thr", 10.0)), 41)
     a = np.linspace(0, 1.0, 41)
     F, A = np.meshgrid(f, a)

@@ -108,11 +108,9 @@ def comparison_table(results: list[ControllerResult]) -> str:
 
 def plot_responses(results: list[ControllerResult], path: str | pathlib.Path) -> pathlib.Path:
     """Every tuned response on one figure: speed, yaw rate, IB angle, average current vs time."""
-    import matplotlib
+    from tuner.figures import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, ax = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
     ref_drawn = False
     for i, r in enumerate(sorted(results, key=lambda r: r.fitness)):

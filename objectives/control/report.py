@@ -17,11 +17,11 @@ def plot_surfaces(
     Figs. 2.19 (FLC1 of the protective scheme: proportional tag over speed error and |I_A|) and 2.20
     (FLC2 over IB angle and rate errors). Returns the written paths ``fig_dir/surface_<name>.png``.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
+
+    from tuner.figures import pyplot
+
+    plt = pyplot()
 
     fig_dir = pathlib.Path(fig_dir)
     fig_dir.mkdir(parents=True, exist_ok=True)

@@ -106,3 +106,16 @@ def test_closed_loop_sweep_compares_responses_on_one_figure(tmp_path):
     assert res["ok"] and png.exists()
     assert Image.open(png).size[0] == 1050  # drawn for the page width
     assert "responses.png" in (tmp_path / "sw" / "report.md").read_text()
+
+
+def test_pyplot_is_headless_and_silences_font_cache_noise():
+    import logging
+
+    import matplotlib
+
+    from tuner.figures import pyplot
+
+    pyplot()
+    assert matplotlib.get_backend().lower() == "agg"
+    # "findfont: Font family ... not found" is logged at WARNING while a fresh environment builds its font cache
+    assert not logging.getLogger("matplotlib.font_manager").isEnabledFor(logging.WARNING)
