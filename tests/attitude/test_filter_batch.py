@@ -36,13 +36,15 @@ def _same(batch, serial):
 
 
 def _serial(obj, params):
-    out = []
-    for p in params:
-        try:
-            out.append(obj(p))
-        except Exception as exc:
-            out.append(exc)
-    return out
+    """What the serial path gives each candidate: its evaluation or the exception it raises."""
+    return [_call(obj, p) for p in params]
+
+
+def _call(obj, p):
+    try:
+        return obj(p)
+    except Exception as exc:
+        return exc
 
 
 @pytest.mark.parametrize("flt, fixed, extra", [
