@@ -290,3 +290,16 @@ def test_browser_measurement_catches_overflow_and_broken_images(evil_run, tmp_pa
     (bad / "report.html").write_text(page)
     res = _measure(bad / "report.html", tmp_path)
     assert res["scrollWidth"] > 2000 and res["wide"] and res["broken"] == ["broken"] and res["errors"]
+
+
+@pytest.mark.skipif(_chromium() is None, reason="Chromium not installed (.ci/run installs it)")
+def test_report_with_cross_validation_in_a_browser(tmp_path):
+    # the Generalisation section (validation: cv) adds a table and a warning: it must fit the page too
+    from tests.tuner.test_validation import _raw as _val_raw
+
+    cfg = config_from_dict(_val_raw(tmp_path, {"cv": "kfold", "folds": 2, "budget_fraction": 0.5, "gap_warn_rel": 0.0}))
+    page = run(cfg, quiet=True).run_dir / "report.html"
+    assert "Generalisation" in page.read_text()
+    res = _measure(page, tmp_path)
+    assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
+    assert res["broken"] == [] and res["errors"] == [], res
