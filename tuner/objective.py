@@ -105,6 +105,12 @@ class TunableObjective(Objective, Protocol):
     def parameter_names(self) -> Collection[str]:
         """Every name the objective accepts in a parameter dict; others are rejected at preflight."""
 
+    def check_params(self, params: Mapping[str, Any]) -> None:
+        """Raise ``ValueError`` (naming the parameter and what it allows) when ``params`` can never be
+        evaluated, e.g. a negative gain; cheap, no data touched. Preflight calls it at both bounds of
+        every searched parameter, so a search range reaching outside what the objective accepts is a
+        config error instead of a run whose candidates there all fail."""
+
     def preflight(self) -> list[str]:
         """Load and validate all data once, before the first generation. Raise ``ValueError`` whose
         message starts with the config key (``objective.data[0]: ...``) on bad data; return warnings
@@ -158,7 +164,7 @@ class TunableObjective(Objective, Protocol):
 
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
-HOOKS = ("default_space", "default_params", "parameter_names", "preflight", "score", "has_test_data",
+HOOKS = ("default_space", "default_params", "parameter_names", "check_params", "preflight", "score", "has_test_data",
          "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize")
 
 

@@ -6,6 +6,8 @@
 1. every name under ``parameters:`` and ``objective.fixed:`` is one the objective knows
    (``parameter_names`` hook; a misspelled ``betta:`` names the key, the allowed names and the
    closest one);
+   and each searched parameter's ``low`` and ``high`` is a value the objective accepts
+   (``check_params`` hook, at the default point with one parameter moved to its bound);
 2. the objective's ``preflight`` hook loads and validates all its data once (bad files, missing
    columns, NaN rows, ``warmup_s`` longer than a recording...) and returns warnings (units);
 3. with ``parallel.backend: dask`` and a scheduler ``address``, the same hook runs on every worker
@@ -27,7 +29,7 @@ from tuner.config import ConfigError, RunConfig
 from tuner.objective import hook
 from tuner.space import Space
 
-__all__ = ["preflight", "check_names", "reference_point"]
+__all__ = ["preflight", "check_names", "check_bounds", "reference_point"]
 
 
 def _key_error(cfg: RunConfig, exc: ValueError, default_key: str = "objective") -> ConfigError:
@@ -55,6 +57,22 @@ def check_names(cfg: RunConfig, objective: Any, space: Space) -> None:
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
                 raise ConfigError(cfg.source, f"{where}.{name}",
                                   f"not a parameter of this objective{hint}; allowed: {', '.join(known)}")
+
+
+def check_bounds(cfg: RunConfig, objective: Any, space: Space) -> None:
+    """Both bounds of every searched parameter must be values the objective accepts (``check_params``)."""
+    check = hook(objective, "check_params")
+    if check is None:
+        return
+    point = reference_point(objective, space)
+    for p in space.free:
+        for side in ("low", "high"):
+            value = p.from_unit(0.0 if side == "low" else 1.0)
+            try:
+                check({**point, p.name: value})
+            except ValueError as exc:
+                raise ConfigError(cfg.source, f"parameters.{p.name}.{side}",
+                                  f"{value!r} is outside what the objective accepts ({exc})") from None
 
 
 def reference_point(objective: Any, space: Space) -> dict[str, Any]:
@@ -106,6 +124,7 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
     from tuner.evaluate import evaluate_one
 
     check_names(cfg, objective, space)
+    check_bounds(cfg, objective, space)
     warnings: list[str] = []
     fn = hook(objective, "preflight")
     if fn is not None:

@@ -378,6 +378,10 @@ class FilterObjective:
         return self._cache[which]
 
     # --- scoring ------------------------------------------------------------------------------
+    def check_params(self, params: Mapping[str, Any]) -> None:
+        """The filter's own validation of ``params`` (with ``fixed``), nothing run (preflight's bound check)."""
+        self.make_filter(params)
+
     def make_filter(self, params: Mapping[str, Any]):
         values = {**self.fixed, **{k: v for k, v in params.items() if k in self._cls.defaults}}
         return self._cls(**values)

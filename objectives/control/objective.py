@@ -264,6 +264,10 @@ class ClosedLoopObjective:
                 "IB angle theta3 (deg)": {"t": t, "y": y[:, 1] * deg, "ref": None},
                 "avg. current (A)": {"t": t, "y": y[:, 4], "ref": None}}
 
+    def check_params(self, params: Mapping[str, Any]) -> None:
+        """The controller declaration's validation of ``params`` (with ``fixed``); no design, no simulation."""
+        self._cls.resolve({**self.fixed, **params})
+
     def simulate(self, params: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """Run the closed loop; dict with t, references (N, 2: m/s, rad/s), outputs (N, 5),
         measurements (N, 5), voltages (N, 2), currents (N, 2), state (N, 8), status, n_done."""

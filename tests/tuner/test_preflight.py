@@ -59,6 +59,9 @@ def no_run_dir(tmp_path):
      ["parameters.betta", "not a parameter", "did you mean 'beta'", "allowed: beta"]),
     ({"objective": {"fixed": {"betta": 0.1}}}, ["objective.fixed.betta", "not a parameter of madgwick", "beta"]),
     ({"objective": {"warmup_s": 5.0}}, ["objective.warmup_s", "5 s is not shorter than recording", "rec", "3 s"]),
+    # a search range reaching outside what the filter accepts: every candidate there would fail
+    ({"parameters": {"beta": {"low": -1.0, "high": 1.0}}},
+     ["parameters.beta.low", "-1.0 is outside what the objective accepts", "beta must be in [0, inf)"]),
 ])
 def test_bad_names_and_warmup_are_errors_before_any_evaluation(tmp_path, over, expected):
     write_csv(tmp_path / "rec.csv")
@@ -135,6 +138,18 @@ def test_run_where_every_evaluation_failed_exits_nonzero_and_says_why(tmp_path):
     assert out.returncode == 1, out.stderr
     assert "warning: the default parameters score as failed (non-finite fitness nan)" in out.stderr
     assert "every one of 8 evaluations failed; most common reason (8x): non-finite fitness nan" in out.stderr
+
+
+def test_closed_loop_bound_outside_what_the_controller_accepts(tmp_path):
+    cfg = {"name": "cl", "objective": {"kind": "closed_loop", "controller": "lqr", "duration_s": 1.0},
+           "parameters": {"r_u1": {"low": 0.0, "high": 10.0}}, "optimizer": {"population": 4, "generations": 1},
+           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
+    p = tmp_path / "job.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    out = tuner("run", str(p))
+    assert out.returncode == 2, out.stderr
+    assert "parameters.r_u1.low: 0.0 is outside what the objective accepts" in out.stderr
+    assert no_run_dir(tmp_path)
 
 
 def test_closed_loop_misspelled_parameter(tmp_path):
