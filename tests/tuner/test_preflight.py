@@ -140,25 +140,24 @@ def test_run_where_every_evaluation_failed_exits_nonzero_and_says_why(tmp_path):
     assert "every one of 8 evaluations failed; most common reason (8x): non-finite fitness nan" in out.stderr
 
 
-def test_closed_loop_bound_outside_what_the_controller_accepts(tmp_path):
-    cfg = {"name": "cl", "objective": {"kind": "closed_loop", "controller": "lqr", "duration_s": 1.0},
-           "parameters": {"r_u1": {"low": 0.0, "high": 10.0}}, "optimizer": {"population": 4, "generations": 1},
+def closed_loop_job(tmp_path, controller, parameters):
+    cfg = {"name": "cl", "objective": {"kind": "closed_loop", "controller": controller, "duration_s": 1.0},
+           "parameters": parameters, "optimizer": {"population": 4, "generations": 1},
            "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
     p = tmp_path / "job.yaml"
     p.write_text(yaml.safe_dump(cfg))
-    out = tuner("run", str(p))
+    return p
+
+
+def test_closed_loop_bound_outside_what_the_controller_accepts(tmp_path):
+    out = tuner("run", str(closed_loop_job(tmp_path, "lqr", {"r_u1": {"low": 0.0, "high": 10.0}})))
     assert out.returncode == 2, out.stderr
     assert "parameters.r_u1.low: 0.0 is outside what the objective accepts" in out.stderr
     assert no_run_dir(tmp_path)
 
 
 def test_closed_loop_misspelled_parameter(tmp_path):
-    cfg = {"name": "cl", "objective": {"kind": "closed_loop", "controller": "pid", "duration_s": 1.0},
-           "parameters": {"kp_1": {"low": 0.1, "high": 10.0}}, "optimizer": {"population": 4, "generations": 1},
-           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
-    p = tmp_path / "job.yaml"
-    p.write_text(yaml.safe_dump(cfg))
-    out = tuner("run", str(p))
+    out = tuner("run", str(closed_loop_job(tmp_path, "pid", {"kp_1": {"low": 0.1, "high": 10.0}})))
     assert out.returncode == 2
     assert "parameters.kp_1: not a parameter of this objective (did you mean 'kp1'?)" in out.stderr
 
