@@ -6,7 +6,7 @@ array, the initial state, the FAEKF's fuzzy tables); one ``@njit(parallel=True)`
 for every pair, the filter's own per-recording kernel, the frame conversion of
 :func:`objectives.attitude.quaternion.to_frame` and the one-pass error sums of
 :mod:`objectives.attitude.fused_errors`, threads sharing the recordings (see
-:mod:`objectives.batch_threads` for lanes and buffers). The sums are combined per candidate by the
+:mod:`objectives.batch_threads` for lanes, dynamic claiming and buffers). The sums are combined per candidate by the
 objective's own code (``_combine`` and ``_evaluation``), so each result equals what ``__call__``
 returns for the same parameters, bit for bit (tests/attitude/test_filter_batch.py).
 
@@ -40,7 +40,7 @@ from objectives.attitude.filters.mahony import Mahony, _mahony_kernel
 from objectives.attitude.fused_errors import ErrorSums, _error_sums
 from objectives.attitude.quaternion.algebra import _qmul_kernel
 from objectives.attitude.quaternion.conversions import frame_rotation
-from objectives.batch_threads import lanes, use_threads
+from objectives.batch_threads import claim, counter, deal, use_threads
 from tuner.objective import Score
 
 __all__ = ["evaluate_batch", "batchable"]
@@ -82,17 +82,21 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
         1.0 when a conversion is needed.
     pairs : ``(rec, use_mag, coefs, states)``: (P,) recording of each pair, 1 when it uses the
         magnetometer, (P, 5) coefficients (Mahony's 4 padded with a zero), (P, 7) initial states.
-    lanes_ : ``(order, start)`` (:func:`objectives.batch_threads.lanes`).
+    lanes_ : ``(order, count)``: the order pairs are claimed in and the claim counter
+        (:mod:`objectives.batch_threads`).
     bufs : ``(qbuf, cbuf)``: (lanes, N_max, 4) per-lane output buffers.
     """
     gyrs, accs, mags, trues, masks, rots = data
     pair_rec, pair_mag, coefs, states = pairs
-    order, start = lanes_
+    order, count = lanes_
     qbuf, cbuf = bufs
-    for lane in prange(start.shape[0] - 1):
+    for lane in prange(qbuf.shape[0]):
         no_bias = np.empty((0, 3))
         no_mag = np.empty((0, 3))
-        for j in range(start[lane], start[lane + 1]):
+        while True:
+            j = claim(count)
+            if j >= order.shape[0]:
+                break
             p, r, n, q, mag = _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag)
             if family == 0:
                 _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
@@ -114,13 +118,16 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
     """
     gyrs, accs, mags, trues, masks, rots = data
     pair_rec, pair_mag, coefs, states = pairs
-    order, start = lanes_
+    order, count = lanes_
     vibs, exts, mps, mf_kind, mf_params, rules, cons = fz
     qbuf, bbuf, cbuf, kbuf = bufs
-    for lane in prange(start.shape[0] - 1):
+    for lane in prange(qbuf.shape[0]):
         no_mag = np.zeros((1, 3))
         one = np.ones(1)
-        for j in range(start[lane], start[lane + 1]):
+        while True:
+            j = claim(count)
+            if j >= order.shape[0]:
+                break
             p, r, n, q, mag = _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag)
             if fuzzy != 0:
                 k = kbuf[lane, :n]
@@ -143,11 +150,14 @@ def _kf1d_batch(data, pairs, lanes_, theta, bufs, sums):
     """
     gys, axs, azs, trues, masks, up = data
     pair_rec, coefs, states = pairs
-    order, start = lanes_
+    order, count = lanes_
     bbuf, qbuf = bufs
-    for lane in prange(start.shape[0] - 1):
+    for lane in prange(qbuf.shape[0]):
         one = np.ones(1)
-        for j in range(start[lane], start[lane + 1]):
+        while True:
+            j = claim(count)
+            if j >= order.shape[0]:
+                break
             p = order[j]
             r = pair_rec[p]
             n = gys[r].shape[0]
@@ -316,13 +326,13 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     for k, r in enumerate(rows):
         coefs[k, :len(r[2])] = r[2]
         states[k] = r[3]
-    order, start = lanes(data.n[pair_rec] if P else np.zeros(0), n_lanes)
+    order = deal(data.n[pair_rec] if P else np.zeros(0))  # longest first, claimed by free lanes
     n_max = int(data.n.max()) if len(data.n) else 0
     qbuf = np.empty((n_lanes, n_max, 4))
     cbuf = np.empty((n_lanes, n_max, 4))
     sums = np.zeros((P, _N_SUMS))
     theta = None
-    lanes_ = (order, start)
+    lanes_ = (order, counter())
     if fam == 4:
         theta = np.empty((P, n_max))
         up = np.array([_up_sign(r.frame) for r in data.recs])

@@ -3,10 +3,16 @@
 :meth:`ClosedLoopObjective.evaluate_batch` comes here. The Python side builds each candidate's
 controller parameter array (a design that cannot be built fails as in the serial path); one
 ``@njit(parallel=True)`` kernel then runs the closed-loop driver :func:`objectives.control.wmp._simulate`
-for every candidate, threads sharing the reference profile and the sensor noise, candidates dealt to
-lanes (:mod:`objectives.batch_threads`). The responses are scored by the objective's own
-``_evaluation``, so each result equals what ``__call__`` returns, bit for bit
-(tests/control/test_closed_loop_batch.py).
+for every candidate, threads sharing the reference profile and the sensor noise, and scores the run
+where it was simulated: the error measures of eqs. 2.34-2.35, the means and F of eq. 2.39, the rise
+times and peaks of :meth:`ClosedLoopObjective._evaluation`, with the summation order of NumPy
+(:func:`objectives.control.metrics._measures_kernel`). Python only turns each candidate's row of
+:data:`_N_STATS` numbers into its :class:`~tuner.objective.Evaluation`, as ``_evaluation`` does, so each
+result equals what ``__call__`` returns, bit for bit (tests/control/test_closed_loop_batch.py).
+
+Candidates are claimed by the lanes one at a time (:mod:`objectives.batch_threads`): a robot that falls
+early costs little, and the other lane takes the next candidate instead of waiting. The simulation
+writes into buffers of its lane, so a batch allocates (lanes x samples), not (candidates x samples).
 
 Not cached (``cache=False``), like the driver it calls (see :mod:`objectives.control.wmp`): the kernel
 compiles once per process, on the first batch.
@@ -21,33 +27,160 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
-from objectives.batch_threads import lanes, use_threads
-from objectives.control.wmp import STATUS_NAMES, _simulate
+from objectives.batch_threads import _pairwise_sum, claim, counter, use_threads
+from objectives.control.metrics import _measures_kernel, _weighted_cost_kernel, cost_exponents, log10_product
+from objectives.control.wmp import STATUS_NAMES, STATUS_OK, _simulate
 from tuner.objective import Evaluation
 
 __all__ = ["evaluate_batch"]
 
+#: a candidate's row of the kernel's statistics: 4 measures (SAE, SSE, STAE, STSE) of each error ...
+_ERRORS = ("nu", "xi", "omega3")
+_MEASURES = ("sae", "sse", "stae", "stse")
+#: ... then these (rise: the first sample index reaching 90 %, -1 if none; peaks: |.| maxima, NaN if none)
+_MAE_NU, _MAE_XI, _MAE_W3, _MS_I, _RISE_NU, _RISE_XI, _PEAK_TH3, _PEAK_I, _COST = range(12, 21)
+_N_STATS = 21
+
+
+@njit(cache=False)
+def _rise_index(y, col, win):
+    """First sample ``k - k0`` in the window ``win = (k0, end, r0, r1)`` where ``(y[k, col] - r0) / (r1 - r0)``
+    reaches 0.9 (:func:`objectives.control.metrics.rise_time_s`); -1 if none or ``k0 < 0`` (no step)."""
+    k0 = int(win[0])
+    if k0 < 0:
+        return -1
+    for k in range(k0, int(win[1])):
+        if (y[k, col] - win[2]) / (win[3] - win[2]) >= 0.9:
+            return k - k0
+    return -1
+
+
+@njit(cache=False)
+def _abs_nanmax(y, col, n):
+    """``np.nanmax(np.abs(y[:n, col]))`` (NaN when every value is NaN)."""
+    m = np.nan
+    for k in range(n):
+        v = abs(y[k, col])
+        if v == v and not (v <= m):
+            m = v
+    return m
+
+
+@njit(cache=False)
+def _score_run(ref, y, ts, wins, expo, e, tmp, out):
+    """The statistics row ``out`` (:data:`_N_STATS`) of a complete run: outputs ``y`` (N, 5), references
+    ``ref`` (N, 2), as ``ClosedLoopObjective._evaluation`` computes them; ``e``, ``tmp``: (N,) scratch."""
+    n = ref.shape[0]
+    terms = np.empty(4)
+    for which in range(3):
+        for k in range(n):
+            if which == 0:
+                e[k] = ref[k, 0] - y[k, 0]
+            elif which == 1:
+                e[k] = ref[k, 1] - y[k, 3]
+            else:
+                e[k] = -y[k, 2] * (180.0 / np.pi)  # np.degrees: the measures of e_omega3 are in deg/s
+        _measures_kernel(e, ts, tmp, out[4 * which:4 * which + 4])
+    out[_MAE_NU] = out[0] / n  # np.mean: the same pairwise sum as SAE, divided by N
+    out[_MAE_XI] = out[4] / n
+    for k in range(n):
+        tmp[k] = abs(-y[k, 2])  # e_omega3 in rad/s for eq. 2.39
+    out[_MAE_W3] = _pairwise_sum(tmp, 0, n) / n
+    for k in range(n):
+        tmp[k] = y[k, 4] * y[k, 4]
+    out[_MS_I] = _pairwise_sum(tmp, 0, n) / n
+    out[_RISE_NU] = _rise_index(y, 0, wins[0])
+    out[_RISE_XI] = _rise_index(y, 3, wins[1])
+    for i in range(4):
+        terms[i] = out[_MAE_NU + i]
+    out[_COST] = _weighted_cost_kernel(terms, expo)
+
 
 @njit(cache=False, parallel=True)
-def _closed_loop_batch(loop, kind, cps, state_size, lanes_, outs, status):
-    """``_simulate`` for every candidate ``p``: controller ``kind`` with parameters ``cps[p]`` and a zeroed
-    state of ``state_size``; ``status[p]`` is ``(status code, samples done)``.
+def _closed_loop_batch(loop, kind, cps, state_size, sched, score, bufs, status, stats):
+    """``_simulate`` and its score for every candidate ``p``: controller ``kind`` with parameters ``cps[p]``
+    and a zeroed state of ``state_size``; ``status[p]`` is ``(status code, samples done)``, ``stats[p]``
+    the statistics row (:data:`_N_STATS`; only the peaks unless the status is ok).
 
     loop : ``(x0, c, sc, ref, noise, n_sub, fall_limit)``, the arguments of ``_simulate`` every candidate shares.
-    lanes_ : ``(order, start)`` (objectives.batch_threads.lanes).
-    outs : ``(x_out, y_out, m_out, u_out)``: (P, N, 8), (P, N, 5), (P, N, 5), (P, N, 2), NaN-filled.
+    sched : ``(order, count)``: the order candidates are claimed in and the claim counter
+        (:mod:`objectives.batch_threads`).
+    score : ``(ts, wins, expo)``: sample period (s), (2, 4) rise-time windows ``(k0, end, r0, r1)`` of the
+        speed and yaw-rate references (k0 = -1: no step), (4,) exponents of eq. 2.39.
+    bufs : ``(x_buf, y_buf, m_buf, u_buf, c_buf, e_buf)``: per lane (lanes, N, 8), (lanes, N, 5), (lanes, N, 5),
+        (lanes, N, 2), controller state (lanes, state_size) and scratch (lanes, 2, N).
     """
     x0, c, sc, ref, noise, n_sub, fall_limit = loop
-    order, start = lanes_
-    x_out, y_out, m_out, u_out = outs
-    for lane in prange(start.shape[0] - 1):
-        for j in range(start[lane], start[lane + 1]):
+    order, count = sched
+    ts, wins, expo = score
+    x_buf, y_buf, m_buf, u_buf, c_buf, e_buf = bufs
+    n_items = order.shape[0]
+    for lane in prange(x_buf.shape[0]):
+        y = y_buf[lane]
+        cs = c_buf[lane]
+        while True:
+            j = claim(count)
+            if j >= n_items:
+                break
             p = order[j]
-            cs = np.zeros(state_size)
+            cs[:] = 0.0
             st, done = _simulate(x0, c, sc, ref, noise, kind, cps[p], cs, n_sub, fall_limit,
-                                 x_out[p], y_out[p], m_out[p], u_out[p])
+                                 x_buf[lane], y, m_buf[lane], u_buf[lane])
             status[p, 0] = st
             status[p, 1] = done
+            row = stats[p]
+            if st == 0:
+                _score_run(ref, y, ts, wins, expo, e_buf[lane, 0], e_buf[lane, 1], row)
+            row[_PEAK_TH3] = _abs_nanmax(y, 1, done)
+            row[_PEAK_I] = _abs_nanmax(y, 4, done)
+
+
+def _windows(ref: np.ndarray) -> np.ndarray:
+    """(2, 4) rise-time windows ``(k0, end, r0, r1)`` of the speed and yaw-rate references, found as
+    ``ClosedLoopObjective._rise_time`` and :func:`~objectives.control.metrics.rise_time_s` find them."""
+    wins = np.full((2, 4), -1.0)
+    for i in range(2):
+        r = ref[:, i]
+        steps = np.flatnonzero(np.diff(np.concatenate(([0.0], r))) != 0)
+        if not steps.size:
+            continue
+        k0 = int(steps[0])
+        r0 = float(r[k0 - 1]) if k0 > 0 else 0.0
+        r1 = float(r[k0])
+        change = np.flatnonzero(r[k0:] != r1)
+        wins[i] = (k0, k0 + (int(change[0]) if change.size else r.size - k0), r0, r1)
+    return wins
+
+
+def _evaluation(obj: Any, st: int, done: int, s: np.ndarray, wins: np.ndarray) -> Evaluation:
+    """``obj._evaluation`` of a run from its status and statistics row ``s``."""
+    ts = obj._sensors.Ts_s
+    peak = {
+        "peak_theta3_deg": float(np.degrees(s[_PEAK_TH3])) if done else 0.0,
+        "peak_current_A": float(s[_PEAK_I]) if done else 0.0,
+        "status_code": float(st),
+    }
+    if st != STATUS_OK:
+        return Evaluation.failed(f"robot {STATUS_NAMES[st]} at t={done * ts:.2f} s", peak)
+    metrics: dict[str, float] = {}
+    for m, measure in enumerate(_MEASURES):  # the keys and order of metrics.error_integrals
+        vals = []
+        for e, name in enumerate(_ERRORS):
+            metrics[f"{measure}_{name}"] = float(s[4 * e + m])
+            vals.append(metrics[f"{measure}_{name}"])
+        metrics[f"{measure}_log10_prod"] = log10_product(vals)
+    rise = [float(int(s[k])) * ts if s[k] >= 0 else (math.inf if wins[i, 0] >= 0 else math.nan)
+            for i, k in enumerate((_RISE_NU, _RISE_XI))]
+    metrics.update({"mae_nu": float(s[_MAE_NU]), "mae_xi": float(s[_MAE_XI]), "mae_omega3": float(s[_MAE_W3]),
+                    "ms_current": float(s[_MS_I]), "rise_time_nu_s": rise[0], "rise_time_xi_s": rise[1]})
+    metrics.update(peak)
+    f = float(s[_COST])
+    violated = obj._violated(metrics)
+    if violated:
+        return Evaluation.failed(violated, metrics)
+    if not math.isfinite(f):
+        return Evaluation.failed(f"non-finite cost {f}", metrics)
+    return Evaluation(f, metrics)
 
 
 def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads: int) -> list[Any]:
@@ -70,29 +203,27 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
             continue
         rows.append((i, cp))
     n_lanes = use_threads(n_threads)
-    ref, noise = obj._ref, obj._noise
+    ref = np.ascontiguousarray(obj._ref, dtype=float)
     n, P = ref.shape[0], len(rows)
     width = max([len(cp) for _, cp in rows] or [1])
     cps = np.zeros((P, width))
     for k, (_, cp) in enumerate(rows):
         cps[k, :len(cp)] = cp
-    x_out = np.full((P, n, 8), np.nan)
-    y_out = np.full((P, n, 5), np.nan)
-    m_out = np.full((P, n, 5), np.nan)
-    u_out = np.full((P, n, 2), np.nan)
+    lanes = max(1, min(n_lanes, P))
+    state_size = int(obj._cls.state_size)
+    bufs = (np.full((lanes, n, 8), np.nan), np.full((lanes, n, 5), np.nan), np.full((lanes, n, 5), np.nan),
+            np.full((lanes, n, 2), np.nan), np.zeros((lanes, state_size)), np.empty((lanes, 2, n)))
     status = np.zeros((P, 2), dtype=np.int64)
-    order, start = lanes(np.ones(P), n_lanes)
-    loop = (np.zeros(8), obj._plant.coeffs(), obj._sensors.coeffs(obj._plant.u_max_V),
-            np.ascontiguousarray(ref, dtype=float), np.ascontiguousarray(noise, dtype=float), int(obj.n_sub),
-            math.radians(obj.fall_limit_deg))
-    _closed_loop_batch(loop, int(obj._cls.kind), cps, int(obj._cls.state_size), (order, start),
-                       (x_out, y_out, m_out, u_out), status)
+    stats = np.full((P, _N_STATS), np.nan)
+    wins = _windows(ref)
+    loop = (np.zeros(8), obj._plant.coeffs(), obj._sensors.coeffs(obj._plant.u_max_V), ref,
+            np.ascontiguousarray(obj._noise, dtype=float), int(obj.n_sub), math.radians(obj.fall_limit_deg))
+    sched = (np.arange(P, dtype=np.int64), counter())  # no cost is known before the run: claiming balances
+    score = (float(obj._sensors.Ts_s), wins, cost_exponents(obj.cost))
+    _closed_loop_batch(loop, int(obj._cls.kind), cps, state_size, sched, score, bufs, status, stats)
     for k, (i, _) in enumerate(rows):
-        st = int(status[k, 0])
-        sim = {"outputs": y_out[k], "references": ref, "n_done": int(status[k, 1]), "status": st,
-               "status_name": STATUS_NAMES[st], "state": x_out[k], "measurements": m_out[k], "voltages": u_out[k]}
         try:
-            results[i] = obj._evaluation(sim)
+            results[i] = _evaluation(obj, int(status[k, 0]), int(status[k, 1]), stats[k], wins)
         except Exception as exc:
             results[i] = exc
     return results

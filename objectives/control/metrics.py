@@ -21,6 +21,12 @@ Units. The thesis states none for eqs. 2.34-2.39; two different sets are consist
   for the 0.5 / -1.2 rad/s yaw steps of section 2.2.3.1 is a lag of 0.38 s in rad/s, of 7 ms in
   deg/s (faster than the 0.9 s rise time of Table 2.4). These integrals are metrics only; they do
   not enter F.
+
+Population kernels (``backend: threads``, objectives/control/batch.py) score a run inside numba with
+:func:`_measures_kernel` and :func:`_weighted_cost_kernel` (sums by
+:func:`objectives.batch_threads._pairwise_sum`), which add and
+multiply in NumPy's order so that their values equal those of :func:`sae` ... :func:`mae_weighted_cost`
+bit for bit (tests/control/test_metrics_kernel.py).
 """
 
 from __future__ import annotations
@@ -28,6 +34,9 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
+from numba import njit
+
+from objectives.batch_threads import _pairwise_sum
 
 __all__ = [
     "sae",
@@ -140,6 +149,46 @@ def mae_weighted_cost(e_nu, e_xi, e_omega3, i_avg, weights: Mapping[str, float] 
     terms = [np.mean(np.abs(sig[0])), np.mean(np.abs(sig[1])), np.mean(np.abs(sig[2])), np.mean(sig[3] ** 2)]
     expo = [w["alpha1"], w["alpha2"], w["beta"], w["gamma"]]
     return float(np.prod([t**a for t, a in zip(terms, expo)]) ** 0.25)
+
+
+@njit(cache=True)
+def _measures_kernel(e, ts, tmp, out):
+    """SAE, SSE, STAE, STSE of ``e`` (eqs. 2.34-2.35) into ``out[0:4]``, equal to :func:`sae`, :func:`sse`,
+    :func:`stae` and :func:`stse` bit for bit; ``tmp``: scratch of at least ``e``'s length."""
+    n = e.shape[0]
+    for i in range(n):
+        tmp[i] = abs(e[i])
+    out[0] = _pairwise_sum(tmp, 0, n)
+    for i in range(n):
+        tmp[i] = e[i] * e[i]
+    out[1] = _pairwise_sum(tmp, 0, n)
+    for i in range(n):
+        tmp[i] = (i + 1) * ts * abs(e[i])  # k Ts |e_k|, multiplied left to right as NumPy does
+    out[2] = _pairwise_sum(tmp, 0, n)
+    for i in range(n):
+        tmp[i] = (i + 1) * ts * e[i] * e[i]
+    out[3] = _pairwise_sum(tmp, 0, n)
+
+
+@njit(cache=True)
+def _weighted_cost_kernel(terms, expo):
+    """F of eq. 2.39 from its four means ``terms`` and exponents ``expo`` (alpha1, alpha2, beta, gamma),
+    multiplied in :func:`mae_weighted_cost`'s order (equal to it bit for bit)."""
+    prod = 1.0
+    for i in range(4):
+        prod *= terms[i] ** expo[i]
+    return prod ** 0.25
+
+
+def cost_exponents(weights: Mapping[str, float] | None = None) -> np.ndarray:
+    """(4,) alpha1, alpha2, beta, gamma of eq. 2.39: :data:`DEFAULT_COST_WEIGHTS` with ``weights``' overrides."""
+    w = dict(DEFAULT_COST_WEIGHTS)
+    if weights:
+        unknown = sorted(set(weights) - set(w))
+        if unknown:
+            raise ValueError(f"unknown cost weight(s) {unknown}; known: {sorted(w)}")
+        w.update({k: float(v) for k, v in weights.items()})
+    return np.array([w["alpha1"], w["alpha2"], w["beta"], w["gamma"]], dtype=float)
 
 
 def rise_time_s(y, ref, Ts: float, k0: int, frac: float = 0.9) -> float:

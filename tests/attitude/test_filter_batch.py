@@ -8,7 +8,6 @@ import pytest
 from objectives.attitude.batch import batchable
 from objectives.attitude.data.broad import default_broad_dir
 from objectives.attitude.objective import FilterObjective
-from objectives.batch_threads import lanes
 from tuner.config import config_from_dict
 from tuner.evaluate import Evaluator
 from tuner.objective import Evaluation
@@ -88,16 +87,6 @@ def test_configurations_without_a_kernel_return_none(flt, section):
     obj = FilterObjective.from_config({"kind": "filter", "filter": flt, **section})
     assert not batchable(obj)
     assert obj.evaluate_batch([obj.default_params()], 2) is None
-
-
-def test_lanes_balance_and_cover_every_item():
-    costs = np.array([5.0, 1.0, 4.0, 2.0, 3.0, 3.0])
-    order, start = lanes(costs, 2)
-    assert sorted(order.tolist()) == list(range(6)) and start.tolist()[0] == 0 and start[-1] == 6
-    loads = [costs[order[start[k]:start[k + 1]]].sum() for k in range(2)]
-    assert loads == [9.0, 9.0]
-    order, start = lanes(np.zeros(0), 3)
-    assert order.size == 0 and start.tolist() == [0, 0, 0, 0]
 
 
 def _history(rd):
