@@ -22,6 +22,7 @@ process, on the first batch.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -32,15 +33,16 @@ from numba.typed import List
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms, growth_verdict
 from objectives.attitude.filters._ekf_kernel import ekf_kernel
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel
-from objectives.attitude.filters.base import FilterResult, initial_quaternion
+from objectives.attitude.filters.base import initial_quaternion
 from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale, gravity_in_units
 from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt, _up_sign, tilt_from_quat
 from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel
 from objectives.attitude.filters.mahony import Mahony, _mahony_kernel
 from objectives.attitude.fused_errors import ErrorSums, _error_sums
+from objectives.attitude.quaternion import euler_zyx
 from objectives.attitude.quaternion.algebra import _qmul_kernel
 from objectives.attitude.quaternion.conversions import frame_rotation
-from objectives.batch_threads import claim, counter, deal, use_threads
+from objectives.batch_threads import _pairwise_sum, claim, counter, deal, use_threads
 from tuner.objective import Score
 
 __all__ = ["evaluate_batch", "batchable"]
@@ -138,20 +140,45 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
             _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
 
 
-@njit(cache=False, parallel=True)
-def _kf1d_batch(data, pairs, lanes_, theta, bufs, sums):
-    """The thesis 1-D tilt KF on every pair: the angle into ``theta[pair, :n]`` (for ``mse_1d``), the
-    error sums of its quaternion (:func:`objectives.attitude.filters.kf1d.quat_from_tilt`, already in the
-    recording's frame) into ``sums[pair]``.
+@njit(cache=False)
+def _wrap_angle(a):
+    """:func:`objectives.attitude.metrics.wrap_angle` of one value, bit for bit (``np.mod``'s rules)."""
+    two_pi = 2.0 * np.pi
+    out = (a + np.pi) % two_pi - np.pi  # Python's float % has np.mod's rules (fmod, then the divisor's sign)
+    return out - two_pi if out >= np.pi else out
 
-    data : ``(gys, axs, azs, trues, masks, up)``: per recording the rate about y, the specific force
-        along x and z, truth and mask (typed lists), and (R,) the kernel's ``up_sign``.
-    pairs : ``(rec, coefs, states)``: (P,), (P, 4), (P, 5).  bufs : ``(bbuf, qbuf)`` per lane.
+
+@njit(cache=False)
+def _mse_1d_kernel(est, true, mask, e):
+    """:func:`objectives.attitude.metrics.mse_1d` of ``est`` against ``true`` inside ``mask``, bit for bit
+    (NumPy's pairwise mean over the valid samples, gathered into the scratch ``e``); NaN if none is valid."""
+    m = 0
+    for k in range(true.shape[0]):
+        if math.isfinite(true[k]) and mask[k]:
+            w = _wrap_angle(true[k] - est[k]) if math.isfinite(est[k]) else np.pi
+            e[m] = w * w
+            m += 1
+    if m == 0:
+        return np.nan
+    return _pairwise_sum(e, 0, m) / m
+
+
+@njit(cache=False, parallel=True)
+def _kf1d_batch(data, pairs, lanes_, bufs, sums, mse):
+    """The thesis 1-D tilt KF on every pair: the error sums of its quaternion
+    (:func:`objectives.attitude.filters.kf1d.quat_from_tilt`, already in the recording's frame) into
+    ``sums[pair]`` and the ``mse_1d`` of its angle into ``mse[pair]``.
+
+    data : ``(gys, axs, azs, trues, masks, up, angles)``: per recording the rate about y, the specific force
+        along x and z, truth and mask (typed lists), (R,) the kernel's ``up_sign`` and the true angles
+        ``mse_1d`` compares with (typed list).
+    pairs : ``(rec, coefs, states)``: (P,), (P, 4), (P, 5).
+    bufs : ``(bbuf, qbuf, tbuf, ebuf)`` per lane: bias, quaternion, angle and ``mse_1d`` scratch.
     """
-    gys, axs, azs, trues, masks, up = data
+    gys, axs, azs, trues, masks, up, angles = data
     pair_rec, coefs, states = pairs
     order, count = lanes_
-    bbuf, qbuf = bufs
+    bbuf, qbuf, tbuf, ebuf = bufs
     for lane in prange(qbuf.shape[0]):
         one = np.ones(1)
         while True:
@@ -161,8 +188,9 @@ def _kf1d_batch(data, pairs, lanes_, theta, bufs, sums):
             p = order[j]
             r = pair_rec[p]
             n = gys[r].shape[0]
-            th = theta[p, :n]
+            th = tbuf[lane, :n]
             kf1d_kernel(gys[r], axs[r], azs[r], up[r], coefs[p], one, states[p], 1, th, bbuf[lane, :n])
+            mse[p] = _mse_1d_kernel(th, angles[r], masks[r], ebuf[lane])
             q = qbuf[lane, :n]
             _quat_from_tilt(th, q)
             _error_sums(q, trues[r], masks[r], sums[p, :_N_ERR])
@@ -205,6 +233,19 @@ class _Data:
             self.rots[i, :4] = frame_rotation(frame, r.frame)
             self.rots[i, 4] = 0.0 if frame.upper() == r.frame.upper() else 1.0
         self.dist: list | None = None
+        self._angles: List | None = None
+
+    def angles(self) -> List:
+        """The true angles ``mse_1d`` compares with, per recording (``FilterObjective._mse_1d``'s choice)."""
+        if self._angles is None:
+            out = []
+            for rec in self.recs:
+                true = rec.extra.get("angle")
+                if true is None:
+                    true = euler_zyx(rec.quat)[:, 1]
+                out.append(np.ascontiguousarray(np.asarray(true, dtype=float).ravel()))
+            self._angles = List(out)
+        return self._angles
 
     def initial(self, obj: Any, flt: Any, i: int) -> np.ndarray:
         """The start quaternion of ``flt`` on recording ``i`` (``AttitudeFilter._run_detailed``'s)."""
@@ -235,11 +276,11 @@ def _sums(out: np.ndarray) -> ErrorSums:
     return ErrorSums(n, int(out[10]), out[0:3] / n, out[3:6] / n, out[6:9] / n)
 
 
-def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = None,
+def _score(obj: Any, recs: list, sums: list[ErrorSums], mse_1d: list | None = None,
            segments: list | None = None) -> Score:
     """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth);
-    ``angles``: the 1-D filters' angle per recording, for ``mse_1d``; ``segments``: each recording's
-    growth segments (mean squares, counts) for the divergence check."""
+    ``mse_1d``: the 1-D filters' ``mse_1d`` per recording (computed in the kernel); ``segments``: each
+    recording's growth segments (mean squares, counts) for the divergence check."""
     per: dict[str, dict[str, float]] = {}
     failed = ""
     for i, (rec, es) in enumerate(zip(recs, sums)):
@@ -253,8 +294,7 @@ def _score(obj: Any, recs: list, sums: list[ErrorSums], angles: list | None = No
             failed = f"filter diverged on {rec.name}: {why}" if why else ""
         per[rec.name] = dict(es.as_dict())
         if obj.metric == "mse_1d":
-            res = FilterResult(np.empty((0, 4)), rec.frame, {"angle": angles[i]})
-            per[rec.name]["mse_1d"] = obj._mse_1d(rec, res, obj._mask(rec))
+            per[rec.name]["mse_1d"] = float(mse_1d[i])
     fitness = obj._combine(sums, per, [r.name for r in recs], "train")
     return Score(float(fitness), per, failed)
 
@@ -331,17 +371,17 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     qbuf = np.empty((n_lanes, n_max, 4))
     cbuf = np.empty((n_lanes, n_max, 4))
     sums = np.zeros((P, _N_SUMS))
-    theta = None
     lanes_ = (order, counter())
     if fam == 4:
-        theta = np.empty((P, n_max))
+        mse = np.full(P, np.nan)
         up = np.array([_up_sign(r.frame) for r in data.recs])
         c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
         cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
                      for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
-        _kf1d_batch((*cols, data.trues, data.masks, up), (pair_rec, coefs, states), lanes_, theta,
-                    (np.empty((n_lanes, n_max)), qbuf), sums)
-        return _results(obj, data, params_list, rows, sums, theta, results)
+        _kf1d_batch((*cols, data.trues, data.masks, up, data.angles()), (pair_rec, coefs, states), lanes_,
+                    (np.empty((n_lanes, n_max)), qbuf, np.empty((n_lanes, n_max)), np.empty((n_lanes, n_max))),
+                    sums, mse)
+        return _results(obj, data, params_list, rows, sums, mse, results)
     recs = (data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots)
     pairs = (pair_rec, pair_mag, coefs, states)
     if fam <= 1:
@@ -366,19 +406,19 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
 
 
 def _results(obj: Any, data: _Data, params_list: Sequence[Mapping[str, Any]], rows: list, sums: np.ndarray,
-             theta: np.ndarray | None, results: list) -> list[Any]:
-    """Each candidate's evaluation from its pairs' sums (and angles), by the objective's own code."""
+             mse: np.ndarray | None, results: list) -> list[Any]:
+    """Each candidate's evaluation from its pairs' sums (and ``mse_1d`` values), by the objective's own code."""
     per_cand: dict[int, list[ErrorSums]] = {}
     segments: dict[int, list[tuple[np.ndarray, np.ndarray]]] = {}
-    angles: dict[int, list[np.ndarray]] = {}
+    mses: dict[int, list[float]] = {}
     for k, r in enumerate(rows):
         per_cand.setdefault(r[0], []).append(_sums(sums[k]))
         segments.setdefault(r[0], []).append((sums[k, _N_ERR:_N_ERR + N_SEGMENTS], sums[k, _N_ERR + N_SEGMENTS:]))
-        if theta is not None:
-            angles.setdefault(r[0], []).append(theta[k, :data.n[r[1]]])
+        if mse is not None:
+            mses.setdefault(r[0], []).append(mse[k])
     for ci, es in per_cand.items():
         try:
-            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es, angles.get(ci), segments[ci]))
+            results[ci] = obj._evaluation(params_list[ci], _score(obj, data.recs, es, mses.get(ci), segments[ci]))
         except Exception as exc:
             results[ci] = exc
     return results
