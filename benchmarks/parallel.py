@@ -6,6 +6,11 @@
   warm-up batch (worker start, data loading, compilation); median of several batches. Besides wall
   time, the CPU seconds a batch costs (this process and its loky workers): on free cores the
   speed-up is bounded by ``2 x serial CPU / backend CPU``, a number the machine's load does not move.
+  The backend's CPU seconds are split into the calling thread's (``time.thread_time``: the serial
+  part of a generation, Python preparation, scoring, dispatch; numba's workqueue threads and loky's
+  workers do the parallel part) and the rest, which gives the serial fraction (of the serial run's
+  CPU) and the Amdahl bound ``serial CPU / (calling-thread CPU + rest / workers)``: the speed-up on
+  free cores, also measurable on a busy machine.
 * The same for a synthetic objective that burns about 10 ms of CPU per evaluation (loky only: it
   has no batch kernel).
 * Engine overhead with a trivial objective (sphere): evaluations per second through a whole
@@ -67,20 +72,26 @@ def speedup(objective, params: list[dict], repeats: int, n_jobs: int = 2,
     for backend in backends:
         with Evaluator(objective, backend=backend, n_jobs=1 if backend == "serial" else n_jobs) as ev:
             ev(params)  # warm-up: workers, data, compilation
-            times, cpus = [], []
+            times, cpus, mains = [], [], []
             for _ in range(repeats):
                 pids: set[int] = set()
-                c, t = _cpu_s(pids), time.perf_counter()
+                c, m, t = _cpu_s(pids), time.thread_time(), time.perf_counter()
                 ev(params)
                 times.append(time.perf_counter() - t)
+                mains.append(time.thread_time() - m)
                 cpus.append(_cpu_s(pids) - c)
             if ev.notes:
                 out[f"{backend}_notes"] = list(ev.notes)
         out[backend] = float(np.median(times))
         out[f"{backend}_cpu_s"] = float(np.median(cpus))
+        out[f"{backend}_main_cpu_s"] = float(np.median(mains))
     for backend in backends[1:]:
         out[f"speedup_{backend}"] = out["serial"] / out[backend]
         out[f"cpu_bound_{backend}"] = n_jobs * out["serial_cpu_s"] / max(out[f"{backend}_cpu_s"], 1e-12)
+        main = out[f"{backend}_main_cpu_s"]
+        rest = max(out[f"{backend}_cpu_s"] - main, 0.0)
+        out[f"serial_fraction_{backend}"] = main / max(out["serial_cpu_s"], 1e-12)
+        out[f"amdahl_bound_{backend}"] = out["serial_cpu_s"] / max(main + rest / n_jobs, 1e-12)
     out["speedup"] = out.get("speedup_loky", math.nan)
     out["batch"] = len(params)
     return out
@@ -212,14 +223,18 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     mems = {b: _peak_memory(smoke, b) for b in ("loky", "threads")}
     load_after = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     rows = [[k, v.get("t_eval_s"), v.get("batch"), v.get("serial"), v.get("loky"), v.get("threads"),
-             v.get("speedup_loky"), v.get("speedup_threads"), v.get("cpu_bound_loky"), v.get("cpu_bound_threads")]
+             v.get("speedup_loky"), v.get("speedup_threads"), v.get("cpu_bound_loky"), v.get("cpu_bound_threads"),
+             v.get("serial_fraction_threads"), v.get("amdahl_bound_threads")]
             for k, v in problems.items()]
     rows.append(["busy 10 ms objective", 0.01, busy_r["batch"], busy_r["serial"], busy_r["loky"], None,
-                 busy_r["speedup"], None, busy_r["cpu_bound_loky"], None])
+                 busy_r["speedup"], None, busy_r["cpu_bound_loky"], None, None, None])
     md = [md_table(["problem", "s per eval", "batch", "serial s", f"loky x{n_jobs} s", f"threads x{n_jobs} s",
-                    "speed-up loky", "speed-up threads", "CPU bound loky", "CPU bound threads"], rows),
+                    "speed-up loky", "speed-up threads", "CPU bound loky", "CPU bound threads",
+                    "serial fraction threads", "Amdahl bound threads"], rows),
           f"\nCPU bound: {n_jobs} x serial CPU seconds / the backend's CPU seconds for the same batch (this "
-          "process and its workers), the speed-up on free cores if the work is spread evenly.\n",
+          "process and its workers), the speed-up on free cores if the work is spread evenly. Serial "
+          "fraction: CPU seconds of the calling thread (Python preparation and scoring around the kernel) / "
+          f"serial CPU seconds; Amdahl bound: serial CPU / (calling thread + the rest / {n_jobs}).\n",
           "\nEngine overhead, trivial objective (sphere 5-D) through `tuner.run.run`:\n",
           md_table(["backend", "evaluations/s", "outside objective per generation s", "per evaluation s",
                     "population x generations"],
