@@ -55,14 +55,24 @@ _N_SUMS = _N_ERR + 2 * N_SEGMENTS
 
 
 @njit(cache=False)
-def _pair_sums(q, c, rots, r, true, mask, out):
+def _pair_sums(q, c, rots, r, true, mask, acc, out):
     """Error sums and growth segments (``out``, :data:`_N_SUMS`) of the estimate ``q`` of recording ``r``
-    (converted into ``c`` to its frame if needed)."""
+    (converted into ``c`` to its frame if needed), accumulated in the lane's own ``acc`` (see
+    :func:`_lane_sums`)."""
     if rots[r, 4] != 0.0:
         _qmul_kernel(rots[r:r + 1, :4], q, c)
         q = c
-    _error_sums(q, true, mask, out[:_N_ERR])
-    _segment_ms(q, true, mask, out[_N_ERR:])
+    _lane_sums(q, true, mask, acc, out)
+
+
+@njit(cache=False)
+def _lane_sums(q, true, mask, acc, out):
+    """The error sums and growth segments of ``q`` into ``out``, accumulated per sample in ``acc`` (the
+    lane's (:data:`_N_SUMS`,) array) and copied once: rows of ``sums`` that two lanes fill at the same
+    time can share a cache line, which per-sample updates would pass between the cores all the time."""
+    _error_sums(q, true, mask, acc[:_N_ERR])
+    _segment_ms(q, true, mask, acc[_N_ERR:])
+    out[:] = acc
 
 
 @njit(cache=False, inline="always")
@@ -95,6 +105,7 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
     for lane in prange(qbuf.shape[0]):
         no_bias = np.empty((0, 3))
         no_mag = np.empty((0, 3))
+        acc = np.empty(_N_SUMS)
         while True:
             j = claim(count)
             if j >= order.shape[0]:
@@ -104,7 +115,7 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
                 _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             else:
                 _mahony_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
-            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
 
 
 @njit(cache=False, parallel=True)
@@ -126,6 +137,7 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
     for lane in prange(qbuf.shape[0]):
         no_mag = np.zeros((1, 3))
         one = np.ones(1)
+        acc = np.empty(_N_SUMS)
         while True:
             j = claim(count)
             if j >= order.shape[0]:
@@ -137,7 +149,7 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
                 ekf_kernel(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
             else:
                 ekf_kernel(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
-            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], sums[p])
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
 
 
 @njit(cache=False)
@@ -181,6 +193,7 @@ def _kf1d_batch(data, pairs, lanes_, bufs, sums, mse):
     bbuf, qbuf, tbuf, ebuf = bufs
     for lane in prange(qbuf.shape[0]):
         one = np.ones(1)
+        acc = np.empty(_N_SUMS)
         while True:
             j = claim(count)
             if j >= order.shape[0]:
@@ -193,8 +206,7 @@ def _kf1d_batch(data, pairs, lanes_, bufs, sums, mse):
             mse[p] = _mse_1d_kernel(th, angles[r], masks[r], ebuf[lane])
             q = qbuf[lane, :n]
             _quat_from_tilt(th, q)
-            _error_sums(q, trues[r], masks[r], sums[p, :_N_ERR])
-            _segment_ms(q, trues[r], masks[r], sums[p, _N_ERR:])
+            _lane_sums(q, trues[r], masks[r], acc, sums[p])
 
 
 def batchable(obj: Any) -> bool:
