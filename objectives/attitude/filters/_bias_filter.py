@@ -56,7 +56,7 @@ __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags",
 # --- layouts of the robust blocks in the coefficient and state arrays ----------------------------------------
 #: index of the first robust coefficient (the filters' own coefficients fit before it)
 ROBUST_AT = 8
-_MC = ROBUST_AT + 3  # flags: mag_rejection, rest_bias, acc_lp
+_MC = ROBUST_AT + 4  # flags: mag_rejection, rest_bias, acc_lp, mag_ref_start
 _RC = _MC + 11  # block a: mag_dist_coefficients (11,)
 _AC = _RC + 7  # block b: rest_coefficients (7,)
 #: length of a coefficient array with the blocks (block c: acc_lp_coefficients (4,) last)
@@ -69,7 +69,7 @@ _SCR = _AS + ACC_STATE
 STATE_LEN = _SCR + 7
 #: the options of the robust blocks in Madgwick and Mahony
 ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_norm_th", "mag_dip_th_deg", "rest_bias",
-                "rest_bias_tau_s")
+                "rest_bias_tau_s", "mag_ref_start")
 #: rest detection on unit accelerometer vectors: VQF's 0.5 m/s^2 relative to g
 _REST_TH_ACC = 0.5 / 9.81
 
@@ -80,6 +80,10 @@ def robust_options(rejected: str) -> tuple[Param, ...]:
     """
     shared = tuple(p for p in robust_decl("the gravity correction", rejected) if p.name in ROBUST_NAMES)
     return shared + (
+        Param("mag_ref_start", True, choices=(True, False),
+              doc="the field at the start is the first reference (mag_rejection; the start orientation already "
+                  "trusts it); false: learned as a new field, after new_first_time_s of rotation faster than "
+                  "20 deg/s, the magnetometer used fully until then"),
         Param("rest_bias_tau_s", 2.0, unit="s", allowed=POSITIVE,
               doc="time constant with which the bias estimate follows the low-passed gyro at rest (rest_bias)"),
     )
@@ -97,7 +101,7 @@ def with_robust(coef: np.ndarray, v: dict, dt: float) -> np.ndarray:
         return coef
     out = np.zeros(COEF_LEN)
     out[:coef.shape[0]] = coef
-    out[ROBUST_AT:_MC] = (float(rej), float(rest), float(alp))
+    out[ROBUST_AT:_MC] = (float(rej), float(rest), float(alp), float(bool(v["mag_ref_start"])))
     out[_MC:_RC] = mag_dist_coefficients(dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
                                          max_rejection_s=float(v["mag_max_rejection_s"]))
     out[_RC:_AC] = rest_coefficients(dt, th_acc=_REST_TH_ACC, tau_bias_s=float(v["rest_bias_tau_s"]))
@@ -161,6 +165,9 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
             gl = math.sqrt(rs[0] * rs[0] + rs[1] * rs[1] + rs[2] * rs[2])
             ms = state[_MS:_RS]
             g = _mag_dist_update(ms, coef[_MC:_RC], hx, hy, hz, gl)
+            if ms[0] == 0.0 and coef[ROBUST_AT + 3] != 0.0:  # mag_ref_start: the first field is the reference
+                ms[0], ms[1], ms[2], ms[6] = ms[8], ms[9], coef[_MC + 5], 0.0
+                g = 1.0
             gm = 1.0 if ms[0] == 0.0 else g
     return bx, by, bz, ax, ay, az, a_ok, gm
 
