@@ -9,7 +9,8 @@ default (the kernels then run the papers' algorithms, bit for bit):
 - ``mag_rejection`` (block a): the magnetometer, rotated into the NWU earth frame with the current
   estimate, feeds the field norm and dip detector; while the field is disturbed its correction (Mahony's
   error term, Madgwick's gradient) is scaled by the block's gain (0, or ``1 / rejection_factor`` after
-  ``mag_max_rejection_s``), the gravity correction goes on;
+  ``mag_max_rejection_s``), the gravity correction goes on; the field at the start is the first reference
+  (``mag_ref_start``, as the start orientation trusts it; off: learned after 5 s of fast rotation);
 - ``rest_bias`` (block b): at detected rest the gyro's low-pass is the bias estimate (time constant
   ``rest_bias_tau_s``), subtracted from the gyro before the filter's own bias estimate (zeta / Ki);
 - ``acc_lp_tau_s`` (block c): the accelerometer low-passed in the earth frame replaces the raw one in the
@@ -50,8 +51,8 @@ from objectives.attitude.filters.stream import StateStream
 from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
-           "with_robust", "robust_coef", "initial_state", "robust_sample", "robust_on", "ROBUST_AT", "COEF_LEN", "STATE_LEN",
-           "ROBUST_NAMES"]
+           "with_robust", "robust_coef", "initial_state", "robust_sample", "robust_on", "ROBUST_AT", "COEF_LEN",
+           "STATE_LEN", "ROBUST_NAMES"]
 
 # --- layouts of the robust blocks in the coefficient and state arrays ----------------------------------------
 #: index of the first robust coefficient (the filters' own coefficients fit before it)
@@ -140,7 +141,8 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
     Returns ``(bx, by, bz, ax, ay, az, acc_ok, gm)``: the rest bias to subtract from the gyro (rad/s, 0 when
     ``rest_bias`` is off), the unit accelerometer for the gravity correction (earth-frame low-passed when
     ``acc_lp`` is on; ``acc_ok`` as :func:`~objectives.attitude.filters._scalar.read_unit`) and the
-    magnetometer gain (1: use fully; 0: rejected; 1 until block a has learned a first reference field).
+    magnetometer gain (1: use fully; 0: rejected; with ``mag_ref_start`` the first field is block a's
+    reference, else the gain is 1 until block a has learned one, as in the EKF).
     The blocks' states live in ``state[7:]`` and are updated in place.
     """
     rej, rest, alp = coef[ROBUST_AT] != 0.0, coef[ROBUST_AT + 1] != 0.0, coef[ROBUST_AT + 2] != 0.0
