@@ -251,7 +251,8 @@ class Mahony(BiasKernelFilter, kernel=_mahony_kernel, coef=_coef, bias_param="Ki
         Magnetic disturbance rejection (default False): while the field's norm or dip departs from a
         reference learned when undisturbed (``mag_norm_th``, ``mag_dip_th_deg``), the magnetometer's
         error term is dropped (for at most ``mag_max_rejection_s``, then halved) and the gravity term
-        alone corrects; a field that stays is accepted as the new reference.
+        alone corrects; a field that stays is accepted as the new reference. The first reference is the
+        field at the start (``mag_ref_start``, default True; False: learned after 5 s of fast rotation).
     rest_bias : bool
         Gyro bias estimation at rest (default False): at detected rest the bias follows the low-passed
         gyro with ``rest_bias_tau_s``; held during motion, subtracted before the integral's estimate.
