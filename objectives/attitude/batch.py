@@ -31,6 +31,7 @@ from numba import njit, prange
 from numba.typed import List
 
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms, growth_verdict
+from objectives.attitude.filters._bias_filter import initial_state, robust_coef
 from objectives.attitude.filters._ekf_kernel import ekf_kernel
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel
 from objectives.attitude.filters.base import initial_quaternion
@@ -93,7 +94,8 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
         (0, 3) without one), and ``rots`` (R, 5): the rotation quaternion to the recording's frame and
         1.0 when a conversion is needed.
     pairs : ``(rec, use_mag, coefs, states)``: (P,) recording of each pair, 1 when it uses the
-        magnetometer, (P, 5) coefficients (Mahony's 4 padded with a zero), (P, 7) initial states.
+        magnetometer, (P, 5) coefficients (Mahony's 4 padded with a zero) and (P, 7) initial states, or
+        (P, COEF_LEN) and (P, STATE_LEN) when a pair has the robust blocks on (zero padding keeps them off).
     lanes_ : ``(order, count)``: the order pairs are claimed in and the claim counter
         (:mod:`objectives.batch_threads`).
     bufs : ``(qbuf, cbuf)``: (lanes, N_max, 4) per-lane output buffers.
@@ -327,8 +329,9 @@ def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str,
                 if fam == 4:
                     coef = flt._coef(rec.dt)
                     state = flt._state0(tilt_from_quat(q0, rec.frame, flt.working_frame))
-                elif fam <= 1:
+                elif fam <= 1:  # with a robust block on, the longer coefficients and state of _bias_filter
                     coef = flt.coef(v, rec.dt, use_mag)
+                    state = initial_state(q0, robust_coef(coef))
                 else:
                     coef = flt.coefficients(rec.dt, use_mag, data.gravity[ri])
                 fz = None
@@ -372,12 +375,12 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     P = len(rows)
     pair_rec = np.array([r[1] for r in rows], dtype=np.int64)
     pair_mag = np.array([r[4] for r in rows], dtype=np.int64)
-    width = {0: 5, 1: 5, 4: 4}.get(fam) or max([len(r[2]) for r in rows] or [12])
+    width = {4: 4}.get(fam) or max([len(r[2]) for r in rows] or [5 if fam <= 1 else 12])
     coefs = np.zeros((P, width))
-    states = np.zeros((P, 5 if fam == 4 else 7))
+    states = np.zeros((P, 5 if fam == 4 else max([len(r[3]) for r in rows] or [7])))
     for k, r in enumerate(rows):
         coefs[k, :len(r[2])] = r[2]
-        states[k] = r[3]
+        states[k, :len(r[3])] = r[3]
     order = deal(data.n[pair_rec] if P else np.zeros(0))  # longest first, claimed by free lanes
     n_max = int(data.n.max()) if len(data.n) else 0
     qbuf = np.empty((n_lanes, n_max, 4))

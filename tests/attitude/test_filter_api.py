@@ -52,13 +52,16 @@ def test_declaration_reproduces_previous_defaults_and_space(name):
     """Defaults and default search space equal those of the hand-written tuples and dicts they replace."""
     cls = get_filter(name)
     before = BEFORE["filters"][name]
-    # every declared filter gained the common start option ``init`` (last, fixed at "auto") and the EKF family
-    # and the QRAUKF its robust blocks (appended, fixed, off); the rest is unchanged
+    # every declared filter gained the common start option ``init`` (last, fixed at "auto") and the EKF family,
+    # the QRAUKF, Madgwick and Mahony their robust blocks (appended, fixed, off); the rest is unchanged
     assert cls.defaults["init"] == "auto" and list(cls.defaults)[-1] == "init"
     added = {"init": "auto"}
     if name in ("ekf", "faekf", "qraukf"):
         added.update(acc_lp_tau_s=0.0, mag_rejection=False, mag_max_rejection_s=60.0, mag_norm_th=0.1,
                      mag_dip_th_deg=10.0, rest_bias=False, rest_bias_var=3e-6)
+    if name in ("madgwick", "mahony"):  # their robust blocks (appended, fixed, off)
+        added.update(acc_lp_tau_s=0.0, mag_rejection=False, mag_max_rejection_s=60.0, mag_norm_th=0.1,
+                     mag_dip_th_deg=10.0, rest_bias=False, mag_ref_start=True, rest_bias_tau_s=2.0)
     if name in ("lcf", "ccf"):  # alpha_mode (per_sample: the seed's filter) and its time constant, fixed
         added.update(alpha_mode="per_sample", tau_s=0.1)
     assert {k: cls.defaults[k] for k in added} == added

@@ -50,6 +50,8 @@ def _call(obj, p):
     ("madgwick", {}, {}),
     ("madgwick", {"use_mag": False, "zeta": 0.01}, {"metric": "euler_rmse_mean"}),
     ("mahony", {}, {"metric": "broad_total_rmse", "warmup_s": 0.5}),
+    ("madgwick", {"mag_rejection": True, "rest_bias": True, "acc_lp_tau_s": 3.0, "zeta": 0.01}, {}),
+    ("mahony", {"mag_rejection": True, "mag_max_rejection_s": 1.0, "Ki": 0.02}, {"metric": "broad_total_rmse"}),
     ("ekf", {}, {"q0": "truth"}),
     ("faekf", FAEKF_FIXED, {"metric": "euler_rmse_mean", "metric_options": {"aggregate": "median"}}),
     ("kf1d", {}, {"metric": "mse_1d", "data": [TILT, TILT2]}),
@@ -62,6 +64,19 @@ def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
     assert batchable(obj)
     _same(obj.evaluate_batch(params, 2), _serial(obj, params))
     _same(obj.evaluate_batch(params[:3], 1), _serial(obj, params[:3]))
+
+
+@pytest.mark.parametrize("flt, key", [("madgwick", "beta"), ("mahony", "Kp")])
+def test_candidates_with_and_without_robust_blocks_share_a_batch(flt, key):
+    """Madgwick / Mahony pairs with the blocks on get the longer coefficients and state, the others zero padding
+    (blocks off); every candidate still equals its serial evaluation."""
+    obj = FilterObjective(flt, [BENCH, BENCH2])
+    params = [{key: 0.3}, {key: 0.3, "mag_rejection": True}, {key: 0.2, "rest_bias": True, "acc_lp_tau_s": 2.0},
+              {key: 0.3, "mag_rejection": "yes"}, {key: 0.5}]
+    got = obj.evaluate_batch(params, 2)
+    _same(got, _serial(obj, params))
+    assert isinstance(got[3], ValueError) and "mag_rejection" in str(got[3])
+    assert got[2].fitness != obj({key: 0.2}).fitness  # the blocks are on in that pair
 
 
 def test_a_bad_candidate_fails_alone_with_the_serial_message():

@@ -56,7 +56,7 @@ def no_run_dir(tmp_path):
 
 @pytest.mark.parametrize("over, expected", [
     ({"parameters": {"betta": {"low": 0.01, "high": 1.0}}},
-     ["parameters.betta", "not a parameter", "did you mean 'beta'", "allowed: beta"]),
+     ["parameters.betta", "not a parameter", "did you mean 'beta'", "allowed: acc_lp_tau_s, beta"]),
     ({"objective": {"fixed": {"betta": 0.1}}}, ["objective.fixed.betta", "not a parameter of madgwick", "beta"]),
     ({"objective": {"warmup_s": 5.0}}, ["objective.warmup_s", "5 s is not shorter than recording", "rec", "3 s"]),
     # a search range reaching outside what the filter accepts: every candidate there would fail

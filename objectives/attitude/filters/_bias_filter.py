@@ -2,22 +2,176 @@
 state is the quaternion and a gyro bias (``state`` (7,): q (4,), bias (3,)), called on whole arrays by
 ``run`` and on one sample at a time by ``stream``. Each filter supplies its kernel, the function that
 builds its coefficient array, and the name of the parameter that switches the bias estimate on.
+
+The robust blocks (:mod:`objectives.attitude.filters.robust`) are options of both filters, all off by
+default (the kernels then run the papers' algorithms, bit for bit):
+
+- ``mag_rejection`` (block a): the magnetometer, rotated into the NWU earth frame with the current
+  estimate, feeds the field norm and dip detector; while the field is disturbed its correction (Mahony's
+  error term, Madgwick's gradient) is scaled by the block's gain (0, or ``1 / rejection_factor`` after
+  ``mag_max_rejection_s``), the gravity correction goes on; the field at the start is the first reference
+  (``mag_ref_start``, as the start orientation trusts it; off: learned after 5 s of fast rotation);
+- ``rest_bias`` (block b): at detected rest the gyro's low-pass is the bias estimate (time constant
+  ``rest_bias_tau_s``), subtracted from the gyro before the filter's own bias estimate (zeta / Ki);
+- ``acc_lp_tau_s`` (block c): the accelerometer low-passed in the earth frame replaces the raw one in the
+  gravity correction.
+
+With a block on, the coefficient array is the filter's own padded to :data:`ROBUST_AT` followed by the
+flags and the blocks' coefficients (:func:`with_robust`), and the state is :data:`STATE_LEN` long (the
+blocks' states after q and bias, :func:`initial_state`); the shared per-sample prologue is
+:func:`robust_sample`.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
+from objectives.attitude.filters import _scalar as sc
 from objectives.attitude.filters._scalar import read_unit
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.robust import (
+    ACC_STATE,
+    MAG_STATE,
+    REST_STATE,
+    _acc_lp_update,
+    _mag_dist_update,
+    _rest_update,
+    acc_lp_coefficients,
+    mag_dist_coefficients,
+    mag_dist_state,
+    rest_coefficients,
+)
+from objectives.attitude.filters.robust_params import robust_decl
 from objectives.attitude.filters.stream import StateStream
-from objectives.params import POSITIVE, ParamSet, check_number, imu_arrays, unit_quaternion
+from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
-__all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag"]
+__all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
+           "with_robust", "robust_coef", "initial_state", "robust_sample", "robust_on", "ROBUST_AT", "COEF_LEN",
+           "STATE_LEN", "ROBUST_NAMES"]
+
+# --- layouts of the robust blocks in the coefficient and state arrays ----------------------------------------
+#: index of the first robust coefficient (the filters' own coefficients fit before it)
+ROBUST_AT = 8
+_MC = ROBUST_AT + 4  # flags: mag_rejection, rest_bias, acc_lp, mag_ref_start
+_RC = _MC + 11  # block a: mag_dist_coefficients (11,)
+_AC = _RC + 7  # block b: rest_coefficients (7,)
+#: length of a coefficient array with the blocks (block c: acc_lp_coefficients (4,) last)
+COEF_LEN = _AC + 4
+_MS = 7  # state: q (4), bias (3), then block a, b, c states and 7 scratch values (q, low-passed acc)
+_RS = _MS + MAG_STATE
+_AS = _RS + REST_STATE
+_SCR = _AS + ACC_STATE
+#: length of the state array with the blocks
+STATE_LEN = _SCR + 7
+#: the options of the robust blocks in Madgwick and Mahony
+ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_norm_th", "mag_dip_th_deg", "rest_bias",
+                "rest_bias_tau_s", "mag_ref_start")
+#: rest detection on unit accelerometer vectors: VQF's 0.5 m/s^2 relative to g
+_REST_TH_ACC = 0.5 / 9.81
+
+
+def robust_options(rejected: str) -> tuple[Param, ...]:
+    """The robust blocks' parameter declarations for Madgwick and Mahony (``rejected``: what a rejected field
+    does in this filter, for the docs): the shared ``robust_decl`` ones these kernels use, and ``rest_bias_tau_s``.
+    """
+    shared = tuple(p for p in robust_decl("the gravity correction", rejected) if p.name in ROBUST_NAMES)
+    return shared + (
+        Param("mag_ref_start", True, choices=(True, False),
+              doc="the field at the start is the first reference (mag_rejection; the start orientation already "
+                  "trusts it); false: learned as a new field, after new_first_time_s of rotation faster than "
+                  "20 deg/s, the magnetometer used fully until then"),
+        Param("rest_bias_tau_s", 2.0, unit="s", allowed=POSITIVE,
+              doc="time constant with which the bias estimate follows the low-passed gyro at rest (rest_bias)"),
+    )
+
+
+def _blocks_on(v: dict) -> tuple[bool, bool, bool]:
+    return bool(v.get("mag_rejection", False)), bool(v.get("rest_bias", False)), float(v.get("acc_lp_tau_s", 0.0)) > 0
+
+
+def with_robust(coef: np.ndarray, v: dict, dt: float) -> np.ndarray:
+    """``coef`` unchanged when every robust block of the validated values ``v`` is off; else ``coef`` padded to
+    :data:`ROBUST_AT`, then the flags and the coefficients of blocks a, b and c (:data:`COEF_LEN` in all)."""
+    rej, rest, alp = _blocks_on(v)
+    if not (rej or rest or alp):
+        return coef
+    out = np.zeros(COEF_LEN)
+    out[:coef.shape[0]] = coef
+    out[ROBUST_AT:_MC] = (float(rej), float(rest), float(alp), float(bool(v["mag_ref_start"])))
+    out[_MC:_RC] = mag_dist_coefficients(dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
+                                         max_rejection_s=float(v["mag_max_rejection_s"]))
+    out[_RC:_AC] = rest_coefficients(dt, th_acc=_REST_TH_ACC, tau_bias_s=float(v["rest_bias_tau_s"]))
+    out[_AC:] = acc_lp_coefficients(dt, tau_acc_s=float(v["acc_lp_tau_s"]) if alp else 0.0)
+    return out
+
+
+def robust_coef(coef: np.ndarray) -> bool:
+    """True when the coefficient array switches a robust block on (the kernel then needs :data:`STATE_LEN`)."""
+    return coef.shape[0] >= COEF_LEN and bool(np.any(coef[ROBUST_AT:_MC] != 0.0))
+
+
+def initial_state(q0: np.ndarray, robust: bool) -> np.ndarray:
+    """The kernels' start state: q0 and zero bias (7,), followed by the blocks' initial states when ``robust``."""
+    state = np.zeros(STATE_LEN if robust else 7)
+    state[:4] = q0
+    if robust:
+        state[_MS:_RS] = mag_dist_state()
+    return state
+
+
+@njit(cache=True, inline="always")
+def robust_on(coef, state):
+    """The kernels' switch: a robust block is on (``ValueError`` when the state has no room for the blocks)."""
+    on = coef.shape[0] >= COEF_LEN and (coef[ROBUST_AT] != 0.0 or coef[ROBUST_AT + 1] != 0.0
+                                        or coef[ROBUST_AT + 2] != 0.0)
+    if on and state.shape[0] < STATE_LEN:
+        raise ValueError("robust blocks on: the state array needs STATE_LEN entries (initial_state)")
+    return on
+
+
+@njit(cache=True, inline="always")
+def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
+    """The robust blocks' prologue of sample ``i`` at the previous estimate ``q`` (sensor-to-earth, NWU).
+
+    Returns ``(bx, by, bz, ax, ay, az, acc_ok, gm)``: the rest bias to subtract from the gyro (rad/s, 0 when
+    ``rest_bias`` is off), the unit accelerometer for the gravity correction (earth-frame low-passed when
+    ``acc_lp`` is on; ``acc_ok`` as :func:`~objectives.attitude.filters._scalar.read_unit`) and the
+    magnetometer gain (1: use fully; 0: rejected; with ``mag_ref_start`` the first field is block a's
+    reference, else the gain is 1 until block a has learned one, as in the EKF).
+    The blocks' states live in ``state[7:]`` and are updated in place.
+    """
+    rej, rest, alp = coef[ROBUST_AT] != 0.0, coef[ROBUST_AT + 1] != 0.0, coef[ROBUST_AT + 2] != 0.0
+    gx, gy, gz, g_ok = sc.read_vec(gyr, i)
+    ax, ay, az, a_ok = sc.unit(acc[i, 0], acc[i, 1], acc[i, 2])
+    rs = state[_RS:_AS]
+    if (rej or rest) and g_ok and a_ok:
+        _rest_update(rs, coef[_RC:_AC], gx, gy, gz, ax, ay, az)
+    bx, by, bz = 0.0, 0.0, 0.0
+    if rest:
+        bx, by, bz = rs[8], rs[9], rs[10]
+    if alp and a_ok:
+        scr = state[_SCR:]
+        scr[0], scr[1], scr[2], scr[3] = q0, q1, q2, q3
+        _acc_lp_update(state[_AS:_SCR], coef[_AC:COEF_LEN], scr[:4], ax, ay, az, scr[4:7])
+        ax, ay, az, a_ok = sc.unit(scr[4], scr[5], scr[6])
+    gm = 1.0
+    if rej and use_mag:
+        mx, my, mz, m_ok = sc.read_vec(mag, i)
+        if m_ok:
+            hx, hy, hz = sc.rotate_sensor_to_earth(q0, q1, q2, q3, mx, my, mz)  # NWU: z up, as block a expects
+            gl = math.sqrt(rs[0] * rs[0] + rs[1] * rs[1] + rs[2] * rs[2])
+            ms = state[_MS:_RS]
+            g = _mag_dist_update(ms, coef[_MC:_RC], hx, hy, hz, gl)
+            if ms[0] == 0.0 and coef[ROBUST_AT + 3] != 0.0:  # mag_ref_start: the first field is the reference
+                ms[0], ms[1], ms[2], ms[6] = ms[8], ms[9], coef[_MC + 5], 0.0
+                g = 1.0
+            gm = 1.0 if ms[0] == 0.0 else g
+    return bx, by, bz, ax, ay, az, a_ok, gm
 
 
 @njit(cache=True, inline="always")
@@ -41,8 +195,7 @@ def run_bias_kernel(kernel: Any, coef: np.ndarray, gyr: np.ndarray, acc: np.ndar
                     q0: np.ndarray, with_bias: bool):
     """One kernel call on checked contiguous arrays: (N, 4) quaternions, and the (N, 3) bias if asked."""
     n = gyr.shape[0]
-    state = np.zeros(7)
-    state[:4] = q0
+    state = initial_state(q0, robust_coef(coef))
     out = np.empty((n, 4))
     bias = np.empty((n if with_bias else 0, 3))
     kernel(gyr, acc, mag, coef, state, out, bias)
@@ -86,7 +239,7 @@ class BiasKernelFilter(AttitudeFilter):
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         v = self.values
         gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if v["use_mag"] else None)
-        with_bias = v[self.bias_param] > 0
+        with_bias = v[self.bias_param] > 0 or bool(v.get("rest_bias", False))
         res = run_bias_kernel(self.kernel, self.coef(v, rec.dt, mag.shape[0] > 0), gyr, acc, mag, q0, with_bias)
         if with_bias:
             return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
@@ -105,9 +258,7 @@ class _BiasKernelStream(StateStream):
         self._coefs = {m: flt.coef(flt.values, self.dt, m) for m in (False, True)}
         self._out = np.empty((1, 4))
         self._bias = np.empty((0, 3))
-        state = np.zeros(7)
-        state[:4] = q0
-        return state
+        return initial_state(q0, robust_coef(self._coefs[True]))
 
     def _step(self, state, gyr, acc, mag):
         self._kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._bias)

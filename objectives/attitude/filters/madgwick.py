@@ -35,7 +35,16 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters import _scalar as sc
-from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays, io_flags, read_mag
+from objectives.attitude.filters._bias_filter import (
+    BiasKernelFilter,
+    batch_on_arrays,
+    io_flags,
+    read_mag,
+    robust_on,
+    robust_options,
+    robust_sample,
+    with_robust,
+)
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
@@ -43,6 +52,82 @@ __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
 #: name -> factor k with ``2 b_x = k |h_xy|``, ``2 b_z = k h_z`` (paper: 2; the 2010 C code: 1)
 VARIANTS = {"paper": 2.0, "original_c": 1.0}
 
+
+@njit(cache=True, inline="always")
+def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, dt, beta, zeta,
+            k):
+    """One sample of the filter with the robust blocks from the estimate ``q`` and bias ``b``: the new ``(q, b)``
+    (report eqs. 11-13, 25-34, 42-49); ``gm`` scales the magnetometer's error (1: the paper; below 1: a
+    disturbed field).
+
+    The same operations as the loop of :func:`_madgwick_kernel`, which keeps them written out: under the
+    kernels' ``fastmath`` flags, that loop calling this helper compiles to a different operation order and
+    the paper's output (blocks off) must stay bit for bit what it was.
+    """
+    # eq. 49: bias-compensated rate
+    gx -= bx_
+    gy -= by_
+    gz -= bz_
+    # eq. 12: rate of change from the gyroscope, q_dot = 0.5 q (x) (0, w)
+    qd0 = 0.5 * (-q1 * gx - q2 * gy - q3 * gz)
+    qd1 = 0.5 * (q0_ * gx + q2 * gz - q3 * gy)
+    qd2 = 0.5 * (q0_ * gy - q1 * gz + q3 * gx)
+    qd3 = 0.5 * (q0_ * gz + q1 * gy - q2 * gx)
+    if acc_ok:
+        # eq. 25: f_g = R(q)^T (0, 0, 1) - a
+        f1 = 2.0 * (q1 * q3 - q0_ * q2) - ax
+        f2 = 2.0 * (q0_ * q1 + q2 * q3) - ay
+        f3 = 1.0 - 2.0 * (q1 * q1 + q2 * q2) - az
+        # eq. 34: J_g^T f_g (J_g of eq. 26)
+        s0 = -2.0 * q2 * f1 + 2.0 * q1 * f2
+        s1 = 2.0 * q3 * f1 + 2.0 * q0_ * f2 - 4.0 * q1 * f3
+        s2 = -2.0 * q0_ * f1 + 2.0 * q3 * f2 - 4.0 * q2 * f3
+        s3 = 2.0 * q1 * f1 + 2.0 * q2 * f2
+        if mag_ok:
+            # eq. 45: h = q (x) m (x) q*
+            hx, hy, hz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
+            # eq. 46 (paper: k = 2) or the C code's half-length field (k = 1)
+            tbx = k * math.sqrt(hx * hx + hy * hy)  # 2 b_x
+            tbz = k * hz  # 2 b_z
+            # eq. 29: f_b = R(q)^T b - m
+            e1 = tbx * (0.5 - q2 * q2 - q3 * q3) + tbz * (q1 * q3 - q0_ * q2) - mx
+            e2 = tbx * (q1 * q2 - q0_ * q3) + tbz * (q0_ * q1 + q2 * q3) - my
+            e3 = tbx * (q0_ * q2 + q1 * q3) + tbz * (0.5 - q1 * q1 - q2 * q2) - mz
+            if gm != 1.0:  # a disturbed field (mag_rejection): its gradient scaled by the block's gain
+                e1 *= gm
+                e2 *= gm
+                e3 *= gm
+            # eq. 34: + J_b^T f_b (J_b of eq. 30)
+            s0 += -tbz * q2 * e1 + (-tbx * q3 + tbz * q1) * e2 + tbx * q2 * e3
+            s1 += tbz * q3 * e1 + (tbx * q2 + tbz * q0_) * e2 + (tbx * q3 - 2.0 * tbz * q1) * e3
+            s2 += ((-2.0 * tbx * q2 - tbz * q0_) * e1 + (tbx * q1 + tbz * q3) * e2
+                   + (tbx * q0_ - 2.0 * tbz * q2) * e3)
+            s3 += (-2.0 * tbx * q3 + tbz * q1) * e1 + (-tbx * q0_ + tbz * q2) * e2 + tbx * q1 * e3
+        sn = s0 * s0 + s1 * s1 + s2 * s2 + s3 * s3
+        if sn > 0.0 and sn < math.inf:
+            r = 1.0 / math.sqrt(sn)
+            s0 *= r
+            s1 *= r
+            s2 *= r
+            s3 *= r
+            # eq. 42-43: q_dot = q_dot_w - beta * grad / |grad|
+            qd0 -= beta * s0
+            qd1 -= beta * s1
+            qd2 -= beta * s2
+            qd3 -= beta * s3
+            if zeta != 0.0:
+                # eqs. 47-48: w_eps = 2 q* (x) q_dot_eps, w_b += zeta w_eps dt
+                c = 2.0 * zeta * dt
+                bx_ += c * (q0_ * s1 - q1 * s0 - q2 * s3 + q3 * s2)
+                by_ += c * (q0_ * s2 + q1 * s3 - q2 * s0 - q3 * s1)
+                bz_ += c * (q0_ * s3 - q1 * s2 + q2 * s1 - q3 * s0)
+    # eq. 13 (Euler step) and normalisation
+    n0 = q0_ + qd0 * dt
+    n1 = q1 + qd1 * dt
+    n2 = q2 + qd2 * dt
+    n3 = q3 + qd3 * dt
+    q0_, q1, q2, q3 = sc.normalized_q(n0, n1, n2, n3)
+    return q0_, q1, q2, q3, bx_, by_, bz_
 
 
 @njit(cache=True, fastmath=sc.FASTMATH)
@@ -53,17 +138,24 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     ----------
     gyr, acc, mag : (N, 3) float64
         rad/s, any unit (normalised), any unit (normalised); ``mag`` may be (0, 3) for IMU only.
-    coef : (5,) float64
+    coef : (5,) or (COEF_LEN,) float64
         ``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k`` the
-        field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1).
-    state : (7,) float64
+        field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1); with a robust block on, the blocks'
+        flags and coefficients from index ``ROBUST_AT`` (:func:`~._bias_filter.with_robust`), and the
+        kernel is :func:`_madgwick_robust`.
+    state : (7,) or (STATE_LEN,) float64
         Read and written: the sensor-to-earth quaternion (NWU) and the gyro bias estimate ``omega_b``
-        (rad/s); in: before the first sample, out: after the last (for streaming).
+        (rad/s), then the robust blocks' states when they are on; in: before the first sample, out:
+        after the last (for streaming).
     out : (N, 4) float64
         Written: the estimate after each sample's update.
     bias_out : (N, 3) or (0, 3) float64
-        Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample.
+        Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample (plus the
+        rest bias of ``rest_bias``).
     """
+    if robust_on(coef, state):
+        _madgwick_robust(gyr, acc, mag, coef, state, out, bias_out)
+        return
     dt, beta, zeta, k = coef[0], coef[1], coef[2], coef[3]
     use_mag, write_bias = io_flags(coef[4], gyr, mag, bias_out)
     q0_, q1, q2, q3, bx_, by_, bz_ = sc.load_q_bias(state)
@@ -137,6 +229,25 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
 
 
+@njit(cache=True, fastmath=sc.FASTMATH)
+def _madgwick_robust(gyr, acc, mag, coef, state, out, bias_out):
+    """:func:`_madgwick_kernel` with the robust blocks on (:func:`~._bias_filter.robust_sample` per sample)."""
+    dt, beta, zeta, k = coef[0], coef[1], coef[2], coef[3]
+    use_mag, write_bias = io_flags(coef[4], gyr, mag, bias_out)
+    q0_, q1, q2, q3, bx_, by_, bz_ = sc.load_q_bias(state)
+    for i in range(gyr.shape[0]):
+        gx, gy, gz = sc.read_rate(gyr, i)
+        rbx, rby, rbz, ax, ay, az, acc_ok, gm = robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
+        if write_bias:
+            sc.write_vec(bias_out, i, bx_ + rbx, by_ + rby, bz_ + rbz)
+        mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
+        q0_, q1, q2, q3, bx_, by_, bz_ = _update(q0_, q1, q2, q3, bx_, by_, bz_, gx - rbx, gy - rby, gz - rbz, ax,
+                                                 ay, az, acc_ok, mx, my, mz, mag_ok and gm > 0.0, gm, dt, beta, zeta,
+                                                 k)
+        sc.write_q(out, i, q0_, q1, q2, q3)
+    sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
+
+
 #: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)
 DECL = ParamSet("madgwick", (
     Param("beta", 0.1, (1e-3, 1.0), "log", "rad/s", "gradient step gain (eq. 33)", "report eq. 33", NONNEG),
@@ -145,16 +256,18 @@ DECL = ParamSet("madgwick", (
     Param("variant", "paper", choices=tuple(VARIANTS), doc="'paper' or 'original_c' (2010 C code field scale)",
           eq="report eqs. 45-46"),
     Param("use_mag", True, doc="MARG (true) or IMU (false)"),
+    *robust_options("a rejected field drops the magnetometer's gradient (eq. 34), the gravity gradient stays"),
 ))
 
 
 def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
     """The kernel's coefficient array from validated values (the only place it is built)."""
-    return np.array([dt, float(v["beta"]), float(v["zeta"]), VARIANTS[v["variant"]], 1.0 if has_mag else 0.0])
+    coef = np.array([dt, float(v["beta"]), float(v["zeta"]), VARIANTS[v["variant"]], 1.0 if has_mag else 0.0])
+    return with_robust(coef, v, dt)
 
 
 def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float = 0.0,
-                   variant: str = "paper", with_bias: bool = False):
+                   variant: str = "paper", with_bias: bool = False, **robust):
     """Run the Madgwick kernel on raw arrays (NWU working frame, no frame conversion).
 
     Parameters
@@ -171,12 +284,14 @@ def madgwick_batch(gyr, acc, mag, dt: float, q0, beta: float = 0.1, zeta: float 
         As :data:`DECL` declares them (validated against it).
     with_bias : bool
         Also return the (N, 3) bias estimate.
+    **robust
+        The robust blocks' options of :data:`DECL` (``mag_rejection``, ``rest_bias``, ``acc_lp_tau_s``, ...).
 
     Returns
     -------
     quat : (N, 4), or (quat, bias) when ``with_bias``.
     """
-    values = {"beta": beta, "zeta": zeta, "variant": variant}
+    values = {"beta": beta, "zeta": zeta, "variant": variant, **robust}
     return batch_on_arrays(DECL, _madgwick_kernel, _coef, values, gyr, acc, mag, dt, q0, with_bias)
 
 
@@ -193,7 +308,19 @@ class Madgwick(BiasKernelFilter, kernel=_madgwick_kernel, coef=_coef, bias_param
         Field reference of the report (default) or the 2010 C code's (half length).
     use_mag : bool
         MARG (True, default) or IMU version (False).
+    mag_rejection : bool
+        Magnetic disturbance rejection (default False): while the field's norm or dip departs from a
+        reference learned when undisturbed (``mag_norm_th``, ``mag_dip_th_deg``), the magnetometer's
+        gradient is dropped (for at most ``mag_max_rejection_s``, then halved) and the gravity gradient
+        alone corrects; a field that stays is accepted as the new reference. The first reference is the
+        field at the start (``mag_ref_start``, default True; False: learned after 5 s of fast rotation).
+    rest_bias : bool
+        Gyro bias estimation at rest (default False): at detected rest the bias follows the low-passed
+        gyro with ``rest_bias_tau_s``; held during motion, subtracted before ``zeta``'s estimate.
+    acc_lp_tau_s : float
+        Earth-frame accelerometer low-pass time constant, s (default 0: raw accelerometer).
 
+    With every robust block off (the defaults) the output is the paper's algorithm bit for bit.
     The kernel works in NWU (``working_frame``); :meth:`run` returns quaternions in ``rec.frame``.
     ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s, when ``zeta > 0``.
     :meth:`stream` updates in O(1) per sample (the kernel carries quaternion and bias in ``state``).

@@ -35,10 +35,67 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters import _scalar as sc
-from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays, io_flags, read_mag
+from objectives.attitude.filters._bias_filter import (
+    BiasKernelFilter,
+    batch_on_arrays,
+    io_flags,
+    read_mag,
+    robust_on,
+    robust_options,
+    robust_sample,
+    with_robust,
+)
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Mahony", "mahony_batch", "DECL"]
+
+
+@njit(cache=True, inline="always")
+def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, dt, kp, ki):
+    """One sample with the robust blocks from the estimate ``q`` and integral ``I``: the new ``(q, I)``; ``gm``
+    scales the magnetometer's error term (1: the C code; below 1: a disturbed field).
+
+    The same operations as the loop of :func:`_mahony_kernel`, which keeps them written out: under the
+    kernels' ``fastmath`` flags, that loop calling this helper compiles to a different operation order and
+    the C code's output (blocks off) must stay bit for bit what it was.
+    """
+    if acc_ok:
+        vx = 2.0 * (q1 * q3 - q0_ * q2)
+        vy = 2.0 * (q0_ * q1 + q2 * q3)
+        vz = q0_ * q0_ - q1 * q1 - q2 * q2 + q3 * q3
+        ex = ay * vz - az * vy
+        ey = az * vx - ax * vz
+        ez = ax * vy - ay * vx
+        if mag_ok:
+            hx, hy, bz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
+            bx = math.sqrt(hx * hx + hy * hy)
+            wx = 2.0 * gm * (bx * (0.5 - q2 * q2 - q3 * q3) + bz * (q1 * q3 - q0_ * q2))
+            wy = 2.0 * gm * (bx * (q1 * q2 - q0_ * q3) + bz * (q0_ * q1 + q2 * q3))
+            wz = 2.0 * gm * (bx * (q0_ * q2 + q1 * q3) + bz * (0.5 - q1 * q1 - q2 * q2))
+            ex += my * wz - mz * wy
+            ey += mz * wx - mx * wz
+            ez += mx * wy - my * wx
+        if ki > 0.0:
+            ix += ki * ex * dt
+            iy += ki * ey * dt
+            iz += ki * ez * dt
+        else:
+            ix = 0.0
+            iy = 0.0
+            iz = 0.0
+        gx += kp * ex
+        gy += kp * ey
+        gz += kp * ez
+    h = 0.5 * dt
+    gx = (gx + ix) * h
+    gy = (gy + iy) * h
+    gz = (gz + iz) * h
+    n0 = q0_ + (-q1 * gx - q2 * gy - q3 * gz)
+    n1 = q1 + (q0_ * gx + q2 * gz - q3 * gy)
+    n2 = q2 + (q0_ * gy - q1 * gz + q3 * gx)
+    n3 = q3 + (q0_ * gz + q1 * gy - q2 * gx)
+    q0_, q1, q2, q3 = sc.normalized_q(n0, n1, n2, n3)
+    return q0_, q1, q2, q3, ix, iy, iz
 
 
 @njit(cache=True, fastmath=sc.FASTMATH)
@@ -49,16 +106,22 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     ----------
     gyr, acc, mag : (N, 3) float64
         rad/s, any unit, any unit; ``mag`` may be (0, 3) for the IMU version.
-    coef : (4,) float64
-        ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` (0/1).
-    state : (7,) float64
-        Read and written: the sensor-to-earth quaternion (NWU) and the integral ``I`` (rad/s); in:
-        before the first sample, out: after the last (for streaming).
+    coef : (4,) or (COEF_LEN,) float64
+        ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` (0/1); with a
+        robust block on, the blocks' flags and coefficients from index ``ROBUST_AT``
+        (:func:`~._bias_filter.with_robust`), and the kernel is :func:`_mahony_robust`.
+    state : (7,) or (STATE_LEN,) float64
+        Read and written: the sensor-to-earth quaternion (NWU) and the integral ``I`` (rad/s), then the
+        robust blocks' states when they are on; in: before the first sample, out: after the last.
     out : (N, 4) float64
         Written: estimate after each sample.
     bias_out : (N, 3) or (0, 3) float64
-        Written when not empty: gyro bias estimate ``b = -I`` used at each sample, rad/s.
+        Written when not empty: gyro bias estimate ``b = -I`` used at each sample (plus the rest bias of
+        ``rest_bias``), rad/s.
     """
+    if robust_on(coef, state):
+        _mahony_robust(gyr, acc, mag, coef, state, out, bias_out)
+        return
     dt, kp, ki = coef[0], coef[1], coef[2]
     use_mag, write_bias = io_flags(coef[3], gyr, mag, bias_out)
     q0_, q1, q2, q3, ix, iy, iz = sc.load_q_bias(state)
@@ -114,6 +177,24 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
         sc.write_q(out, i, q0_, q1, q2, q3)
     sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
 
+@njit(cache=True, fastmath=sc.FASTMATH)
+def _mahony_robust(gyr, acc, mag, coef, state, out, bias_out):
+    """:func:`_mahony_kernel` with the robust blocks on (:func:`~._bias_filter.robust_sample` per sample)."""
+    dt, kp, ki = coef[0], coef[1], coef[2]
+    use_mag, write_bias = io_flags(coef[3], gyr, mag, bias_out)
+    q0_, q1, q2, q3, ix, iy, iz = sc.load_q_bias(state)
+    for i in range(gyr.shape[0]):
+        gx, gy, gz = sc.read_rate(gyr, i)
+        rbx, rby, rbz, ax, ay, az, acc_ok, gm = robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
+        mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
+        # the bias written is the one used at this sample: the rest bias and the integral after its update
+        q0_, q1, q2, q3, ix, iy, iz = _update(q0_, q1, q2, q3, ix, iy, iz, gx - rbx, gy - rby, gz - rbz, ax, ay,
+                                              az, acc_ok, mx, my, mz, mag_ok and gm > 0.0, gm, dt, kp, ki)
+        if write_bias:
+            sc.write_vec(bias_out, i, rbx - ix, rby - iy, rbz - iz)
+        sc.write_q(out, i, q0_, q1, q2, q3)
+    sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
+
 
 #: the one declaration of Mahony's parameters (defaults, search space, validation, docs)
 DECL = ParamSet("mahony", (
@@ -121,16 +202,17 @@ DECL = ParamSet("mahony", (
     Param("Ki", 0.0, (1e-5, 1.0), "log", "rad/s^2", "integral gain (gyro bias)", "TAC 2008 eq. 32 (k_I)",
           NONNEG),
     Param("use_mag", True, doc="MARG (true) or IMU (false)"),
+    *robust_options("a rejected field drops the magnetometer's error term m x w_hat, the gravity term stays"),
 ))
 
 
 def _coef(v: dict, dt: float, has_mag: bool) -> np.ndarray:
     """The kernel's coefficient array from validated values (the only place it is built)."""
-    return np.array([dt, float(v["Kp"]), float(v["Ki"]), 1.0 if has_mag else 0.0])
+    return with_robust(np.array([dt, float(v["Kp"]), float(v["Ki"]), 1.0 if has_mag else 0.0]), v, dt)
 
 
 def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
-                 with_bias: bool = False):
+                 with_bias: bool = False, **robust):
     """Run the Mahony kernel on raw arrays (NWU working frame, no frame conversion).
 
     Parameters
@@ -147,8 +229,11 @@ def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
         ``Kp`` and ``Ki`` of :data:`DECL` (validated against it).
     with_bias : bool
         Also return the (N, 3) gyro bias estimate, rad/s.
+    **robust
+        The robust blocks' options of :data:`DECL` (``mag_rejection``, ``rest_bias``, ``acc_lp_tau_s``, ...).
     """
-    return batch_on_arrays(DECL, _mahony_kernel, _coef, {"Kp": kp, "Ki": ki}, gyr, acc, mag, dt, q0, with_bias)
+    return batch_on_arrays(DECL, _mahony_kernel, _coef, {"Kp": kp, "Ki": ki, **robust}, gyr, acc, mag, dt, q0,
+                           with_bias)
 
 
 class Mahony(BiasKernelFilter, kernel=_mahony_kernel, coef=_coef, bias_param="Ki"):
@@ -162,6 +247,19 @@ class Mahony(BiasKernelFilter, kernel=_mahony_kernel, coef=_coef, bias_param="Ki
         Integral (bias) gain, rad/s^2. Default 0.
     use_mag : bool
         MARG (True, default) or IMU version.
+    mag_rejection : bool
+        Magnetic disturbance rejection (default False): while the field's norm or dip departs from a
+        reference learned when undisturbed (``mag_norm_th``, ``mag_dip_th_deg``), the magnetometer's
+        error term is dropped (for at most ``mag_max_rejection_s``, then halved) and the gravity term
+        alone corrects; a field that stays is accepted as the new reference. The first reference is the
+        field at the start (``mag_ref_start``, default True; False: learned after 5 s of fast rotation).
+    rest_bias : bool
+        Gyro bias estimation at rest (default False): at detected rest the bias follows the low-passed
+        gyro with ``rest_bias_tau_s``; held during motion, subtracted before the integral's estimate.
+    acc_lp_tau_s : float
+        Earth-frame accelerometer low-pass time constant, s (default 0: raw accelerometer).
+
+    With every robust block off (the defaults) the output is the C code's algorithm bit for bit.
 
     Works in NWU; ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s, when ``Ki > 0``.
     :meth:`stream` updates in O(1) per sample (the kernel carries quaternion and integral in ``state``).
