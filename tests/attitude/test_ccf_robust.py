@@ -51,7 +51,8 @@ def test_robust_kernel_with_blocks_off_computes_the_plain_kernel(rec, opts):
     q2, e2, b2, gm = np.empty((rec.n, 4)), np.empty((rec.n, 3)), np.empty((rec.n, 3)), np.empty(rec.n)
     _cf_kernel(gyr, acc, mag, coef, s1, q1, e1, b1)
     _, mcoef, rcoef, acoef = CCF(acc_lp_tau_s=3.0)._blocks(g, rec.dt)
-    cf_robust_kernel(gyr, acc, mag, coef, np.zeros(2), mcoef, rcoef, acoef, s2, *robust_states(), q2, e2, b2, gm)
+    off = np.array([0.0, 0.0, 1.0])  # no rejection, no low-pass, mag_weight 1
+    cf_robust_kernel(gyr, acc, mag, coef, off, mcoef, rcoef, acoef, s2, *robust_states(), q2, e2, b2, gm)
     # the same recursion (the filter calls _cf_kernel itself when the blocks are off: the hashes above);
     # fastmath may contract or reorder the two compiled loops differently, hence rounding-level tolerance
     for a, b in ((q1, q2), (e1, e2), (b1, b2), (s1, s2)):
@@ -156,3 +157,23 @@ def test_on_broad_the_blocks_lower_the_fast_translation_and_magnet_errors():
     both = score_trials("ccf", {**base, "acc_lp_tau_s": 3.0, "mag_rejection": True}, paths[1:])
     assert plain[0] > 30.0 and lp[0] < 0.1 * plain[0]
     assert lp[1] < 0.5 * plain[1] and both[0] < lp[1]
+
+
+def test_mag_weight_slows_only_the_heading_correction():
+    gyr, acc, mag, dt, quat = _turning(duration_s=20.0)
+    h = math.radians(20.0)  # start with the heading 20 deg off, level
+    from objectives.attitude.quaternion.conversions import to_frame
+
+    q0 = to_frame(np.array([math.cos(h / 2), 0.0, 0.0, math.sin(h / 2)]), "ENU", "NED")  # the filter's frame
+    err = {w: _angle_deg(CCF(**TAU, mag_weight=w).run(gyr, acc, mag, dt=dt, q0=q0), quat) for w in (1.0, 0.1, 0.0)}
+    at = int(5 / dt)
+    # weight 0: the yaw follows the gyroscope only (the output leads the truth's sample by one gyro step, 0.3 deg)
+    assert np.ptp(err[0.0]) < 0.05 and abs(err[0.0][0] - 20.0) < 0.5
+    assert err[1.0][at] < 1.0 < err[0.1][at] < 19.0  # weight 0.1: the same correction, about ten times slower
+    # the exponential decay of the yaw error: the rate scales with the weight (PI loop, Ki small)
+    r1 = math.log(20.0 / err[1.0][int(1 / dt)])
+    r01 = math.log(20.0 / err[0.1][int(10 / dt)])
+    assert r01 == pytest.approx(r1, rel=0.35)
+    with pytest.raises(ValueError, match="mag_weight"):
+        CCF(mag_weight=1.5)
+    assert not CCF(mag_weight=1.0).robust and CCF(mag_weight=0.5).robust

@@ -15,6 +15,12 @@ filter classes call ``_cf_kernel`` itself then, so the paper's output stays bit 
   block's gain: 1 undisturbed, 0 while disturbed (the yaw follows the gyroscope), ``1 / rejection_factor``
   after ``mag_max_rejection_s``. Until a first reference is accepted the gain is 1. The gyro low-pass the
   block needs for accepting a new field is the rest block's (b) (its rest flag is not used).
+- ``mag_weight`` in [0, 1] (1: the paper): a constant factor on the yaw correction (the same place as block
+  (a)'s gain), so the heading is corrected more slowly than roll and pitch, as VQF's magnetometer time
+  constant ``tauMag`` (9 s) is longer than its accelerometer's ``tauAcc`` (3 s). A disturbance block (a)
+  cannot see (a magnet attached to the sensor from the start rotates with it, so there is no undisturbed
+  reference to compare with) then turns the heading less, while fast rotations keep the inclination
+  correction they need.
 """
 
 from __future__ import annotations
@@ -57,14 +63,15 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
     ----------
     gyr, acc, mag, coef, state, out, euler_out, bias_out
         As ``complementary._cf_kernel``.
-    flags : (2,) float64
-        ``mag_rejection`` and ``acc_lp`` (1/0).
+    flags : (3,) float64
+        ``mag_rejection`` and ``acc_lp`` (1/0), ``mag_weight`` (factor on the yaw correction, 1: none).
     mcoef, rcoef, acoef : float64 arrays
         ``robust.mag_dist_coefficients``, ``robust.rest_coefficients``, ``robust.acc_lp_coefficients``.
     ms, rs, ast : float64 arrays
         States of blocks (a), (b), (c) (:func:`robust_states`), read and written (streaming).
     gain_out : (N,) or (0,) float64
-        Written when not empty: the magnetometer gain of block (a) per sample (1 without rejection).
+        Written when not empty: the factor on the yaw correction per sample, block (a)'s gain times
+        ``mag_weight`` (1 with neither).
     """
     dt, alpha, kp, ki = coef[0], coef[1], coef[2], coef[3]
     use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
@@ -73,6 +80,7 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
     static = coef.shape[0] > 7 and coef[7] != 0.0
     use_rej = flags[0] != 0.0
     use_alp = flags[1] != 0.0
+    w_mag = flags[2]
     w_euler = euler_out.shape[0] == gyr.shape[0]
     w_bias = bias_out.shape[0] == gyr.shape[0]
     w_gain = gain_out.shape[0] == gyr.shape[0]
@@ -106,7 +114,7 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
         if acc_ok and gate < math.inf:
             acc_ok = abs(math.sqrt(an) - g_ref) <= gate * g_ref
         mx, my, mz, mag_ok = _read_mag(mag, i, use_mag)
-        gm = 1.0
+        gm = w_mag
         if use_rej:
             _rest_update(rs, rcoef, p, q, r, -acc[i, 0], -acc[i, 1], -acc[i, 2])
             if mag_ok:
@@ -117,8 +125,7 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
                 lz = -st * mx + math.cos(th) * v2
                 gl = math.sqrt(rs[0] * rs[0] + rs[1] * rs[1] + rs[2] * rs[2])
                 gm = _mag_dist_update(ms, mcoef, lx, ly, -lz, gl)
-                if ms[0] == 0.0:
-                    gm = 1.0
+                gm = w_mag if ms[0] == 0.0 else gm * w_mag
         if w_gain:
             gain_out[i] = gm
         yaw_ok = acc_ok and mag_ok and gm > 0.0

@@ -84,8 +84,9 @@ Robust options (CCF; off by default, the output then bit for bit the above): ``a
 accelerometer low-pass feeding eqs. (4)-(6)) and ``mag_rejection`` (with ``mag_norm_th``, ``mag_dip_th_deg``,
 ``mag_max_rejection_s``: the yaw correction is suspended while the field's norm or dip departs from a
 learned reference), the blocks (c) and (a) of :mod:`objectives.attitude.filters.robust` declared once in
-:func:`~objectives.attitude.filters.robust_params.robust_decl`; kernel in
-:mod:`objectives.attitude.filters._cf_robust`.
+:func:`~objectives.attitude.filters.robust_params.robust_decl`; and ``mag_weight`` (a constant factor < 1
+on the yaw correction: the heading corrected more slowly than roll and pitch, as VQF's two time
+constants). Kernel in :mod:`objectives.attitude.filters._cf_robust`.
 
 Degenerate samples: acc zero or non-finite: no correction of any angle (gyro propagation only, the
 integral is not updated); mag zero or non-finite, or ``use_mag: false``: no yaw correction
@@ -445,9 +446,10 @@ class _ComplementaryBase(AttitudeFilter):
 
     @property
     def robust(self) -> bool:
-        """True when a robust block is on (``acc_lp_tau_s > 0`` or ``mag_rejection``; CCF options)."""
+        """True when a robust option is on (``acc_lp_tau_s > 0``, ``mag_rejection``, ``mag_weight < 1``; CCF)."""
         v = self.values
-        return bool(v.get("mag_rejection", False)) or float(v.get("acc_lp_tau_s", 0.0)) > 0.0
+        return bool(v.get("mag_rejection", False)) or float(v.get("acc_lp_tau_s", 0.0)) > 0.0 \
+            or float(v.get("mag_weight", 1.0)) != 1.0
 
     def _blocks(self, g_ref: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(flags, mcoef, rcoef, acoef)`` of :func:`~objectives.attitude.filters._cf_robust.cf_robust_kernel`."""
@@ -455,7 +457,7 @@ class _ComplementaryBase(AttitudeFilter):
 
         v = self.values
         tau = float(v["acc_lp_tau_s"])
-        flags = np.array([1.0 if v["mag_rejection"] else 0.0, 1.0 if tau > 0 else 0.0])
+        flags = np.array([1.0 if v["mag_rejection"] else 0.0, 1.0 if tau > 0 else 0.0, float(v["mag_weight"])])
         mcoef = mag_dist_coefficients(dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
                                       max_rejection_s=float(v["mag_max_rejection_s"]))
         return flags, mcoef, rest_coefficients(dt, th_acc=0.5 * g_ref / 9.81), \
@@ -539,16 +541,19 @@ _CCF_ROBUST = tuple(p for p in robust_decl("the roll/pitch angles of eqs. (4)-(6
                                            "a rejected field leaves the yaw to the gyroscope")
                     if p.name in ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_norm_th",
                                   "mag_dip_th_deg"))
+_MAG_WEIGHT = Param("mag_weight", 1.0, unit="1", allowed=UNIT_CLOSED,
+                    doc="factor on the magnetometer's yaw correction (PI and blend; 1: as roll and pitch, the paper): "
+                        "< 1 corrects the heading more slowly than the inclination (VQF's tauMag > tauAcc)")
 
 
 class CCF(_ComplementaryBase):
     """Cascaded complementary filter, eq. (14). ``alpha`` (default 0.7, section 4), ``Kp`` 25, ``Ki`` 0.1;
-    robust options ``acc_lp_tau_s``, ``mag_rejection`` (off by default: the paper's filter)."""
+    robust options ``acc_lp_tau_s``, ``mag_rejection``, ``mag_weight`` (off by default: the paper's filter)."""
 
     name = "ccf"
     decl = ParamSet("ccf", (Param("alpha", 0.7, (0.5, 0.9999), **_ALPHA), Param("Kp", 25.0, **_KP),
                             Param("Ki", 0.1, **_KI), _USE_MAG, _GATE, _ALPHA_RATE, _ALPHA_MODE, _TAU,
-                            *_CCF_ROBUST))
+                            *_CCF_ROBUST, _MAG_WEIGHT))
 
     def _gains(self):
         v = self.values
