@@ -243,7 +243,7 @@ def tune_and_select(cfg: RunConfig, objective: Any, tune: Callable[[Any, Callabl
     ``tune(objective, callback)`` runs the optimiser (``callback`` sees every :class:`tuner.loop.Generation`).
     Returns the chosen parameters, their tuning fitness and the record ``{holdout, n_holdout, candidates,
     chosen (``"tuning best"``, ``"candidate k"`` (rank k of the tuning, 1 = best) or ``"defaults"``),
-    chosen_rank, holdout_fitness, tuning_best_holdout, defaults_holdout, outside_bounds}``.
+    chosen_rank (0: the defaults), holdout_fitness, tuning_best_holdout, defaults_holdout, outside_bounds}``.
     """
     sel = cfg.validation.select
     assert sel is not None
