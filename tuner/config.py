@@ -13,7 +13,7 @@ Shape of a job (see README for every key)::
                 refine: {stages: 2, shrink: 0.2}}
     parallel: {backend: loky, n_jobs: 2, address: null}
     output: runs                              # parent directory of run directories
-    validation: {cv: logo, select: {top_k: 5, holdout: 0.25}}   # optional, see ValidationConfig
+    validation: {cv: logo, select: {top_k: 5, holdout: 0.25, include_defaults: true}}   # optional, see ValidationConfig
 """
 
 from __future__ import annotations
@@ -41,7 +41,8 @@ TOP_KEYS = {
     "optimizer": "{method: pso|cmaes|de|random, population, generations, ...options}",
     "parallel": "{backend: serial|loky|dask|threads, n_jobs, address}",
     "output": "directory holding the run directories (default: runs)",
-    "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, select: {top_k, holdout}}",
+    "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, "
+                  "select: {top_k, holdout, include_defaults}}",
 }
 
 
@@ -82,10 +83,17 @@ class SelectConfig:
     """Final choice by a validation fold: the ``top_k`` distinct best candidates of the tuning history
     are rescored on the held-out recordings ``holdout`` (a fold name of the objective's ``cv_folds``,
     e.g. a BROAD group, or a fraction ``f`` in (0, 0.5]: fold 0 of ``round(1 / f)``-fold); the run
-    tunes on the rest."""
+    tunes on the rest.
+
+    ``include_defaults`` (default true) adds the objective's default values of the searched parameters
+    (its ``default_params`` hook, not clipped to the search bounds) as one more candidate on the held-out
+    fold, so the final choice is the untuned objective when that does better there. It is on by default
+    because a choice among tuned candidates alone can be worse than the untuned objective on new data,
+    which a held-out fold is there to catch; it costs one evaluation on each side of the split."""
 
     top_k: int = 5
     holdout: str | float = 0.25
+    include_defaults: bool = True
 
 
 @dataclass(frozen=True)
@@ -305,10 +313,12 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     select = None
     if sel_raw is not None:
         if not isinstance(sel_raw, Mapping):
-            raise ConfigError(f, "validation.select", f"expected a mapping {{top_k, holdout}}, got {sel_raw!r}")
-        bad = sorted(set(sel_raw) - {"top_k", "holdout"})
+            raise ConfigError(f, "validation.select", f"expected a mapping {{top_k, holdout, include_defaults}}, "
+                              f"got {sel_raw!r}")
+        bad = sorted(set(sel_raw) - {"top_k", "holdout", "include_defaults"})
         if bad:
-            raise ConfigError(f, f"validation.select.{bad[0]}", "unknown key; allowed: top_k, holdout")
+            raise ConfigError(f, f"validation.select.{bad[0]}",
+                              "unknown key; allowed: top_k, holdout, include_defaults")
         top_k = _get(sel_raw, "top_k", int, f, "validation.select.", default=5)
         if top_k < 2:
             raise ConfigError(f, "validation.select.top_k", f"must be >= 2 (a choice among candidates), got {top_k}")
@@ -316,7 +326,8 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
         if not isinstance(holdout, str) and not 0 < holdout <= 0.5:
             raise ConfigError(f, "validation.select.holdout", "expected a fold name (e.g. a BROAD group) or a "
                               f"fraction in (0, 0.5], got {holdout!r}")
-        select = SelectConfig(top_k, holdout if isinstance(holdout, str) else float(holdout))
+        with_defaults = _get(sel_raw, "include_defaults", bool, f, "validation.select.", default=True)
+        select = SelectConfig(top_k, holdout if isinstance(holdout, str) else float(holdout), with_defaults)
     return ValidationConfig(cv, folds, frac, rel, gabs, select)
 
 

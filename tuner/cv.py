@@ -17,6 +17,12 @@ The same cross-validation runs after ``tuner run`` when the config has ``validat
 parameters give the tuning score (``full_params``: no second tuning on all data) and the tables go
 into the run directory. The gap is *large* by :meth:`tuner.config.ValidationConfig.gap_is_large`
 (default: more than 25 % of the tuning score).
+
+With ``validation.select`` the CV measures the whole procedure a run uses (:func:`tuner.validation.tune_and_select`):
+each fold's tuning recordings are split again into tune / held-out parts by the ``select`` rule, and the
+fold's parameters are the candidate (or the defaults, ``include_defaults``) that does best on that inner
+held-out part; ``FoldOutcome.selection`` says which won, the ``chosen`` column of the tables shows it.
+The tuning on all data (``full``) follows the same procedure.
 """
 
 from __future__ import annotations
@@ -49,6 +55,7 @@ class FoldOutcome:
     cv_fitness: float
     default_fitness: float
     failed: str = ""
+    selection: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass
@@ -102,16 +109,26 @@ def scaled_budget(cfg: RunConfig, fraction: float) -> RunConfig:
     return dataclasses.replace(cfg, optimizer=dataclasses.replace(opt, generations=gens, options=options))
 
 
-def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int) -> tuple[dict[str, Any], float]:
+def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int,
+          callback: Callable | None = None) -> tuple[dict[str, Any], float]:
     from tuner.run import new_optimizer
 
     space = cfg.space(objective)
     if space.dim == 0:
         raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
-    res = minimize(objective, space, new_optimizer(cfg, stage, space, None), evaluate=evaluate)
+    res = minimize(objective, space, new_optimizer(cfg, stage, space, None), evaluate=evaluate, callback=callback)
     if res.best is None:
         return {}, math.inf
     return dict(res.best.params), float(res.best.fitness)
+
+
+def _procedure(cfg: RunConfig, objective: Any, evaluate: Callable) -> tuple[dict[str, Any], float, dict[str, Any]]:
+    """Tune ``objective`` as a run would: plainly, or with the final selection of ``validation.select``."""
+    if cfg.validation.select is None:
+        return (*_tune(cfg, objective, evaluate, stage=0), {})
+    from tuner.validation import tune_and_select
+
+    return tune_and_select(cfg, objective, lambda obj, cb: _tune(cfg, obj, evaluate, 0, cb))
 
 
 def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
@@ -168,20 +185,22 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
     for i, (name, train, test) in enumerate(folds):
         evaluate = _LiveMap(cfg, n_jobs)
         try:
-            params, train_fit = _tune(cfg, train, evaluate, stage=0)
+            params, train_fit, sel = _procedure(cfg, train, evaluate)
         finally:
             evaluate.close()
         cv_fit, failed, n_test = plain_score(test, params) if params else (math.inf, "no successful evaluation", 1)
         de_fit, _, n_test = plain_score(test, defaults) if defaults is not None else (math.nan, "", n_test)
-        out.folds.append(FoldOutcome(str(name), n_test, params, train_fit, cv_fit, de_fit, failed))
-        say(f"fold {i + 1}/{len(folds)} {name}: tuned {train_fit:.4g}, held out {cv_fit:.4g}, defaults {de_fit:.4g}")
+        out.folds.append(FoldOutcome(str(name), n_test, params, train_fit, cv_fit, de_fit, failed, sel))
+        say(f"fold {i + 1}/{len(folds)} {name}: tuned {train_fit:.4g}, held out {cv_fit:.4g}, defaults {de_fit:.4g}"
+            + (f"; chosen on inner fold {sel['holdout']}: {sel['chosen']}" if sel else ""))
     if full or full_params is not None:
+        sel = {}
         if full_params is not None:
             params, train_fit = dict(full_params), math.nan
         else:
             evaluate = _LiveMap(cfg, n_jobs)
             try:
-                params, train_fit = _tune(cfg, objective, evaluate, stage=0)
+                params, train_fit, sel = _procedure(cfg, objective, evaluate)
             finally:
                 evaluate.close()
         # its score on all data as the folds count it (held-out scores weighted by recordings), so the
@@ -189,9 +208,11 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         sc = [(plain_score(test, params), n) for (_, _, test), n in zip(folds, [f.n_test for f in out.folds])] \
             if params else []
         plain = sum(s[0] * n for s, n in sc) / sum(n for _, n in sc) if sc else math.nan
-        out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan)
+        out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan,
+                               selection=sel)
         say(("all data: the run's best" if full_params is not None else f"all data: tuned {train_fit:.4g}")
-            + f", scored as the folds {plain:.4g}")
+            + f", scored as the folds {plain:.4g}" + (f"; chosen on fold {sel['holdout']}: {sel['chosen']}"
+                                                      if sel else ""))
     out.seconds = time.time() - t0
     return out
 
@@ -221,23 +242,38 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
     names = list(out.searched)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", *names])
+    w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", "chosen",
+                "inner_holdout", *names])
     for f in rows:
         w.writerow([f.name, f.n_test, f.train_fitness, f.cv_fitness, f.default_fitness, f.failed,
+                    f.selection.get("chosen", ""), f.selection.get("holdout", ""),
                     *[f.params.get(n, "") for n in names]])
     s = out.summary()
+    with_sel = any(f.selection for f in rows)
+    sel_head, sel_cols = ("chosen (inner held-out fold) | ", 1) if with_sel else ("", 0)
+
+    def chosen(f: FoldOutcome) -> str:
+        if not with_sel:
+            return ""
+        s = f.selection
+        return (f"{s.get('chosen', '')} ({s.get('holdout', '')}: {_fmt(s.get('holdout_fitness', math.nan))})"
+                if s else "") + " | "
+
     lines = [f"# Cross-validation of {out.name}", "",
              f"{len(out.folds)} folds, {out.seconds:.0f} s. Each fold: tuned on the other folds, scored on the "
-             "held-out recordings (plain metric, no prior); defaults scored on the same recordings.", "",
-             "| fold (held out) | n | tuned: train | tuned: held out (CV) | defaults: held out | "
-             + " | ".join(names) + " |", "|" + "---|" * (5 + len(names))]
+             "held-out recordings (plain metric, no prior); defaults scored on the same recordings."
+             + (" Each fold's final choice: the best of the tuning's top candidates"
+                " (and the defaults, where included) on an inner held-out part of the fold's tuning recordings,"
+                " as `validation.select` does in a run." if with_sel else ""), "",
+             "| fold (held out) | n | tuned: train | tuned: held out (CV) | defaults: held out | " + sel_head
+             + " | ".join(names) + " |", "|" + "---|" * (5 + sel_cols + len(names))]
     for f in out.folds:
         lines.append(f"| {f.name} | {f.n_test} | {_fmt(f.train_fitness)} | {_fmt(f.cv_fitness)}"
-                     f"{' (failed)' if f.failed else ''} | {_fmt(f.default_fitness)} | "
+                     f"{' (failed)' if f.failed else ''} | {_fmt(f.default_fitness)} | {chosen(f)}"
                      + " | ".join(_fmt(f.params.get(n, "")) for n in names) + " |")
     if out.full:
         lines.append(f"| *all (tuning)* | {out.full.n_test} | {_fmt(out.full.train_fitness)} | "
-                     f"{_fmt(out.full.cv_fitness)} (on all, not held out) | | "
+                     f"{_fmt(out.full.cv_fitness)} (on all, not held out) | | {chosen(out.full)}"
                      + " | ".join(_fmt(out.full.params.get(n, "")) for n in names) + " |")
     lines += ["", "| | tuned (CV) | defaults |", "|---|---|---|",
               f"| mean over held-out recordings | {s['cv_mean']:.4g} | {s['defaults_mean']:.4g} |",

@@ -212,6 +212,11 @@ def _validation_md(val: dict[str, Any]) -> list[str]:
         rows = [[c["eval"], c["tuning_fitness"], c["holdout_fitness"],
                  "chosen" if c["eval"] == sel.get("chosen_eval") else
                  ("tuning best" if c["eval"] == sel.get("tuning_best_eval") else "")] for c in sel["candidates"]]
+        d = sel.get("defaults")
+        if d:  # include_defaults: the untuned values as one more candidate (tuner.validation)
+            rows.append(["defaults" + (f" (outside bounds: {', '.join(d['outside_bounds'])})"
+                                       if d.get("outside_bounds") else ""), d["tuning_fitness"],
+                         d["holdout_fitness"], "chosen" if sel.get("defaults_chosen") else ""])
         md += ["## Final selection on a held-out fold", "",
                f"The {sel['top_k']} best distinct candidates of the tuning (which did not see fold "
                f"`{md_escape(sel['holdout'])}`, {sel.get('n_holdout')} recordings) rescored on that fold; the best "

@@ -64,6 +64,9 @@ def test_declaration_reproduces_previous_defaults_and_space(name):
                      mag_dip_th_deg=10.0, rest_bias=False, mag_ref_start=True, rest_bias_tau_s=2.0)
     if name in ("lcf", "ccf"):  # alpha_mode (per_sample: the seed's filter) and its time constant, fixed
         added.update(alpha_mode="per_sample", tau_s=0.1)
+    if name == "ccf":  # the CCF's robust options (appended, fixed, off: the paper's filter)
+        added.update(acc_lp_tau_s=0.0, mag_rejection=False, mag_max_rejection_s=60.0, mag_norm_th=0.1,
+                     mag_dip_th_deg=10.0, mag_weight=1.0)
     assert {k: cls.defaults[k] for k in added} == added
     defaults = {k: v for k, v in cls.defaults.items() if k not in added}
     assert _plain(defaults) == before["defaults"]

@@ -80,6 +80,14 @@ amplify errors near pitch +-90 deg; and a disturbed magnetometer acts on yaw dir
 15-20 deg). A sound remedy is the same cascade on the rotation group (PI and blend on the body-frame
 rotation vector between the estimate and the acc/mag attitude), which is a different filter.
 
+Robust options (CCF; off by default, the output then bit for bit the above): ``acc_lp_tau_s`` (earth-frame
+accelerometer low-pass feeding eqs. (4)-(6)) and ``mag_rejection`` (with ``mag_norm_th``, ``mag_dip_th_deg``,
+``mag_max_rejection_s``: the yaw correction is suspended while the field's norm or dip departs from a
+learned reference), the blocks (c) and (a) of :mod:`objectives.attitude.filters.robust` declared once in
+:func:`~objectives.attitude.filters.robust_params.robust_decl`; and ``mag_weight`` (a constant factor < 1
+on the yaw correction: the heading corrected more slowly than roll and pitch, as VQF's two time
+constants). Kernel in :mod:`objectives.attitude.filters._cf_robust`.
+
 Degenerate samples: acc zero or non-finite: no correction of any angle (gyro propagation only, the
 integral is not updated); mag zero or non-finite, or ``use_mag: false``: no yaw correction
 (yaw from the gyroscope only); gyr non-finite: zero rate for that sample.
@@ -95,6 +103,7 @@ from numba import njit
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._scalar import FASTMATH, read_rate, read_vec, sq_norm_ok
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.robust_params import robust_decl
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, UNIT_CLOSED, Interval, Param, ParamSet, check_number, imu_arrays
 
@@ -435,13 +444,43 @@ class _ComplementaryBase(AttitudeFilter):
         return _coef(dt, alpha, kp, ki, has_mag, float(self.values.get("acc_gate", math.inf)), g_ref,
                      static=mode == "static")
 
+    @property
+    def robust(self) -> bool:
+        """True when a robust option is on (``acc_lp_tau_s > 0``, ``mag_rejection``, ``mag_weight < 1``; CCF)."""
+        v = self.values
+        return bool(v.get("mag_rejection", False)) or float(v.get("acc_lp_tau_s", 0.0)) > 0.0 \
+            or float(v.get("mag_weight", 1.0)) != 1.0
+
+    def _blocks(self, g_ref: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(flags, mcoef, rcoef, acoef)`` of :func:`~objectives.attitude.filters._cf_robust.cf_robust_kernel`."""
+        from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
+
+        v = self.values
+        tau = float(v["acc_lp_tau_s"])
+        flags = np.array([1.0 if v["mag_rejection"] else 0.0, 1.0 if tau > 0 else 0.0, float(v["mag_weight"])])
+        mcoef = mag_dist_coefficients(dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
+                                      max_rejection_s=float(v["mag_max_rejection_s"]))
+        return flags, mcoef, rest_coefficients(dt, th_acc=0.5 * g_ref / 9.81), \
+            acc_lp_coefficients(dt, tau_acc_s=tau, gravity=g_ref)
+
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         from objectives.attitude.filters.ekf import gravity_in_units
 
         gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if self.values["use_mag"] else None)
-        coef = self._coef(mag.shape[0] > 0, gravity_in_units(rec), rec.dt)
-        q, euler, bias = _run_arrays(gyr, acc, mag, coef, euler_zyx_from_quat(q0), detailed=True)
-        return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias})
+        g = gravity_in_units(rec)
+        coef = self._coef(mag.shape[0] > 0, g, rec.dt)
+        if not self.robust:
+            q, euler, bias = _run_arrays(gyr, acc, mag, coef, euler_zyx_from_quat(q0), detailed=True)
+            return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias})
+        from objectives.attitude.filters._cf_robust import cf_robust_kernel, robust_states
+
+        n = gyr.shape[0]
+        state = np.zeros(6)
+        state[:3] = euler_zyx_from_quat(q0)
+        q, euler, bias, gain = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n)
+        cf_robust_kernel(gyr, acc, mag, coef, *self._blocks(g, rec.dt), state, *robust_states(), q, euler, bias,
+                         gain)
+        return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias, "mag_gain": gain})
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0=None, frame: str = "ENU"):
         """O(1) per-sample filter (the kernel carries the Euler angles and integrals in ``state``);
@@ -454,12 +493,26 @@ class _CFStream(StateStream):
         self._coefs = {m: self.filter._coef(m, 9.80665, self.dt) for m in (False, True)}
         self._out = np.empty((1, 4))
         self._none = np.empty((0, 3))
+        self._none1 = np.empty(0)
+        self._robust = None
+        if self.filter.robust:  # the blocks' coefficients and states, carried between samples
+            from objectives.attitude.filters._cf_robust import robust_states
+
+            self._robust = (*self.filter._blocks(9.80665, self.dt), *robust_states())
         state = np.zeros(6)
         state[:3] = euler_zyx_from_quat(q0)
         return state
 
     def _step(self, state, gyr, acc, mag):
-        _cf_kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._none, self._none)
+        coef = self._coefs[mag.shape[0] > 0]
+        if self._robust is None:
+            _cf_kernel(gyr, acc, mag, coef, state, self._out, self._none, self._none)
+        else:
+            from objectives.attitude.filters._cf_robust import cf_robust_kernel
+
+            flags, mcoef, rcoef, acoef, ms, rs, ast = self._robust
+            cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms, rs, ast, self._out,
+                             self._none, self._none, self._none1)
         return self._out[0]
 
 
@@ -483,12 +536,24 @@ class NCF(_ComplementaryBase):
         return 1.0, float(self.values["Kp"]), float(self.values["Ki"])
 
 
+#: the robust blocks the CCF offers (robust_params.robust_decl: block (c) and block (a), no rest bias)
+_CCF_ROBUST = tuple(p for p in robust_decl("the roll/pitch angles of eqs. (4)-(6)",
+                                           "a rejected field leaves the yaw to the gyroscope")
+                    if p.name in ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_norm_th",
+                                  "mag_dip_th_deg"))
+_MAG_WEIGHT = Param("mag_weight", 1.0, unit="1", allowed=UNIT_CLOSED,
+                    doc="factor on the magnetometer's yaw correction (PI and blend; 1: as roll and pitch, the paper): "
+                        "< 1 corrects the heading more slowly than the inclination (VQF's tauMag > tauAcc)")
+
+
 class CCF(_ComplementaryBase):
-    """Cascaded complementary filter, eq. (14). ``alpha`` (default 0.7, section 4), ``Kp`` 25, ``Ki`` 0.1."""
+    """Cascaded complementary filter, eq. (14). ``alpha`` (default 0.7, section 4), ``Kp`` 25, ``Ki`` 0.1;
+    robust options ``acc_lp_tau_s``, ``mag_rejection``, ``mag_weight`` (off by default: the paper's filter)."""
 
     name = "ccf"
     decl = ParamSet("ccf", (Param("alpha", 0.7, (0.5, 0.9999), **_ALPHA), Param("Kp", 25.0, **_KP),
-                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE, _ALPHA_RATE, _ALPHA_MODE, _TAU))
+                            Param("Ki", 0.1, **_KI), _USE_MAG, _GATE, _ALPHA_RATE, _ALPHA_MODE, _TAU,
+                            *_CCF_ROBUST, _MAG_WEIGHT))
 
     def _gains(self):
         v = self.values
