@@ -160,6 +160,7 @@ SETUPS = [
     ("faekf, broad_faekf defaults (no lp)", "faekf", dict(_EKF_FIXED)),
     ("qraukf, paper", "qraukf", {}),
     ("qraukf, broad_qraukf defaults (rest_bias)", "qraukf", {"rest_bias": True}),
+    ("qraukf, broad_qraukf tuned (rest_bias, sigma_acc 0.232)", "qraukf", {"rest_bias": True, "sigma_acc": 0.2321}),
     ("vqf, broad_vqf tuned (tauAcc 2.32, tauMag 24.9)", "vqf", {"tauAcc": 2.322, "tauMag": 24.86}),
     ("vqf, defaults", "vqf", {}),
     ("vqf offline, broad_best (tauAcc 3, tauMag 18)", "vqf", {"offline": True, "tauAcc": 3.0, "tauMag": 18.0}),
