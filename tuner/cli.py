@@ -97,6 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "groups, e.g. BROAD's trial groups, else 5)")
     p.add_argument("--dir", default=None, help="output directory (default: <output>/cv/<name>-<stamp>)")
     p.add_argument("--no-full", action="store_true", help="skip the tuning on all data (no gap)")
+    p.add_argument("--budget-fraction", type=float, default=None,
+                   help="each tuning's budget relative to the config's, in (0, 1] (default: the config's "
+                        "validation.budget_fraction, else 1)")
     p.add_argument("-q", "--quiet", action="store_true")
     p = sub.add_parser("sweep", help="run many jobs (configs x overrides x seeds) and write one report")
     p.add_argument("sweep", help="sweep YAML file")
@@ -312,12 +315,13 @@ def _cmd_cv(a) -> int:
     if Path(a.config).is_dir():  # a finished run: its best is the tuning result, the tables go into it
         from tuner.validation import cv_run_dir
 
-        v = cv_run_dir(a.config, k=a.k, progress=progress)
+        v = cv_run_dir(a.config, k=a.k, progress=progress, budget_fraction=a.budget_fraction)
         print(f"CV mean {v['cv_score']:.4g} (defaults {v['defaults_cv_score']:.4g}), tuning score "
               f"{v['tuning_score']:.4g}, gap {v['gap']:+.3g}{' (large)' if v['gap_large'] else ''}\n{a.config}")
         return 0
     cfg = load_config(a.config)
-    out = cross_validate(cfg, k=a.k, full=not a.no_full, progress=progress)
+    frac = cfg.validation.budget_fraction if a.budget_fraction is None else a.budget_fraction
+    out = cross_validate(cfg, k=a.k, full=not a.no_full, progress=progress, budget_fraction=frac)
     stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
     d = write_cv(out, a.dir or Path(cfg.output) / "cv" / f"{cfg.name}-{stamp}", cfg.validation)
     s = out.summary()

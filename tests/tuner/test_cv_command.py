@@ -100,3 +100,25 @@ def test_broad_leave_one_group_out_on_three_trials(tmp_path):
         direct = FilterObjective("madgwick", [{"broad": {"dir": str(BROAD), "trials": [t]}}], metric="broad_mean_rmse")
         assert f.n_test == 1
         assert f.cv_fitness == pytest.approx(direct.score(f.params).fitness, rel=1e-12)
+
+
+@pytest.mark.parametrize("flag, expected", [([], 0.5), (["--budget-fraction", "0.25"], 0.25)])
+def test_cv_command_uses_the_configs_budget_fraction_unless_given(tmp_path, monkeypatch, flag, expected):
+    import tuner.cv
+
+    raw = {"name": "cvtest", "seed": 3, "output": str(tmp_path / "runs"),
+           "objective": {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse", "data": SPECS},
+           "optimizer": {"method": "pso", "population": 4, "generations": 4},
+           "parallel": {"backend": "serial"}, "validation": {"cv": "kfold", "folds": 2, "budget_fraction": 0.5}}
+    path = tmp_path / "job.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    seen = {}
+    real = tuner.cv.cross_validate
+
+    def spy(cfg, **kw):
+        seen.update(kw)
+        return real(cfg, **kw)
+
+    monkeypatch.setattr(tuner.cv, "cross_validate", spy)
+    assert main(["cv", str(path), "--k", "2", "--no-full", "--dir", str(tmp_path / "cv"), "-q", *flag]) == 0
+    assert seen["budget_fraction"] == expected
