@@ -3,7 +3,8 @@
 * Speed-up from 1 to 2 workers on each real problem (:mod:`benchmarks.problems`): the same batch of
   candidates through :class:`tuner.evaluate.Evaluator` serially, with 2 loky workers and with the
   ``threads`` backend (the objective's ``evaluate_batch``: one numba kernel, 2 threads), after a
-  warm-up batch (worker start, data loading, compilation); median of several batches. Besides wall
+  warm-up batch (worker start, data loading, compilation); the backends take turns within each of 7
+  repeats and a speed-up is the median of the ratios of neighbouring batches. Besides wall
   time, the CPU seconds a batch costs (this process and its loky workers): on free cores the
   speed-up is bounded by ``2 x serial CPU / backend CPU``, a number the machine's load does not move.
   The backend's CPU seconds are split into the calling thread's (``time.thread_time``: the serial
@@ -65,28 +66,47 @@ def _cpu_s(pool_pids: set[int]) -> float:
 
 def speedup(objective, params: list[dict], repeats: int, n_jobs: int = 2,
             backends: tuple[str, ...] = ("serial", "loky", "threads")) -> dict[str, Any]:
-    """Wall time and CPU seconds of one batch per backend (medians of ``repeats``), speed-ups to serial."""
+    """Wall time and CPU seconds of one batch per backend (medians of ``repeats``), speed-ups to serial.
+
+    The backends take turns within every repeat (serial, loky, threads, then the next repeat in a rotated
+    order), and a speed-up is the median over repeats of the ratio of times taken next to each other: on a
+    virtual machine whose speed drifts over seconds, timing one backend's repeats after the other's moved
+    the ratio by up to 0.4 between runs.
+    """
+    from contextlib import ExitStack
+
     from tuner.evaluate import Evaluator
 
     out: dict[str, Any] = {}
-    for backend in backends:
-        with Evaluator(objective, backend=backend, n_jobs=1 if backend == "serial" else n_jobs) as ev:
+    times: dict[str, list[float]] = {b: [] for b in backends}
+    cpus: dict[str, list[float]] = {b: [] for b in backends}
+    mains: dict[str, list[float]] = {b: [] for b in backends}
+    with ExitStack() as stack:
+        evs = {b: stack.enter_context(Evaluator(objective, backend=b, n_jobs=1 if b == "serial" else n_jobs))
+               for b in backends}
+        for ev in evs.values():
             ev(params)  # warm-up: workers, data, compilation
-            times, cpus, mains = [], [], []
-            for _ in range(repeats):
+        for r in range(repeats):
+            for k in range(len(backends)):
+                backend = backends[(k + r) % len(backends)]
                 pids: set[int] = set()
                 c, m, t = _cpu_s(pids), time.thread_time(), time.perf_counter()
-                ev(params)
-                times.append(time.perf_counter() - t)
-                mains.append(time.thread_time() - m)
-                cpus.append(_cpu_s(pids) - c)
+                evs[backend](params)
+                times[backend].append(time.perf_counter() - t)
+                mains[backend].append(time.thread_time() - m)
+                cpus[backend].append(_cpu_s(pids) - c)
+        for backend, ev in evs.items():
             if ev.notes:
                 out[f"{backend}_notes"] = list(ev.notes)
-        out[backend] = float(np.median(times))
-        out[f"{backend}_cpu_s"] = float(np.median(cpus))
-        out[f"{backend}_main_cpu_s"] = float(np.median(mains))
+    for backend in backends:
+        out[backend] = float(np.median(times[backend]))
+        out[f"{backend}_cpu_s"] = float(np.median(cpus[backend]))
+        out[f"{backend}_main_cpu_s"] = float(np.median(mains[backend]))
+    serial = np.asarray(times["serial"])
     for backend in backends[1:]:
-        out[f"speedup_{backend}"] = out["serial"] / out[backend]
+        ratios = serial / np.maximum(np.asarray(times[backend]), 1e-12)
+        out[f"speedup_{backend}"] = float(np.median(ratios))
+        out[f"speedup_{backend}_range"] = [float(ratios.min()), float(ratios.max())]
         out[f"cpu_bound_{backend}"] = n_jobs * out["serial_cpu_s"] / max(out[f"{backend}_cpu_s"], 1e-12)
         main = out[f"{backend}_main_cpu_s"]
         rest = max(out[f"{backend}_cpu_s"] - main, 0.0)
@@ -94,6 +114,7 @@ def speedup(objective, params: list[dict], repeats: int, n_jobs: int = 2,
         out[f"amdahl_bound_{backend}"] = out["serial_cpu_s"] / max(main + rest / n_jobs, 1e-12)
     out["speedup"] = out.get("speedup_loky", math.nan)
     out["batch"] = len(params)
+    out["repeats"] = repeats
     return out
 
 
@@ -200,7 +221,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     from objectives.functions import FunctionObjective
 
     rng = np.random.default_rng(0)
-    repeats = 1 if smoke else 3
+    repeats = 1 if smoke else 7
     load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     problems = {}
     for name in problem_names(smoke):
