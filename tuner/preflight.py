@@ -65,6 +65,12 @@ def check_bounds(cfg: RunConfig, objective: Any, space: Space) -> None:
     if check is None:
         return
     point = reference_point(objective, space)
+    try:  # the point itself first: a bad fixed value is not the bounds' fault
+        check(point)
+    except ValueError as exc:
+        bad = [n for n in space.fixed if f"{n} " in str(exc)]
+        raise ConfigError(cfg.source, f"parameters.{bad[0]}.fixed" if bad else "objective",
+                          f"the objective refuses its parameters before any search: {exc}") from None
     for p in space.free:
         for side in ("low", "high"):
             value = p.from_unit(0.0 if side == "low" else 1.0)

@@ -203,3 +203,24 @@ def test_preflight_runs_on_every_dask_worker(tmp_path):
         with pytest.raises(ConfigError, match=r"objective: fails on Dask worker .* \(2 of 2 workers\): "
                                               r"ValueError: objective.callable: cannot import 'mymod:f'"):
             preflight(cfg, _FailsOffMainThread(), Space([Real("a", 0.0, 1.0)]), evaluate=False)
+
+
+def test_a_bad_fixed_value_is_reported_as_such_not_as_a_bound(tmp_path):
+    cfg = {"name": "fx", "output": str(tmp_path / "runs"),
+           "objective": {"kind": "filter", "filter": "mahony", "fixed": {"mag_rejection": "maybe"},
+                         "data": [{"synthetic": {"generator": "bench6dof", "duration_s": 2, "seed": 1}}]},
+           "parameters": {"Kp": {"low": 0.1, "high": 2.0}}, "optimizer": {"population": 4, "generations": 1},
+           "parallel": {"backend": "serial"}}
+    p = tmp_path / "job.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    out = tuner("run", str(p))
+    assert out.returncode == 2, out.stderr
+    assert "objective: the objective refuses its parameters before any search: mahony: mag_rejection must be one of" \
+        in out.stderr
+    assert "parameters.Kp" not in out.stderr
+    assert no_run_dir(tmp_path)
+    cfg["objective"]["fixed"] = {}
+    cfg["parameters"]["rest_bias"] = {"fixed": "sometimes"}
+    p.write_text(yaml.safe_dump(cfg))
+    out = tuner("run", str(p))
+    assert out.returncode == 2 and "parameters.rest_bias.fixed: the objective refuses its parameters" in out.stderr
