@@ -25,7 +25,7 @@ from objectives.attitude.quaternion import to_frame
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
 from complementary_reference import complementary_ref, measured_angles, wrap  # noqa: E402
 
-from tests.attitude.robust_cases import digest  # noqa: E402
+from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings  # noqa: E402
 
 DT = 0.01
 
@@ -213,22 +213,14 @@ PER_SAMPLE_DIGESTS = {
 
 
 def test_per_sample_mode_is_bit_identical_to_the_seed_kernel():
-    from objectives.attitude.data.bench6dof import bench6dof
-
-    rec = bench6dof(30.0, 100.0, 3, vibration=False, ext_acc_max_g=0.5, mag_pert_range=(0.1, 0.5))
-    rec2 = bench6dof(20.0, 200.0, 5)
+    rec, rec2 = digest_recordings()
     got = {}
     for key, f, r in (("lcf_rate", LCF(alpha=0.9, alpha_rate_hz=50.0), rec), ("ncf", NCF(Kp=3.0, Ki=0.05), rec),
                       ("ccf", CCF(), rec), ("ccf_gate", CCF(alpha=0.9, Kp=2.0, Ki=0.3, acc_gate=0.2), rec2),
                       ("ccf_nomag", CCF(use_mag=False), rec)):
         res = f.run_detailed(r)
         got[key] = digest(res.quat, res.diagnostics["euler"], res.diagnostics["gyr_bias"])
-    g, a, m = rec.gyr.copy(), rec.acc.copy(), rec.mag.copy()
-    a[100] = 0
-    a[200, 1] = np.nan
-    m[300] = 0
-    m[400, 2] = np.inf
-    g[500, 0] = np.nan
+    g, a, m = degenerate_arrays(rec)
     x0 = [0.1, -0.2, 0.3]
     got["batch_degenerate"] = digest(*complementary_batch(g, a, m, 0.01, x0, 0.7, 25.0, 0.1, detailed=True))
     got["batch_degenerate_gate"] = digest(*complementary_batch(g, a, m, 0.01, x0, 1.0, 1.0, 0.1, detailed=True,
