@@ -77,12 +77,17 @@ def _lane_sums(q, true, mask, acc, out):
 
 
 @njit(cache=False, inline="always")
-def _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag):
-    """The ``j``-th pair of the lane order: pair, recording, length, the lane's output view, magnetometer."""
+def _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag):
+    """The next pair the lane claims (:mod:`objectives.batch_threads`): pair, recording, length, the lane's
+    output view and the magnetometer it uses; pair -1 once every pair is claimed."""
+    order, count = lanes_
+    j = claim(count)
+    if j >= order.shape[0]:
+        return -1, 0, 0, qbuf[lane, :0], no_mag
     p = order[j]
-    r = pair_rec[p]
-    n = gyrs[r].shape[0]
-    mag = mags[r] if pair_mag[p] != 0 else no_mag
+    r = pairs[0][p]
+    n = data[0][r].shape[0]
+    mag = data[2][r] if pairs[1][p] != 0 else no_mag
     return p, r, n, qbuf[lane, :n], mag
 
 
@@ -100,24 +105,21 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
         (:mod:`objectives.batch_threads`).
     bufs : ``(qbuf, cbuf)``: (lanes, N_max, 4) per-lane output buffers.
     """
-    gyrs, accs, mags, trues, masks, rots = data
-    pair_rec, pair_mag, coefs, states = pairs
-    order, count = lanes_
+    gyrs, accs, _, trues, masks, rots = data
+    coefs, states = pairs[2], pairs[3]
     qbuf, cbuf = bufs
     for lane in prange(qbuf.shape[0]):
         no_bias = np.empty((0, 3))
         no_mag = np.empty((0, 3))
         acc = np.empty(_N_SUMS)
-        while True:
-            j = claim(count)
-            if j >= order.shape[0]:
-                break
-            p, r, n, q, mag = _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag)
+        p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
+        while p >= 0:
             if family == 0:
                 _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             else:
                 _mahony_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
+            p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
 
 @njit(cache=False, parallel=True)
@@ -131,20 +133,16 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
     bufs : ``(qbuf, bbuf, cbuf, kbuf)``: per-lane quaternion (lanes, N_max, 4), bias (lanes, N_max, 3),
         converted quaternion and fuzzy-scale (lanes, N_max) buffers.
     """
-    gyrs, accs, mags, trues, masks, rots = data
-    pair_rec, pair_mag, coefs, states = pairs
-    order, count = lanes_
+    gyrs, accs, _, trues, masks, rots = data
+    coefs, states = pairs[2], pairs[3]
     vibs, exts, mps, mf_kind, mf_params, rules, cons = fz
     qbuf, bbuf, cbuf, kbuf = bufs
     for lane in prange(qbuf.shape[0]):
         no_mag = np.zeros((1, 3))
         one = np.ones(1)
         acc = np.empty(_N_SUMS)
-        while True:
-            j = claim(count)
-            if j >= order.shape[0]:
-                break
-            p, r, n, q, mag = _lane_pair(j, order, pair_rec, pair_mag, gyrs, mags, qbuf, lane, no_mag)
+        p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
+        while p >= 0:
             if fuzzy != 0:
                 k = kbuf[lane, :n]
                 fuzzy_scale(vibs[r], exts[r], mps[r], mf_kind, mf_params[p], rules, cons[p], k)
@@ -152,6 +150,7 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
             else:
                 ekf_kernel(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
             _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
+            p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
 
 @njit(cache=False)

@@ -174,13 +174,7 @@ def _evaluation(obj: Any, st: int, done: int, s: np.ndarray, wins: np.ndarray) -
     metrics.update({"mae_nu": float(s[_MAE_NU]), "mae_xi": float(s[_MAE_XI]), "mae_omega3": float(s[_MAE_W3]),
                     "ms_current": float(s[_MS_I]), "rise_time_nu_s": rise[0], "rise_time_xi_s": rise[1]})
     metrics.update(peak)
-    f = float(s[_COST])
-    violated = obj._violated(metrics)
-    if violated:
-        return Evaluation.failed(violated, metrics)
-    if not math.isfinite(f):
-        return Evaluation.failed(f"non-finite cost {f}", metrics)
-    return Evaluation(f, metrics)
+    return obj._scored(float(s[_COST]), metrics)
 
 
 def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads: int) -> list[Any]:

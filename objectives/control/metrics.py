@@ -136,18 +136,12 @@ def mae_weighted_cost(e_nu, e_xi, e_omega3, i_avg, weights: Mapping[str, float] 
     scales as ~1 / T^1.06 with the run length T (the means run over the whole run), which the thesis
     does not state (docs/control-cost.md section 3: 8.5 s instead of 8 s gives 0.1056).
     """
-    w = dict(DEFAULT_COST_WEIGHTS)
-    if weights:
-        unknown = sorted(set(weights) - set(w))
-        if unknown:
-            raise ValueError(f"unknown cost weight(s) {unknown}; known: {sorted(w)}")
-        w.update({k: float(v) for k, v in weights.items()})
+    expo = cost_exponents(weights).tolist()
     sig = [_e(e_nu), _e(e_xi), _e(e_omega3), _e(i_avg)]
     n = sig[0].size
     if n == 0 or any(s.size != n for s in sig):
         raise ValueError(f"signals must be non-empty and of equal length, got {[s.size for s in sig]}")
     terms = [np.mean(np.abs(sig[0])), np.mean(np.abs(sig[1])), np.mean(np.abs(sig[2])), np.mean(sig[3] ** 2)]
-    expo = [w["alpha1"], w["alpha2"], w["beta"], w["gamma"]]
     return float(np.prod([t**a for t, a in zip(terms, expo)]) ** 0.25)
 
 

@@ -339,7 +339,11 @@ class ClosedLoopObjective:
             }
         )
         metrics.update(peak)
-        f = mae_weighted_cost(e_nu, e_xi, e_w3, y[:, 4], self.cost)
+        return self._scored(mae_weighted_cost(e_nu, e_xi, e_w3, y[:, 4], self.cost), metrics)
+
+    def _scored(self, f: float, metrics: dict[str, float]) -> Evaluation:
+        """The evaluation of cost ``f`` with ``metrics``: failed if a requirement is violated or ``f`` is
+        not finite."""
         violated = self._violated(metrics)
         if violated:
             return Evaluation.failed(violated, metrics)

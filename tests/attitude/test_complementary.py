@@ -25,6 +25,8 @@ from objectives.attitude.quaternion import to_frame
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
 from complementary_reference import complementary_ref, measured_angles, wrap  # noqa: E402
 
+from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings  # noqa: E402
+
 DT = 0.01
 
 
@@ -195,18 +197,6 @@ def test_alpha_rate_keeps_the_lcf_time_constant():
 
 
 # --- alpha_mode: the seed's per-sample blend unchanged, the time-constant and eq. (14) readings ---------------
-def _digest(*arrays) -> str:
-    import hashlib
-
-    h = hashlib.sha256()
-    for a in arrays:
-        a = np.ascontiguousarray(a)
-        h.update(str(a.dtype).encode())
-        h.update(repr(a.shape).encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
-
-
 # Computed with the kernel of commit a77527f (before the kernel's shared blocks became inline helpers and
 # alpha_mode was added), on the recordings below; they hold for the pinned NumPy/numba on x86-64 (see
 # tests/attitude/test_synthetic_identity.py for what to do after an upgrade).
@@ -223,28 +213,20 @@ PER_SAMPLE_DIGESTS = {
 
 
 def test_per_sample_mode_is_bit_identical_to_the_seed_kernel():
-    from objectives.attitude.data.bench6dof import bench6dof
-
-    rec = bench6dof(30.0, 100.0, 3, vibration=False, ext_acc_max_g=0.5, mag_pert_range=(0.1, 0.5))
-    rec2 = bench6dof(20.0, 200.0, 5)
+    rec, rec2 = digest_recordings()
     got = {}
     for key, f, r in (("lcf_rate", LCF(alpha=0.9, alpha_rate_hz=50.0), rec), ("ncf", NCF(Kp=3.0, Ki=0.05), rec),
                       ("ccf", CCF(), rec), ("ccf_gate", CCF(alpha=0.9, Kp=2.0, Ki=0.3, acc_gate=0.2), rec2),
                       ("ccf_nomag", CCF(use_mag=False), rec)):
         res = f.run_detailed(r)
-        got[key] = _digest(res.quat, res.diagnostics["euler"], res.diagnostics["gyr_bias"])
-    g, a, m = rec.gyr.copy(), rec.acc.copy(), rec.mag.copy()
-    a[100] = 0
-    a[200, 1] = np.nan
-    m[300] = 0
-    m[400, 2] = np.inf
-    g[500, 0] = np.nan
+        got[key] = digest(res.quat, res.diagnostics["euler"], res.diagnostics["gyr_bias"])
+    g, a, m = degenerate_arrays(rec)
     x0 = [0.1, -0.2, 0.3]
-    got["batch_degenerate"] = _digest(*complementary_batch(g, a, m, 0.01, x0, 0.7, 25.0, 0.1, detailed=True))
-    got["batch_degenerate_gate"] = _digest(*complementary_batch(g, a, m, 0.01, x0, 1.0, 1.0, 0.1, detailed=True,
+    got["batch_degenerate"] = digest(*complementary_batch(g, a, m, 0.01, x0, 0.7, 25.0, 0.1, detailed=True))
+    got["batch_degenerate_gate"] = digest(*complementary_batch(g, a, m, 0.01, x0, 1.0, 1.0, 0.1, detailed=True,
                                                                 acc_gate=0.3, g_ref=9.80665))
     s = CCF(alpha=0.9, Kp=2.0, Ki=0.3).stream(rate_hz=100.0, frame=rec.frame)
-    got["stream"] = _digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
+    got["stream"] = digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
     assert got == PER_SAMPLE_DIGESTS
     assert np.array_equal(CCF(alpha_mode="per_sample").run(rec), CCF().run(rec))
 

@@ -3,16 +3,13 @@ papers' filters bit for bit, on they hold the heading through a magnet, and run 
 
 from __future__ import annotations
 
-import hashlib
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from objectives.attitude.data.bench6dof import bench6dof
 from objectives.attitude.data.imu_model import simulate_imu
-from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._bias_filter import initial_state
 from objectives.attitude.filters.madgwick import DECL as MG_DECL
 from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel, madgwick_batch
@@ -27,18 +24,10 @@ from objectives.attitude.quaternion.conversions import quat_from_euler_zyx
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
 from madgwick_mahony_reference import madgwick_ref, mahony_ref  # noqa: E402
 
+from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings, rest_recording  # noqa: E402
+
 DT = 0.01
 Q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])
-
-
-def _digest(*arrays) -> str:
-    h = hashlib.sha256()
-    for a in arrays:
-        a = np.ascontiguousarray(a)
-        h.update(str(a.dtype).encode())
-        h.update(repr(a.shape).encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
 
 
 # Computed with the kernels of commit 743dcad (before the robust blocks existed), on the recordings below; they
@@ -62,8 +51,7 @@ OFF = {"mag_rejection": False, "rest_bias": False, "acc_lp_tau_s": 0.0, "mag_nor
 
 @pytest.mark.parametrize("options", [{}, OFF], ids=["defaults", "off_spelled_out"])
 def test_blocks_off_is_the_recorded_paper_filter(options):
-    rec = bench6dof(30.0, 100.0, 3, vibration=False, ext_acc_max_g=0.5, mag_pert_range=(0.1, 0.5))
-    rec2 = bench6dof(20.0, 200.0, 5)
+    rec, rec2 = digest_recordings()
     got = {}
     for key, f, r in (("madgwick", Madgwick(**options), rec),
                       ("madgwick_zeta_c", Madgwick(beta=0.05, zeta=0.02, variant="original_c", **options), rec2),
@@ -71,19 +59,14 @@ def test_blocks_off_is_the_recorded_paper_filter(options):
                       ("mahony", Mahony(**options), rec), ("mahony_ki", Mahony(Kp=0.8, Ki=0.05, **options), rec2),
                       ("mahony_imu", Mahony(use_mag=False, Ki=0.02, **options), rec)):
         res = f.run_detailed(r)
-        got[key] = _digest(res.quat, *([res.diagnostics["gyr_bias"]] if "gyr_bias" in res.diagnostics else []))
-    g, a, m = rec.gyr.copy(), rec.acc.copy(), rec.mag.copy()
-    a[100] = 0
-    a[200, 1] = np.nan
-    m[300] = 0
-    m[400, 2] = np.inf
-    g[500, 0] = np.nan
-    got["madgwick_degenerate"] = _digest(*madgwick_batch(g, a, m, DT, Q0, 0.1, 0.02, with_bias=True, **options))
-    got["mahony_degenerate"] = _digest(*mahony_batch(g, a, m, DT, Q0, 0.8, 0.05, with_bias=True, **options))
+        got[key] = digest(res.quat, *([res.diagnostics["gyr_bias"]] if "gyr_bias" in res.diagnostics else []))
+    g, a, m = degenerate_arrays(rec)
+    got["madgwick_degenerate"] = digest(*madgwick_batch(g, a, m, DT, Q0, 0.1, 0.02, with_bias=True, **options))
+    got["mahony_degenerate"] = digest(*mahony_batch(g, a, m, DT, Q0, 0.8, 0.05, with_bias=True, **options))
     for key, f in (("madgwick_stream", Madgwick(beta=0.05, zeta=0.01, **options)),
                    ("mahony_stream", Mahony(Kp=0.8, Ki=0.05, **options))):
         s = f.stream(rate_hz=100.0, frame=rec.frame)
-        got[key] = _digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
+        got[key] = digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
     assert got == PAPER_DIGESTS
 
 
@@ -170,21 +153,10 @@ def test_the_start_field_is_the_first_reference(cls):
 
 
 # --- rest bias and acc low-pass ----------------------------------------------------------------------------------
-def _rest_recording(n, bias=(0.0, 0.0, 0.0), lin=None, seed=0):
-    rng = np.random.default_rng(seed)
-    t = np.arange(n) * DT
-    gyr = np.tile(np.asarray(bias, float), (n, 1)) + rng.normal(0, 0.005, (n, 3))
-    acc = np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0, 0.03, (n, 3))
-    if lin is not None:
-        acc += lin(t)
-    mag = np.tile([0.0, 20.0, -40.0], (n, 1)) + rng.normal(0, 0.1, (n, 3))
-    return Recording("rest", gyr, acc, mag, DT, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)), np.ones(n, bool), "ENU")
-
-
 @pytest.mark.parametrize("cls", [Madgwick, Mahony])
 def test_rest_bias_estimates_the_gyro_bias_at_rest_and_stops_the_heading_drift(cls):
     truth = np.array([0.01, -0.02, 0.03])
-    rec = _rest_recording(3000, bias=truth)
+    rec = rest_recording(3000, bias=truth)
     res = cls(use_mag=False, rest_bias=True).run_detailed(rec, "truth")
     assert np.abs(res.diagnostics["gyr_bias"][-1] - truth).max() < 1e-3  # low-pass of the resting gyro
     assert np.abs(res.diagnostics["gyr_bias"][100]).max() == 0.0  # not yet at rest (min_rest_s 1.5 s)
@@ -205,7 +177,7 @@ def test_acc_low_pass_holds_inclination_through_oscillating_translation(cls):
         a[m, 0] = 5.0 * np.sin(2 * np.pi * t[m])
         return a
 
-    rec = _rest_recording(6000, lin=shake)
+    rec = rest_recording(6000, lin=shake)
     incl = {tau: np.degrees(broad_error_angles(cls(acc_lp_tau_s=tau).run(rec, q0="truth"), rec.quat)
                             .inclination_rad)[2000:4000] for tau in (0.0, 3.0)}
     rms = {tau: np.sqrt(np.mean(e ** 2)) for tau, e in incl.items()}

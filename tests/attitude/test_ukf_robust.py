@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from objectives.attitude.data.bench6dof import bench6dof
-from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import get_filter
 from objectives.attitude.filters._ukf_kernels import new_state, new_work, ukf_chunk
 from objectives.attitude.filters._ukf_robust import ukf_robust_run
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.attitude.fused_errors import error_sums
+from tests.attitude.robust_cases import rest_recording
 
 QRAUKF = get_filter("qraukf")
 
@@ -65,17 +65,6 @@ def test_per_sample_driver_with_every_block_off_equals_one_kernel_call():
     assert np.all(out["mag_gain"] == 1.0) and not out["rest"].any()
 
 
-def _rest_recording(n, dt=0.01, seed=0, bias=(0.0, 0.0, 0.0), lin=None):
-    rng = np.random.default_rng(seed)
-    t = np.arange(n) * dt
-    gyr = np.tile(np.asarray(bias, float), (n, 1)) + rng.normal(0, 0.005, (n, 3))
-    acc = np.tile([0.0, 0.0, 9.81], (n, 1)) + rng.normal(0, 0.03, (n, 3))
-    if lin is not None:
-        acc += lin(t)
-    mag = np.tile([0.0, 20.0, -40.0], (n, 1)) + rng.normal(0, 0.1, (n, 3))
-    return Recording("rest", gyr, acc, mag, dt, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)), np.ones(n, bool), "ENU")
-
-
 def test_acc_low_pass_holds_inclination_through_oscillating_translation():
     def shake(t):  # 5 m/s^2 at 1 Hz along x for 20 s: velocity returns to zero every period
         a = np.zeros((t.size, 3))
@@ -83,7 +72,7 @@ def test_acc_low_pass_holds_inclination_through_oscillating_translation():
         a[m, 0] = 5.0 * np.sin(2 * np.pi * t[m])
         return a
 
-    rec = _rest_recording(6000, lin=shake)
+    rec = rest_recording(6000, lin=shake)
     raw = error_sums(QRAUKF().run(rec, q0="truth"), rec.quat).broad_rmse_deg
     lp = error_sums(QRAUKF(acc_lp_tau_s=3.0).run(rec, q0="truth"), rec.quat).broad_rmse_deg
     assert lp[2] < 0.6 * raw[2]  # inclination (measured: 1.00 -> 0.41 deg)
@@ -103,7 +92,7 @@ def test_magnetic_rejection_detects_the_disturbed_phases_and_holds_the_heading(s
 
 def test_rest_bias_flags_rest_and_speeds_up_the_bias_estimate():
     truth = np.array([0.01, -0.02, 0.03])
-    rec = _rest_recording(1000, bias=truth)
+    rec = rest_recording(1000, bias=truth)
     plain = QRAUKF().run_detailed(rec, "truth").diagnostics
     res = QRAUKF(rest_bias=True).run_detailed(rec, "truth").diagnostics
     rest = res["rest"]

@@ -7,9 +7,9 @@ import json
 
 import pytest
 
+from tests.tuner.kinds import kind_fixture
 from tuner.config import ConfigError, config_from_dict
 from tuner.cv import cross_validate, cv_texts
-from tuner.registry import REGISTRY
 from tuner.run import run
 from tuner.rundir import RunDir
 
@@ -53,11 +53,7 @@ class GroupedObjective:
         return cls()
 
 
-@pytest.fixture
-def kind():
-    REGISTRY.register("grouped_test", GroupedObjective, "tests")
-    yield "grouped_test"
-    REGISTRY._specs.pop("grouped_test", None)
+kind = kind_fixture("kind", "grouped_test", GroupedObjective)
 
 
 def _raw(tmp_path, kind, select, low=0.0, high=1.0, **val):

@@ -11,9 +11,9 @@ import pytest
 import yaml
 
 from objectives.attitude.objective import FilterObjective
+from tests.tuner.kinds import kind_fixture
 from tuner.cli import main
 from tuner.config import ConfigError, ValidationConfig, config_from_dict
-from tuner.registry import REGISTRY
 from tuner.run import run
 from tuner.rundir import RunDir
 
@@ -160,11 +160,7 @@ class OverfitObjective:
         return cls()
 
 
-@pytest.fixture
-def overfit_kind():
-    REGISTRY.register("overfit_test", OverfitObjective, "tests")
-    yield "overfit_test"
-    REGISTRY._specs.pop("overfit_test", None)
+overfit_kind = kind_fixture("overfit_kind", "overfit_test", OverfitObjective)
 
 
 def test_selection_by_held_out_fold_changes_the_choice_of_an_overfit_tuning(tmp_path, overfit_kind):

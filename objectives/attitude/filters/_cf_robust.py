@@ -33,12 +33,12 @@ from numba import njit
 from objectives.attitude.filters._scalar import FASTMATH, read_rate, sq_norm_ok
 from objectives.attitude.filters.complementary import _blend, _mag_yaw, _pi_step, _quat_zyx, _read_mag, _wrap
 from objectives.attitude.filters.robust import (
-    ACC_STATE,
-    MAG_STATE,
-    REST_STATE,
     _acc_lp_update,
     _mag_dist_update,
     _rest_update,
+    acc_lp_state,
+    mag_dist_state,
+    rest_state,
 )
 
 __all__ = ["cf_robust_kernel", "robust_states"]
@@ -48,10 +48,7 @@ _PI = math.pi
 
 def robust_states() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Initial states of blocks (a), (b), (c) as :func:`cf_robust_kernel` expects them (no reference field)."""
-    ms = np.zeros(MAG_STATE)
-    ms[3] = -1.0
-    ms[6] = 1.0
-    return ms, np.zeros(REST_STATE), np.zeros(ACC_STATE)
+    return mag_dist_state(), rest_state(), acc_lp_state()
 
 
 @njit(cache=True, fastmath=FASTMATH)

@@ -31,25 +31,16 @@ from numba import njit
 from objectives.attitude.filters._ukf_kernels import _I_G, _I_P, _ukf_run
 from objectives.attitude.filters._ukf_scalar import _qm, _r2q
 from objectives.attitude.filters.robust import (
-    ACC_STATE,
-    MAG_STATE,
-    REST_STATE,
     _acc_lp_update,
     _mag_dist_update,
     _rest_update,
     _rot,
+    acc_lp_state,
+    mag_dist_state,
+    rest_state,
 )
 
 __all__ = ["ukf_robust_run"]
-
-
-@njit(cache=True)
-def _mag_state():
-    """:func:`objectives.attitude.filters.robust.mag_dist_state` inside numba."""
-    s = np.zeros(MAG_STATE)
-    s[3] = -1.0
-    s[6] = 1.0
-    return s
 
 
 @njit(cache=True)
@@ -76,12 +67,9 @@ def _rest_bias_update(state, g_lp, r_rest):
 
 
 @njit(cache=True)
-def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mcoef, rcoef, acoef,
+def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mcoef, rcoef, acoef, ms, rs, ast,
                      out_q, out_bias, out_lam, out_skip, out_fallback, out_d):
     use_rej, use_rest, use_alp, r_rest = flags[0] != 0.0, flags[1] != 0.0, flags[2] != 0.0, flags[3]
-    ms = _mag_state()
-    rs = np.zeros(REST_STATE)
-    ast = np.zeros(ACC_STATE)
     a_in = np.empty((1, 3))
     m_in = np.empty((1, 3))
     a_used = np.empty(3)
@@ -151,7 +139,8 @@ def ukf_robust_run(gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, coef: np.n
            "skipped": np.zeros(n, dtype=np.bool_), "fallback": np.zeros(n, dtype=np.bool_)}
     d = np.empty((n, 2))
     _ukf_robust_loop(gyr, acc, mag, coef, bool(robust), state, istate, work, flags, mcoef, rcoef, acoef,
-                     out["quat"], out["bias"], out["lam"], out["skipped"], out["fallback"], d)
+                     mag_dist_state(), rest_state(), acc_lp_state(), out["quat"], out["bias"],
+                     out["lam"], out["skipped"], out["fallback"], d)
     out["mag_gain"] = d[:, 0]
     out["rest"] = d[:, 1] != 0.0
     return out

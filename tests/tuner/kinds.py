@@ -1,0 +1,20 @@
+"""Objective kinds registered for one test only."""
+
+from __future__ import annotations
+
+import pytest
+
+from tuner.registry import REGISTRY
+
+
+def kind_fixture(fixture: str, kind: str, cls: type):
+    """A pytest fixture named ``fixture`` that registers ``cls`` as objective ``kind`` for one test, yields the
+    kind's name and removes it afterwards."""
+
+    @pytest.fixture(name=fixture)
+    def registered():
+        REGISTRY.register(kind, cls, "tests")
+        yield kind
+        REGISTRY._specs.pop(kind, None)
+
+    return registered
