@@ -32,11 +32,25 @@ import numpy as np
 
 from objectives.attitude.aggregate import AGGREGATIONS, aggregate, group_weights
 
-__all__ = ["AGG_KEYS", "PER_RECORDING_METRICS", "check_metric_options", "check_prior", "aggregate_scores",
-           "recording_groups"]
+__all__ = ["fitness_label", "AGG_KEYS", "PER_RECORDING_METRICS", "check_metric_options", "check_prior",
+           "aggregate_scores", "recording_groups"]
 
 AGG_KEYS = ("aggregate", "k", "alpha", "group_balanced", "groups")
 PER_RECORDING_METRICS = ("broad_mean_rmse", "euler_rmse_mean", "mse_1d")
+
+
+def fitness_label(metric: str, opts: Mapping[str, Any], prior: Mapping[str, Any] | None = None) -> str:
+    """How the tuning fitness is made, e.g. ``broad_mean_rmse, cvar (alpha 0.5), group-balanced``."""
+    parts = [metric]
+    agg = opts.get("aggregate", "mean")
+    if agg != "mean":
+        extra = {"worst_k": f" (k {opts.get('k', 3)})", "cvar": f" (alpha {opts.get('alpha', 0.5)})"}.get(agg, "")
+        parts.append(f"{agg}{extra} over recordings")
+    if opts.get("group_balanced"):
+        parts.append("group-balanced")
+    if prior and prior.get("strength", 0):
+        parts.append("plus the prior")
+    return ", ".join(parts)
 
 
 def check_metric_options(metric: str, opts: Mapping[str, Any]) -> None:

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude.objective_options import fitness_label
 from tuner.figures import pyplot
 
 __all__ = ["filter_report", "summary_table"]
@@ -38,8 +39,12 @@ def _rows(scores: Any, split: str) -> list[dict[str, Any]]:
     return rows
 
 
-def summary_table(filter_name: str, train: Any, test: Any, metric: str) -> str:
-    """A plain-text table: filter, train and test fitness, mean per-axis RMSE (deg) and BROAD RMSE."""
+def summary_table(filter_name: str, train: Any, test: Any, metric: str, label: str | None = None) -> str:
+    """A plain-text table: filter, train and test fitness, mean per-axis RMSE (deg) and BROAD RMSE.
+
+    ``label``: how the fitness is made when it is not the plain ``metric`` (an aggregation over recordings
+    or a prior); it is printed under the table, so the fitness column is not read as the mean of the RMSEs.
+    """
     def mean_of(scores, key):
         vals = [m.get(key) for m in scores.recordings.values() if m.get(key) is not None]
         return float(np.mean(vals)) if vals else math.nan
@@ -52,6 +57,8 @@ def summary_table(filter_name: str, train: Any, test: Any, metric: str) -> str:
             continue
         vals = [mean_of(s, f"{a}_rmse_deg") for a in _AX] + [mean_of(s, "total_rmse_deg")]
         lines.append(f"{filter_name:10s} {split:6s} {s.fitness:18.6g} " + " ".join(f"{v:7.3f}" for v in vals))
+    if label and label != metric:
+        lines.append(f"{metric}: the fitness, {label}; roll..total: means over the recordings")
     return "\n".join(lines)
 
 
@@ -72,7 +79,8 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
     }
     if test:
         out["test"] = test.recordings
-    table = summary_table(obj.filter, train, test, obj.metric)
+    table = summary_table(obj.filter, train, test, obj.metric,
+                          fitness_label(obj.metric, obj.metric_options, getattr(obj, "prior", None)))
     out["summary_table"] = table
     rows = _rows(train, "train") + (_rows(test, "test") if test else [])
     df = pd.DataFrame(rows)

@@ -98,3 +98,17 @@ def test_options_survive_with_data_and_config():
                                        "prior": {"strength": 1.0}})
     other = obj.with_data(SPECS[2:])
     assert other.metric_options == {"aggregate": "median"} and other.prior == {"strength": 1.0, "center": "defaults"}
+
+
+def test_report_table_says_how_an_aggregated_fitness_is_made(tmp_path):
+    """The run's summary table prints the tuning fitness under the metric's name: with an aggregation over
+    recordings it is not the mean of the RMSE columns, and a line under the table says what it is."""
+    from objectives.attitude.report import filter_report
+
+    plain = FilterObjective("mahony", SPECS[:2], metric="broad_mean_rmse")
+    out = filter_report(plain, tmp_path / "a", PARAMS)
+    assert "the fitness" not in out["summary_table"]
+    cvar = FilterObjective("mahony", SPECS[:2], metric="broad_mean_rmse",
+                           metric_options={"aggregate": "cvar", "alpha": 0.5}, prior={"strength": 2.0})
+    table = filter_report(cvar, tmp_path / "b", PARAMS)["summary_table"]
+    assert "broad_mean_rmse: the fitness, broad_mean_rmse, cvar (alpha 0.5) over recordings, plus the prior" in table
