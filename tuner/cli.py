@@ -97,7 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "groups, e.g. BROAD's trial groups, else 5)")
     p.add_argument("--dir", default=None, help="output directory (default: <output>/cv/<name>-<stamp>)")
     p.add_argument("--no-full", action="store_true", help="skip the tuning on all data (no gap)")
-    p.add_argument("--budget-fraction", type=float, default=None,
+    p.add_argument("--budget-fraction", type=_fraction, default=None,
                    help="each tuning's budget relative to the config's, in (0, 1] (default: the config's "
                         "validation.budget_fraction, else 1)")
     p.add_argument("-q", "--quiet", action="store_true")
@@ -305,6 +305,17 @@ def _cmd_evaluate(a) -> int:
             vals = "  ".join(f"{k}={v:.4g}" for k, v in metrics.items() if isinstance(v, (int, float)))
             print(f"  {rec}: {vals}")
     return 0
+
+
+def _fraction(text: str) -> float:
+    """A number in (0, 1] (argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}") from None
+    if not 0 < value <= 1:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1], got {text!r}")
+    return value
 
 
 def _cmd_cv(a) -> int:

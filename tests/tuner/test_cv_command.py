@@ -122,3 +122,11 @@ def test_cv_command_uses_the_configs_budget_fraction_unless_given(tmp_path, monk
     monkeypatch.setattr(tuner.cv, "cross_validate", spy)
     assert main(["cv", str(path), "--k", "2", "--no-full", "--dir", str(tmp_path / "cv"), "-q", *flag]) == 0
     assert seen["budget_fraction"] == expected
+
+
+@pytest.mark.parametrize("value", ["0", "1.5", "abc"])
+def test_cv_command_refuses_a_budget_fraction_outside_0_1(value, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["cv", "job.yaml", "--budget-fraction", value])
+    assert exc.value.code == 2
+    assert "--budget-fraction: expected a number in (0, 1]" in capsys.readouterr().err
