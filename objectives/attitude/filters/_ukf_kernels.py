@@ -43,6 +43,29 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters._ukf_scalar import (
+    _A1,
+    _A2,
+    _A3,
+    _A4,
+    _A5,
+    _A6,
+    _A7,
+    _A8,
+    _A9,
+    _C1,
+    _C2,
+    _C3,
+    _C4,
+    _C5,
+    _C6,
+    _Q2R_SERIES_N2,
+    _R2Q_SERIES_TH2,
+    _S1,
+    _S2C,
+    _S3,
+    _S4,
+    _S5,
+    _S6,
     _acc_frame,
     _acc_quat,
     _aqua_finish,
@@ -69,11 +92,12 @@ _BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
 N_STATE_FIXED = 46
 _I_Q, _I_B, _I_P, _I_G = 0, 4, 7, 43
 
-# work layout (float64): E (18, 4), D (18, 3), DB (18, 3), Ym (12, 4), Dm (12, 3), L (6, 6), 3x3 x 4, K (6, 3)
+# work layout (float64), sigma points one per column: E (4, 18), D (3, 18), DB (3, 18), Ym (4, 12), Dm (3, 12),
+# L (6, 6), 3x3 x 4, K (6, 3), 1 / diag(L) (6,), U (3, 18), PA (3, 18)
 _W_E, _W_D, _W_DB, _W_YM, _W_DM, _W_L = 0, 72, 126, 180, 228, 264
-_W_R0, _W_RH, _W_PYY, _W_SYY, _W_K = 300, 309, 318, 327, 336
+_W_R0, _W_RH, _W_PYY, _W_SYY, _W_K, _W_LD, _W_U, _W_PA = 300, 309, 318, 327, 336, 354, 360, 414
 #: size of ``work``
-WORK_SIZE = 354
+WORK_SIZE = 468
 
 # rounding-level freedoms only (FMA, reassociation, reciprocal): NaN/inf semantics are kept for the checks
 _FM = {"nsz", "arcp", "contract", "reassoc"}
@@ -81,24 +105,67 @@ _FM = {"nsz", "arcp", "contract", "reassoc"}
 
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
-def _put3(D, j, dx, dy, dz):
-    """``D[j, :3] = (dx, dy, dz)``."""
-    D[j, 0] = dx
-    D[j, 1] = dy
-    D[j, 2] = dz
-
-
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
 def _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz):
     """The six second-moment sums (xx, xy, xz, yy, yz, zz) plus the outer product of ``(dx, dy, dz)``."""
     return cxx + dx * dx, cxy + dx * dy, cxz + dx * dz, cyy + dy * dy, cyz + dy * dz, czz + dz * dz
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM)
-def _wmean_cov(Y, m, r0, r1, r2, r3, D):
-    """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3) and covariance.
+@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+def _r2q_series(rx, ry, rz):
+    """Eq. 2 by its power series only (valid below ``|r|^2 = 0.25``, see ``_ukf_scalar``): no branch, so a
+    loop over sigma points vectorises. Returns the quaternion and ``|r|^2`` for the caller's range check."""
+    th2 = rx * rx + ry * ry + rz * rz
+    y = 0.25 * th2
+    c = 1.0 + y * (_C1 + y * (_C2 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))
+    s = 0.5 * (1.0 + y * (_S1 + y * (_S2C + y * (_S3 + y * (_S4 + y * (_S5 + y * _S6))))))
+    return c, s * rx, s * ry, s * rz, th2
 
-    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
+
+@njit(cache=True, error_model="numpy", fastmath=_FM)
+def _dev_pass(Y, m, r0, r1, r2, r3, D, series):
+    """One pass of the mean: ``D[:, j] = Y[:, j] (-) r`` (eq. 3) for j < m, and the sums of the deviations
+    and of their outer products (sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz).
+
+    ``Y`` (4, m) and ``D`` (3, m) hold one sigma point per column, so the loop runs over contiguous
+    rows without a branch and vectorises: the logarithm is the power series of eq. 1 (valid for
+    ``|n|^2 < 0.01``, i.e. deviations below 0.2 rad, relative error below 1e-20), and a pass with any
+    deviation beyond that is redone with the exact scalar logarithm (``_qdiff``).
+    """
+    sx = sy = sz = 0.0
+    cxx = cxy = cxz = cyy = cyz = czz = 0.0
+    far = 0 if series else 1
+    for j in range(m if series else 0):
+        w, x, y, z = _qm(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
+        n2 = x * x + y * y + z * z
+        far += n2 >= _Q2R_SERIES_N2
+        f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
+            _A6 + n2 * (_A7 + n2 * (_A8 + n2 * _A9)))))))))
+        f = f if w >= 0.0 else -f
+        dx, dy, dz = f * x, f * y, f * z
+        D[0, j], D[1, j], D[2, j] = dx, dy, dz
+        sx += dx
+        sy += dy
+        sz += dz
+        cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+    if far > 0:
+        sx = sy = sz = 0.0
+        cxx = cxy = cxz = cyy = cyz = czz = 0.0
+        for j in range(m):
+            dx, dy, dz = _qdiff(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, r1, r2, r3)
+            D[0, j], D[1, j], D[2, j] = dx, dy, dz
+            sx += dx
+            sy += dy
+            sz += dz
+            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+    return sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FM)
+def _wmean_cov(Y, m, r0, r1, r2, r3, D, series):
+    """Eqs. 13-14 for equally weighted quaternions Y[:, :m] (one per column): iterative mean from
+    (r0..r3) and covariance.
+
+    D[:, :m] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
     (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
 
     The iteration stops when a step is below 1e-12 rad, or when the step ``s`` just taken is below
@@ -110,15 +177,7 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D):
     w = 1.0 / m
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
     for _ in range(_MAX_MEAN_ITER):
-        sx = sy = sz = 0.0
-        cxx = cxy = cxz = cyy = cyz = czz = 0.0
-        for j in range(m):
-            dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
-            _put3(D, j, dx, dy, dz)
-            sx += dx
-            sy += dy
-            sz += dz
-            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+        sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_pass(Y, m, r0, r1, r2, r3, D, series)
         sx *= w
         sy *= w
         sz *= w
@@ -132,9 +191,9 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D):
             hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz
             cxx = cxy = cxz = cyy = cyz = czz = 0.0
             for j in range(m):
-                dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
+                dx, dy, dz = D[0, j], D[1, j], D[2, j]
                 dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
-                _put3(D, j, dx, dy, dz)
+                D[0, j], D[1, j], D[2, j] = dx, dy, dz
                 cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
             break
     return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
@@ -146,8 +205,8 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
 
     ``(ax, ay, az)`` and ``(bx, by, bz)`` are the raw acc and mag; the UT runs on the normalised
     vectors with the noise scaled by the norms (h of eq. 22 does not depend on the vectors' lengths).
-    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (12, 4) and ``D``
-    (12, 3) are scratch.
+    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (4, 12) and ``D``
+    (3, 12) are scratch (one sigma point per column).
     """
     na = math.sqrt(ax * ax + ay * ay + az * az)
     nb = math.sqrt(bx * bx + by * by + bz * bz)
@@ -197,11 +256,11 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
             ok, w, x, y, z = _aqua_finish(a0, a1, a2, a3, mx, my, n2)
         if not ok:
             return False, 1.0, 0.0, 0.0, 0.0
-        Y[j, 0] = w
-        Y[j, 1] = x
-        Y[j, 2] = y
-        Y[j, 3] = z
-    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D)
+        Y[0, j] = w
+        Y[1, j] = x
+        Y[2, j] = y
+        Y[3, j] = z
+    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D, False)
     _store_sym3(R, cxx, cxy, cxz, cyy, cyz, czz)
     return True, y0, y1, y2, y3
 
@@ -238,17 +297,20 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
     P = state[_I_P:_I_P + 36].reshape((6, 6))
     win = state[N_STATE_FIXED:N_STATE_FIXED + 3 * window].reshape((window, 3))
     srt = state[N_STATE_FIXED + 3 * window:N_STATE_FIXED + 6 * window].reshape((3, window))
-    E = work[_W_E:_W_E + 72].reshape((18, 4))       # forecast sigma quaternions (eq. 26)
-    D = work[_W_D:_W_D + 54].reshape((18, 3))       # their deviations from the mean
-    DB = work[_W_DB:_W_DB + 54].reshape((18, 3))    # their bias deviations
-    Ym = work[_W_YM:_W_YM + 48].reshape((12, 4))    # measurement UT sigma images (eq. 25)
-    Dm = work[_W_DM:_W_DM + 36].reshape((12, 3))
+    E = work[_W_E:_W_E + 72].reshape((4, 18))       # forecast sigma quaternions (eq. 26), one per column
+    D = work[_W_D:_W_D + 54].reshape((3, 18))       # their deviations from the mean
+    DB = work[_W_DB:_W_DB + 54].reshape((3, 18))    # their bias deviations
+    U = work[_W_U:_W_U + 54].reshape((3, 18))       # their rotation vectors u dt (eq. 17)
+    PA = work[_W_PA:_W_PA + 54].reshape((3, 18))    # their attitude deviations (zero for 12 of them)
+    Ym = work[_W_YM:_W_YM + 48].reshape((4, 12))    # measurement UT sigma images (eq. 25)
+    Dm = work[_W_DM:_W_DM + 36].reshape((3, 12))
     L = work[_W_L:_W_L + 36].reshape((6, 6))
     R0 = work[_W_R0:_W_R0 + 9].reshape((3, 3))
     Rh = work[_W_RH:_W_RH + 9].reshape((3, 3))
     Pyy = work[_W_PYY:_W_PYY + 9].reshape((3, 3))
     Syy = work[_W_SYY:_W_SYY + 9].reshape((3, 3))
     K = work[_W_K:_W_K + 18].reshape((6, 3))
+    Ld = work[_W_LD:_W_LD + 6]                      # reciprocals of L's diagonal
     seen, iwin, nwin = istate[0], istate[1], istate[2]
     e0, e1, e2, e3 = state[0], state[1], state[2], state[3]
     b0, b1, b2 = state[4], state[5], state[6]
@@ -259,13 +321,13 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
         # ---------------- forecast, eqs. 26-27 (gyr of the previous sample, eq. 20) -----------
         if seen > 0:
             if math.isfinite(wx) and math.isfinite(wy) and math.isfinite(wz):
-                if not _chol(P, L, 6):
+                if not _chol(P, L, 6, Ld):
                     for i in range(6):
                         for j in range(6):
                             if i != j:
                                 P[i, j] = 0.0
                         P[i, i] = max(abs(P[i, i]), 1e-30)
-                    _chol(P, L, 6)
+                    _chol(P, L, 6, Ld)
                 # mean-input image as the start of the iterative mean
                 d0, d1, d2, d3 = _r2q((wx - b0) * dt, (wy - b1) * dt, (wz - b2) * dt)
                 r0, r1, r2, r3 = _qm(e0, e1, e2, e3, d0, d1, d2, d3)
@@ -282,21 +344,33 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
                         nq1 = sgn * sig_g
                     else:
                         nq2 = sgn * sig_g
-                    DB[j, 0] = db0
-                    DB[j, 1] = db1
-                    DB[j, 2] = db2
+                    DB[0, j], DB[1, j], DB[2, j] = db0, db1, db2
                     # f of eqs. 17-20 with u = u_m - beta - q_u (eq. 18)
-                    a0, a1, a2, a3 = _r2q((wx - (b0 + db0) - nq0) * dt, (wy - (b1 + db1) - nq1) * dt,
-                                          (wz - (b2 + db2) - nq2) * dt)
+                    U[0, j] = (wx - (b0 + db0) - nq0) * dt
+                    U[1, j] = (wy - (b1 + db1) - nq1) * dt
+                    U[2, j] = (wz - (b2 + db2) - nq2) * dt
+                    # sigma point, eqs. 4 and 9: e_j = R2Q(d) * e (L lower triangular: only its first
+                    # three columns have an attitude part; R2Q(0) * e = e exactly for the others)
                     if col < 3:
-                        # sigma point, eqs. 4 and 9: e_j = R2Q(d) * e (L lower triangular: only
-                        # its first three columns have an attitude part)
-                        p0, p1, p2, p3 = _r2q(sgn * L[0, col], sgn * L[1, col], sgn * L[2, col])
-                        s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                        PA[0, j], PA[1, j], PA[2, j] = sgn * L[0, col], sgn * L[1, col], sgn * L[2, col]
                     else:
-                        s0, s1, s2, s3 = e0, e1, e2, e3
-                    E[j, 0], E[j, 1], E[j, 2], E[j, 3] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
-                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D)
+                        PA[0, j] = PA[1, j] = PA[2, j] = 0.0
+                # E_j = R2Q(PA_j) * e * R2Q(U_j) for all 18 columns at once (vectorised power series);
+                # the trigonometric form for all of them when any angle is beyond the series' range
+                far = 0
+                for j in range(18):
+                    a0, a1, a2, a3, ta = _r2q_series(U[0, j], U[1, j], U[2, j])
+                    p0, p1, p2, p3, tp = _r2q_series(PA[0, j], PA[1, j], PA[2, j])
+                    far += (ta >= _R2Q_SERIES_TH2) + (tp >= _R2Q_SERIES_TH2)
+                    s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                    E[0, j], E[1, j], E[2, j], E[3, j] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                if far > 0:
+                    for j in range(18):
+                        a0, a1, a2, a3 = _r2q(U[0, j], U[1, j], U[2, j])
+                        p0, p1, p2, p3 = _r2q(PA[0, j], PA[1, j], PA[2, j])
+                        s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                        E[0, j], E[1, j], E[2, j], E[3, j] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D, True)
                 # eq. 14: attitude block from the mean; the bias mean is unchanged (symmetric
                 # points) and the bias block is L_b L_b^T = P_bb, so only the cross block is summed
                 _store_sym3(P, cxx, cxy, cxz, cyy, cyz, czz)
@@ -304,7 +378,7 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
                     for c in range(3):
                         s = 0.0
                         for j in range(6):
-                            s += D[j, r] * DB[j, c] + D[j + 9, r] * DB[j + 9, c]
+                            s += D[r, j] * DB[c, j] + D[r, j + 9] * DB[c, j + 9]
                         P[r, c + 3] = P[c + 3, r] = s / 18.0
             # eq. 27: additive process noise Q2
             for i in range(3):
