@@ -8,16 +8,32 @@ holds the per-sample arithmetic, written for the fixed sizes of the problem (6 e
   three columns move the attitude, so 6 of the 18 sigma points have a rotated attitude and the
   other 12 share ``e``; the bias-bias block of ``P`` is unchanged by the forecast (``L L^T``) and
   only the attitude-bias block is summed over the 12 points that carry a bias deviation.
-- The exponential and logarithm maps (eqs. 1-2) use their power series for small angles (see
-  :mod:`objectives.attitude.filters._ukf_scalar`, which holds the scalar helpers).
+- Sigma points are stored one per column (``(4, 18)`` quaternions, ``(3, 18)`` deviations), and the
+  forecast's 18 points are built (``R2Q(d_j) * e * R2Q(u_j dt)``, with ``d_j = 0`` exactly for the 12
+  unrotated ones) and compared with the mean (eq. 3) in loops without branches, which the compiler
+  turns into vector code: eq. 2 by its power series (valid below 0.5 rad) and eq. 1 by its series
+  (valid below ``|n| = 0.1``, 0.2 rad), both truncated below 1e-19 relative. When any point of a
+  loop is beyond that range the loop is redone with the exact scalar maps (atan2, sin, cos), so the
+  result never depends on a truncated series outside its range. The measurement UT's 12 points
+  keep the scalar loop (measured faster for 12 points than the vector loop with its remainder).
+- The exponential and logarithm maps (eqs. 1-2) elsewhere use their power series for small angles
+  (see :mod:`objectives.attitude.filters._ukf_scalar`, which holds the scalar helpers).
 - The iterative mean (eqs. 5, 13) saves its last pass when the next step is predicted below
   1e-13 rad (:func:`_wmean_cov`).
+- The 6x6 Cholesky factor divides once per column (reciprocal of the pivot).
+- QRAUKF's sorted innovation window finds the removal and insertion places by branch-free counts and
+  the MAD merge uses selects (eq. 36; the same values bit for bit): innovations are noise, so the
+  former bisection and insertion scans mispredicted most of their jumps.
 - Compiled with the NumPy error model (no division checks) and rounding-only fast-math flags
   (FMA contraction, reassociation, reciprocals; no NaN/inf assumptions, the degeneracy checks stay).
 - The pseudo-measurement UT (eq. 25) shares the accelerometer quaternion between the 6 magnetometer
   sigma points, and uses that the magnetometer quaternion of eq. 24 does not depend on the length
   of the field vector.
 - All scratch lives in one ``work`` array allocated by the caller; nothing is allocated per sample.
+
+Where the time goes
+-------------------
+PROFILE_PLACEHOLDER
 
 State passed in and out
 -----------------------
@@ -92,7 +108,7 @@ _BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
 N_STATE_FIXED = 46
 _I_Q, _I_B, _I_P, _I_G = 0, 4, 7, 43
 
-# work layout (float64), sigma points one per column: E (4, 18), D (3, 18), DB (3, 18), Ym (4, 12), Dm (3, 12),
+# work layout (float64), sigma points one per column: E (4, 18), D (3, 18), DB (3, 18), Ym (12, 4), Dm (12, 3),
 # L (6, 6), 3x3 x 4, K (6, 3), 1 / diag(L) (6,), U (3, 18), PA (3, 18)
 _W_E, _W_D, _W_DB, _W_YM, _W_DM, _W_L = 0, 72, 126, 180, 228, 264
 _W_R0, _W_RH, _W_PYY, _W_SYY, _W_K, _W_LD, _W_U, _W_PA = 300, 309, 318, 327, 336, 354, 360, 414
@@ -121,8 +137,24 @@ def _r2q_series(rx, ry, rz):
     return c, s * rx, s * ry, s * rz, th2
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM)
-def _dev_pass(Y, m, r0, r1, r2, r3, D, series):
+@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+def _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz):
+    """Column j of :func:`_dev_pass` by the series of eq. 1, added to the running sums; ``far`` counts
+    columns beyond the series' range."""
+    w, x, y, z = _qm(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
+    n2 = x * x + y * y + z * z
+    far += n2 >= _Q2R_SERIES_N2
+    f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
+        _A6 + n2 * (_A7 + n2 * (_A8 + n2 * _A9)))))))))
+    f = f if w >= 0.0 else -f
+    dx, dy, dz = f * x, f * y, f * z
+    D[0, j], D[1, j], D[2, j] = dx, dy, dz
+    cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+    return far, sx + dx, sy + dy, sz + dz, cxx, cxy, cxz, cyy, cyz, czz
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+def _dev_pass(Y, m, r0, r1, r2, r3, D, vector):
     """One pass of the mean: ``D[:, j] = Y[:, j] (-) r`` (eq. 3) for j < m, and the sums of the deviations
     and of their outer products (sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz).
 
@@ -133,20 +165,13 @@ def _dev_pass(Y, m, r0, r1, r2, r3, D, series):
     """
     sx = sy = sz = 0.0
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
-    far = 0 if series else 1
-    for j in range(m if series else 0):
-        w, x, y, z = _qm(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
-        n2 = x * x + y * y + z * z
-        far += n2 >= _Q2R_SERIES_N2
-        f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
-            _A6 + n2 * (_A7 + n2 * (_A8 + n2 * _A9)))))))))
-        f = f if w >= 0.0 else -f
-        dx, dy, dz = f * x, f * y, f * z
-        D[0, j], D[1, j], D[2, j] = dx, dy, dz
-        sx += dx
-        sy += dy
-        sz += dz
-        cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+    far = 0
+    if vector:
+        for j in range(m):
+            far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz,
+                                                                        cxx, cxy, cxz, cyy, cyz, czz)
+    else:
+        far = 1
     if far > 0:
         sx = sy = sz = 0.0
         cxx = cxy = cxz = cyy = cyz = czz = 0.0
@@ -161,7 +186,7 @@ def _dev_pass(Y, m, r0, r1, r2, r3, D, series):
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FM)
-def _wmean_cov(Y, m, r0, r1, r2, r3, D, series):
+def _wmean_cov(Y, m, r0, r1, r2, r3, D, vector):
     """Eqs. 13-14 for equally weighted quaternions Y[:, :m] (one per column): iterative mean from
     (r0..r3) and covariance.
 
@@ -177,7 +202,7 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D, series):
     w = 1.0 / m
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
     for _ in range(_MAX_MEAN_ITER):
-        sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_pass(Y, m, r0, r1, r2, r3, D, series)
+        sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_pass(Y, m, r0, r1, r2, r3, D, vector)
         sx *= w
         sy *= w
         sz *= w
@@ -199,14 +224,70 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D, series):
     return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
 
 
+@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+def _put3(D, j, dx, dy, dz):
+    """``D[j, :3] = (dx, dy, dz)``."""
+    D[j, 0] = dx
+    D[j, 1] = dy
+    D[j, 2] = dz
+
+
+@njit(cache=True, error_model="numpy", fastmath=_FM)
+def _wmean_cov_rows(Y, m, r0, r1, r2, r3, D):
+    """Eqs. 13-14 for equally weighted quaternions Y[:m] (one per row, scalar code: the measurement UT's
+    12 points, where it measured faster than the vectorised :func:`_wmean_cov`): iterative mean from
+    (r0..r3) and covariance.
+
+    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
+    (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
+
+    The iteration stops when a step is below 1e-12 rad, or when the step ``s`` just taken is below
+    1e-8 rad and the next one is predicted below 1e-13 rad (the contraction per step is at most the
+    trace of the covariance): the deviations then move to the new mean by the first-order
+    Baker-Campbell-Hausdorff form ``D_j - s + s x D_j / 2`` (error O(|s|^2 |D|)) instead of one
+    more pass of logarithms.
+    """
+    w = 1.0 / m
+    cxx = cxy = cxz = cyy = cyz = czz = 0.0
+    for _ in range(_MAX_MEAN_ITER):
+        sx = sy = sz = 0.0
+        cxx = cxy = cxz = cyy = cyz = czz = 0.0
+        for j in range(m):
+            dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
+            _put3(D, j, dx, dy, dz)
+            sx += dx
+            sy += dy
+            sz += dz
+            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+        sx *= w
+        sy *= w
+        sz *= w
+        s2 = sx * sx + sy * sy + sz * sz
+        if s2 < _TOL_MEAN * _TOL_MEAN:
+            break
+        e0, e1, e2, e3 = _r2q(sx, sy, sz)
+        r0, r1, r2, r3 = _qm(e0, e1, e2, e3, r0, r1, r2, r3)
+        tr = (cxx + cyy + czz) * w
+        if s2 < _BCH_STEP2 and s2 * tr * tr < _BCH_NEXT2:
+            hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz
+            cxx = cxy = cxz = cyy = cyz = czz = 0.0
+            for j in range(m):
+                dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
+                dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
+                _put3(D, j, dx, dy, dz)
+                cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+            break
+    return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
+
+
 @njit(cache=True, error_model="numpy", fastmath=_FM)
 def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
     """Eq. 25: quaternion pseudo-measurement (ENU) and its covariance R (3x3) by the UT of eqs. 9-15.
 
     ``(ax, ay, az)`` and ``(bx, by, bz)`` are the raw acc and mag; the UT runs on the normalised
     vectors with the noise scaled by the norms (h of eq. 22 does not depend on the vectors' lengths).
-    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (4, 12) and ``D``
-    (3, 12) are scratch (one sigma point per column).
+    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (12, 4) and ``D``
+    (12, 3) are scratch.
     """
     na = math.sqrt(ax * ax + ay * ay + az * az)
     nb = math.sqrt(bx * bx + by * by + bz * bz)
@@ -256,11 +337,11 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
             ok, w, x, y, z = _aqua_finish(a0, a1, a2, a3, mx, my, n2)
         if not ok:
             return False, 1.0, 0.0, 0.0, 0.0
-        Y[0, j] = w
-        Y[1, j] = x
-        Y[2, j] = y
-        Y[3, j] = z
-    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D, False)
+        Y[j, 0] = w
+        Y[j, 1] = x
+        Y[j, 2] = y
+        Y[j, 3] = z
+    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov_rows(Y, 12, q0, q1, q2, q3, D)
     _store_sym3(R, cxx, cxy, cxz, cyy, cyz, czz)
     return True, y0, y1, y2, y3
 
@@ -302,8 +383,8 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
     DB = work[_W_DB:_W_DB + 54].reshape((3, 18))    # their bias deviations
     U = work[_W_U:_W_U + 54].reshape((3, 18))       # their rotation vectors u dt (eq. 17)
     PA = work[_W_PA:_W_PA + 54].reshape((3, 18))    # their attitude deviations (zero for 12 of them)
-    Ym = work[_W_YM:_W_YM + 48].reshape((4, 12))    # measurement UT sigma images (eq. 25)
-    Dm = work[_W_DM:_W_DM + 36].reshape((3, 12))
+    Ym = work[_W_YM:_W_YM + 48].reshape((12, 4))    # measurement UT sigma images (eq. 25), one per row
+    Dm = work[_W_DM:_W_DM + 36].reshape((12, 3))
     L = work[_W_L:_W_L + 36].reshape((6, 6))
     R0 = work[_W_R0:_W_R0 + 9].reshape((3, 3))
     Rh = work[_W_RH:_W_RH + 9].reshape((3, 3))
