@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from objectives.attitude.filters import _ukf_kernels as kern
+from objectives.attitude.filters import _ukf_mean as um
 from objectives.attitude.filters import _ukf_scalar as sc
 from objectives.attitude.filters.ukf import run_ukf
 from tests.attitude.test_ukf import PARAMS, _disturbed
@@ -36,8 +36,8 @@ def test_deviation_pass_series_and_exact_logarithm_agree(spread):
     c = ref.r2q(rng.normal(size=3))
     Y = _cloud(rng, c, 18, spread)
     D1, D2 = np.zeros((3, 18)), np.zeros((3, 18))
-    s1 = kern._dev_pass(Y, 18, *c, D1, True)
-    s2 = kern._dev_pass(Y, 18, *c, D2, False)
+    s1 = um._dev_pass(Y, 18, *c, D1, True)
+    s2 = um._dev_pass(Y, 18, *c, D2, False)
     Dref = np.array([ref.qminus(Y[:, j], c) for j in range(18)]).T
     assert np.allclose(D1, Dref, rtol=1e-12, atol=1e-15)
     assert np.allclose(D1, D2, rtol=1e-13, atol=1e-16)
@@ -52,7 +52,7 @@ def test_weighted_mean_matches_reference_mean(spread):
     Y = _cloud(rng, c, 18, spread)
     for series in (True, False):
         D = np.zeros((3, 18))
-        out = kern._wmean_cov(Y, 18, *c, D, series)
+        out = um._wmean_cov(Y, 18, *c, D, series)
         mean = ref.wmean(list(Y.T), np.full(18, 1 / 18), c)
         assert abs(abs(np.dot(out[:4], mean)) - 1) < 1e-13
         dev = np.array([ref.qminus(Y[:, j], mean) for j in range(18)])
@@ -67,7 +67,7 @@ def test_branch_free_exponential_equals_eq2(th):
     for _ in range(20):
         r = rng.normal(size=3)
         r *= th / max(np.linalg.norm(r), 1e-300)
-        *q, th2 = kern._r2q_series(*r)
+        *q, th2 = um._r2q_series(*r)
         assert np.allclose(q, ref.r2q(r), rtol=0, atol=2e-16)
         assert math.isclose(th2, th * th, rel_tol=1e-12, abs_tol=1e-300)
 
