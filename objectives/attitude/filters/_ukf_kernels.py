@@ -8,16 +8,58 @@ holds the per-sample arithmetic, written for the fixed sizes of the problem (6 e
   three columns move the attitude, so 6 of the 18 sigma points have a rotated attitude and the
   other 12 share ``e``; the bias-bias block of ``P`` is unchanged by the forecast (``L L^T``) and
   only the attitude-bias block is summed over the 12 points that carry a bias deviation.
-- The exponential and logarithm maps (eqs. 1-2) use their power series for small angles (see
-  :mod:`objectives.attitude.filters._ukf_scalar`, which holds the scalar helpers).
+- Sigma points are stored one per column (``(4, 18)`` quaternions, ``(3, 18)`` deviations), and the
+  forecast's 18 points are built (``R2Q(d_j) * e * R2Q(u_j dt)``, with ``d_j = 0`` exactly for the 12
+  unrotated ones) and compared with the mean (eq. 3) in loops without branches, which the compiler
+  turns into vector code: eq. 2 by its power series (valid below 0.5 rad) and eq. 1 by its series
+  (valid below ``|n| = 0.1``, 0.2 rad), both truncated below 1e-19 relative. When any point of a
+  loop is beyond that range the loop is redone with the exact scalar maps (atan2, sin, cos), so the
+  result never depends on a truncated series outside its range. The measurement UT's 12 points
+  keep the scalar loop (measured faster for 12 points than the vector loop with its remainder).
+- The exponential and logarithm maps (eqs. 1-2) elsewhere use their power series for small angles
+  (see :mod:`objectives.attitude.filters._ukf_scalar`, which holds the scalar helpers).
 - The iterative mean (eqs. 5, 13) saves its last pass when the next step is predicted below
-  1e-13 rad (:func:`_wmean_cov`).
+  1e-13 rad (:mod:`objectives.attitude.filters._ukf_mean`, which holds both means).
+- The 6x6 Cholesky factor divides once per column (reciprocal of the pivot).
+- QRAUKF's sorted innovation window finds the removal and insertion places by branch-free counts and
+  the MAD merge uses selects (eq. 36; the same values bit for bit): innovations are noise, so the
+  former bisection and insertion scans mispredicted most of their jumps.
 - Compiled with the NumPy error model (no division checks) and rounding-only fast-math flags
   (FMA contraction, reassociation, reciprocals; no NaN/inf assumptions, the degeneracy checks stay).
 - The pseudo-measurement UT (eq. 25) shares the accelerometer quaternion between the 6 magnetometer
   sigma points, and uses that the magnetometer quaternion of eq. 24 does not depend on the length
   of the field vector.
 - All scratch lives in one ``work`` array allocated by the caller; nothing is allocated per sample.
+
+Where the time goes
+-------------------
+Per sample on ``bench6dof`` at 1 kHz (one core of the shared 2-core machine, minimum over 25 interleaved
+runs; each part's cost = the run time minus the run time with that part switched off in a scratch copy of
+the kernel, so the parts overlap and do not add up exactly; the "rest" is everything switched off at once:
+the update of eqs. 29-33, the nominal pseudo-measurement, the cross block of eq. 14, the outputs):
+
+==========================  ==========  =========
+part                        before, ns  after, ns
+==========================  ==========  =========
+QUKF total                  1119        980
+measurement UT (eq. 25)     470         456
+  of which its mean         248         229
+forecast propagation        208         163
+forecast mean (1.0 pass)    180         100
+Cholesky 6x6                83          96 (*)
+rest                        216         208
+QRAUKF total                1623        1318
+  Hampel window, eqs. 34-37 503         337
+==========================  ==========  =========
+
+(*) switching the factor off leaves the sigma points degenerate, so this difference is not a clean
+cost. The forecast mean takes 1.0 pass per sample (the BCH shortcut in 21-99 % of them), the
+measurement mean 2.0-2.5 passes (BCH in 57-93 %), measured on bench6dof and BROAD trial 07. What
+was tried and measured slower, so left out: the 12 measurement sigma points as vector columns (a
+branch-free eq. 22-24 and the series mean; 12 columns run mostly in the vector remainder), the same
+padded to 16 columns, the magnetometer points' deviations in closed form (an earth-z rotation by the
+heading change: an atan series per point costs as much as the logarithm it replaces), and the
+forecast's first mean pass fused into the propagation loop in scalar form.
 
 State passed in and out
 -----------------------
@@ -42,7 +84,9 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.attitude.filters._ukf_mean import _FM, _r2q_series, _wmean_cov, _wmean_cov_rows
 from objectives.attitude.filters._ukf_scalar import (
+    _R2Q_SERIES_TH2,
     _acc_frame,
     _acc_quat,
     _aqua_finish,
@@ -60,84 +104,17 @@ from objectives.attitude.filters._ukf_scalar import (
 
 __all__ = ["N_STATE_FIXED", "WORK_SIZE", "new_state", "new_work", "ukf_chunk"]
 
-_TOL_MEAN = 1e-12
-_MAX_MEAN_ITER = 6
-_BCH_STEP2 = 1e-16  # (1e-8 rad)^2
-_BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
-
 #: entries of ``state`` before the innovation window
 N_STATE_FIXED = 46
 _I_Q, _I_B, _I_P, _I_G = 0, 4, 7, 43
 
-# work layout (float64): E (18, 4), D (18, 3), DB (18, 3), Ym (12, 4), Dm (12, 3), L (6, 6), 3x3 x 4, K (6, 3)
+# work layout (float64), sigma points one per column: E (4, 18), D (3, 18), DB (3, 18), Ym (12, 4), Dm (12, 3),
+# L (6, 6), 3x3 x 4, K (6, 3), 1 / diag(L) (6,), U (3, 18), PA (3, 18)
 _W_E, _W_D, _W_DB, _W_YM, _W_DM, _W_L = 0, 72, 126, 180, 228, 264
-_W_R0, _W_RH, _W_PYY, _W_SYY, _W_K = 300, 309, 318, 327, 336
+_W_R0, _W_RH, _W_PYY, _W_SYY, _W_K, _W_LD, _W_U, _W_PA = 300, 309, 318, 327, 336, 354, 360, 414
 #: size of ``work``
-WORK_SIZE = 354
+WORK_SIZE = 468
 
-# rounding-level freedoms only (FMA, reassociation, reciprocal): NaN/inf semantics are kept for the checks
-_FM = {"nsz", "arcp", "contract", "reassoc"}
-
-
-# ----------------------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
-def _put3(D, j, dx, dy, dz):
-    """``D[j, :3] = (dx, dy, dz)``."""
-    D[j, 0] = dx
-    D[j, 1] = dy
-    D[j, 2] = dz
-
-
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
-def _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz):
-    """The six second-moment sums (xx, xy, xz, yy, yz, zz) plus the outer product of ``(dx, dy, dz)``."""
-    return cxx + dx * dx, cxy + dx * dy, cxz + dx * dz, cyy + dy * dy, cyz + dy * dz, czz + dz * dz
-
-
-@njit(cache=True, error_model="numpy", fastmath=_FM)
-def _wmean_cov(Y, m, r0, r1, r2, r3, D):
-    """Eqs. 13-14 for equally weighted quaternions Y[:m]: iterative mean from (r0..r3) and covariance.
-
-    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
-    (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
-
-    The iteration stops when a step is below 1e-12 rad, or when the step ``s`` just taken is below
-    1e-8 rad and the next one is predicted below 1e-13 rad (the contraction per step is at most the
-    trace of the covariance): the deviations then move to the new mean by the first-order
-    Baker-Campbell-Hausdorff form ``D_j - s + s x D_j / 2`` (error O(|s|^2 |D|)) instead of one
-    more pass of logarithms.
-    """
-    w = 1.0 / m
-    cxx = cxy = cxz = cyy = cyz = czz = 0.0
-    for _ in range(_MAX_MEAN_ITER):
-        sx = sy = sz = 0.0
-        cxx = cxy = cxz = cyy = cyz = czz = 0.0
-        for j in range(m):
-            dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
-            _put3(D, j, dx, dy, dz)
-            sx += dx
-            sy += dy
-            sz += dz
-            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
-        sx *= w
-        sy *= w
-        sz *= w
-        s2 = sx * sx + sy * sy + sz * sz
-        if s2 < _TOL_MEAN * _TOL_MEAN:
-            break
-        e0, e1, e2, e3 = _r2q(sx, sy, sz)
-        r0, r1, r2, r3 = _qm(e0, e1, e2, e3, r0, r1, r2, r3)
-        tr = (cxx + cyy + czz) * w
-        if s2 < _BCH_STEP2 and s2 * tr * tr < _BCH_NEXT2:
-            hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz
-            cxx = cxy = cxz = cyy = cyz = czz = 0.0
-            for j in range(m):
-                dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
-                dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
-                _put3(D, j, dx, dy, dz)
-                cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
-            break
-    return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
 
 
 @njit(cache=True, error_model="numpy", fastmath=_FM)
@@ -201,7 +178,7 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
         Y[j, 1] = x
         Y[j, 2] = y
         Y[j, 3] = z
-    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D)
+    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov_rows(Y, 12, q0, q1, q2, q3, D)
     _store_sym3(R, cxx, cxy, cxz, cyy, cyz, czz)
     return True, y0, y1, y2, y3
 
@@ -238,10 +215,12 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
     P = state[_I_P:_I_P + 36].reshape((6, 6))
     win = state[N_STATE_FIXED:N_STATE_FIXED + 3 * window].reshape((window, 3))
     srt = state[N_STATE_FIXED + 3 * window:N_STATE_FIXED + 6 * window].reshape((3, window))
-    E = work[_W_E:_W_E + 72].reshape((18, 4))       # forecast sigma quaternions (eq. 26)
-    D = work[_W_D:_W_D + 54].reshape((18, 3))       # their deviations from the mean
-    DB = work[_W_DB:_W_DB + 54].reshape((18, 3))    # their bias deviations
-    Ym = work[_W_YM:_W_YM + 48].reshape((12, 4))    # measurement UT sigma images (eq. 25)
+    E = work[_W_E:_W_E + 72].reshape((4, 18))       # forecast sigma quaternions (eq. 26), one per column
+    D = work[_W_D:_W_D + 54].reshape((3, 18))       # their deviations from the mean
+    DB = work[_W_DB:_W_DB + 54].reshape((3, 18))    # their bias deviations
+    U = work[_W_U:_W_U + 54].reshape((3, 18))       # their rotation vectors u dt (eq. 17)
+    PA = work[_W_PA:_W_PA + 54].reshape((3, 18))    # their attitude deviations (zero for 12 of them)
+    Ym = work[_W_YM:_W_YM + 48].reshape((12, 4))    # measurement UT sigma images (eq. 25), one per row
     Dm = work[_W_DM:_W_DM + 36].reshape((12, 3))
     L = work[_W_L:_W_L + 36].reshape((6, 6))
     R0 = work[_W_R0:_W_R0 + 9].reshape((3, 3))
@@ -249,6 +228,7 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
     Pyy = work[_W_PYY:_W_PYY + 9].reshape((3, 3))
     Syy = work[_W_SYY:_W_SYY + 9].reshape((3, 3))
     K = work[_W_K:_W_K + 18].reshape((6, 3))
+    Ld = work[_W_LD:_W_LD + 6]                      # reciprocals of L's diagonal
     seen, iwin, nwin = istate[0], istate[1], istate[2]
     e0, e1, e2, e3 = state[0], state[1], state[2], state[3]
     b0, b1, b2 = state[4], state[5], state[6]
@@ -259,13 +239,13 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
         # ---------------- forecast, eqs. 26-27 (gyr of the previous sample, eq. 20) -----------
         if seen > 0:
             if math.isfinite(wx) and math.isfinite(wy) and math.isfinite(wz):
-                if not _chol(P, L, 6):
+                if not _chol(P, L, 6, Ld):
                     for i in range(6):
                         for j in range(6):
                             if i != j:
                                 P[i, j] = 0.0
                         P[i, i] = max(abs(P[i, i]), 1e-30)
-                    _chol(P, L, 6)
+                    _chol(P, L, 6, Ld)
                 # mean-input image as the start of the iterative mean
                 d0, d1, d2, d3 = _r2q((wx - b0) * dt, (wy - b1) * dt, (wz - b2) * dt)
                 r0, r1, r2, r3 = _qm(e0, e1, e2, e3, d0, d1, d2, d3)
@@ -282,21 +262,33 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
                         nq1 = sgn * sig_g
                     else:
                         nq2 = sgn * sig_g
-                    DB[j, 0] = db0
-                    DB[j, 1] = db1
-                    DB[j, 2] = db2
+                    DB[0, j], DB[1, j], DB[2, j] = db0, db1, db2
                     # f of eqs. 17-20 with u = u_m - beta - q_u (eq. 18)
-                    a0, a1, a2, a3 = _r2q((wx - (b0 + db0) - nq0) * dt, (wy - (b1 + db1) - nq1) * dt,
-                                          (wz - (b2 + db2) - nq2) * dt)
+                    U[0, j] = (wx - (b0 + db0) - nq0) * dt
+                    U[1, j] = (wy - (b1 + db1) - nq1) * dt
+                    U[2, j] = (wz - (b2 + db2) - nq2) * dt
+                    # sigma point, eqs. 4 and 9: e_j = R2Q(d) * e (L lower triangular: only its first
+                    # three columns have an attitude part; R2Q(0) * e = e exactly for the others)
                     if col < 3:
-                        # sigma point, eqs. 4 and 9: e_j = R2Q(d) * e (L lower triangular: only
-                        # its first three columns have an attitude part)
-                        p0, p1, p2, p3 = _r2q(sgn * L[0, col], sgn * L[1, col], sgn * L[2, col])
-                        s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                        PA[0, j], PA[1, j], PA[2, j] = sgn * L[0, col], sgn * L[1, col], sgn * L[2, col]
                     else:
-                        s0, s1, s2, s3 = e0, e1, e2, e3
-                    E[j, 0], E[j, 1], E[j, 2], E[j, 3] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
-                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D)
+                        PA[0, j] = PA[1, j] = PA[2, j] = 0.0
+                # E_j = R2Q(PA_j) * e * R2Q(U_j) for all 18 columns at once (vectorised power series);
+                # the trigonometric form for all of them when any angle is beyond the series' range
+                far = 0
+                for j in range(18):
+                    a0, a1, a2, a3, ta = _r2q_series(U[0, j], U[1, j], U[2, j])
+                    p0, p1, p2, p3, tp = _r2q_series(PA[0, j], PA[1, j], PA[2, j])
+                    far += (ta >= _R2Q_SERIES_TH2) + (tp >= _R2Q_SERIES_TH2)
+                    s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                    E[0, j], E[1, j], E[2, j], E[3, j] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                if far > 0:
+                    for j in range(18):
+                        a0, a1, a2, a3 = _r2q(U[0, j], U[1, j], U[2, j])
+                        p0, p1, p2, p3 = _r2q(PA[0, j], PA[1, j], PA[2, j])
+                        s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+                        E[0, j], E[1, j], E[2, j], E[3, j] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D, True)
                 # eq. 14: attitude block from the mean; the bias mean is unchanged (symmetric
                 # points) and the bias block is L_b L_b^T = P_bb, so only the cross block is summed
                 _store_sym3(P, cxx, cxy, cxz, cyy, cyz, czz)
@@ -304,7 +296,7 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
                     for c in range(3):
                         s = 0.0
                         for j in range(6):
-                            s += D[j, r] * DB[j, c] + D[j + 9, r] * DB[j + 9, c]
+                            s += D[r, j] * DB[c, j] + D[r, j + 9] * DB[c, j + 9]
                         P[r, c + 3] = P[c + 3, r] = s / 18.0
             # eq. 27: additive process noise Q2
             for i in range(3):

@@ -19,6 +19,11 @@ eq. 17 with the previous gyro sample and the bias estimate, noise-free):
   ``r_rest`` on the 6-D error state (attitude correction applied as ``R2Q(dx) * e``, eq. 4).
 
 With every block off the driver is not used and the output is the paper's kernel's, bit for bit.
+
+Numba caches this driver's loop with the kernel compiled into it, and the cache entry is keyed on this
+file alone: after a change of ``_ukf_kernels.py``, ``_ukf_mean.py`` or ``_ukf_scalar.py`` a persistent
+cache directory still holds the old kernel here (the per-sample driver then differs from one kernel call
+at rounding level) until this file changes or the cache is cleared.
 """
 
 from __future__ import annotations

@@ -156,8 +156,12 @@ def _aqua_enu(ax, ay, az, bx, by, bz):
 # ----------------------------------------------------------------------------------------------
 # small linear algebra on preallocated arrays
 @njit(cache=True, inline="always")
-def _chol(A, L, n):
-    """Lower Cholesky factor of A[:n, :n] into L (upper part zeroed); False if A is not positive definite."""
+def _chol(A, L, n, rdiag):
+    """Lower Cholesky factor of A[:n, :n] into L (upper part zeroed); False if A is not positive definite.
+
+    ``rdiag`` (n,) receives the reciprocals of the diagonal of L: one division per column instead of
+    one per entry below the diagonal.
+    """
     for i in range(n):
         for j in range(i + 1):
             s = A[i, j]
@@ -166,9 +170,11 @@ def _chol(A, L, n):
             if i == j:
                 if not s > 0.0:
                     return False
-                L[i, i] = math.sqrt(s)
+                d = math.sqrt(s)
+                L[i, i] = d
+                rdiag[i] = 1.0 / d
             else:
-                L[i, j] = s / L[j, j]
+                L[i, j] = s * rdiag[j]
         for j in range(i + 1, n):
             L[i, j] = 0.0
     return True
@@ -224,24 +230,44 @@ def _is_pd3(A):
 
 
 @njit(cache=True, inline="always")
+def _count_below(S, n, x, inclusive):
+    """Number of ``S[:n]`` below ``x`` (``<=`` with ``inclusive``); a branch-free scan (no data-dependent jumps)."""
+    c = 0
+    if inclusive:
+        for i in range(n):
+            c += S[i] <= x
+    else:
+        for i in range(n):
+            c += S[i] < x
+    return c
+
+
+@njit(cache=True, inline="always")
 def _sorted_update(S, n, full, old, new):
-    """Keep ``S[:n]`` sorted: remove one ``old`` (when ``full``), insert ``new``; returns the new length."""
+    """Keep ``S[:n]`` sorted: remove one ``old`` (when ``full``), insert ``new``; returns the new length.
+
+    The removal index (the first ``old``) and the insertion index (after every value ``<= new``) are
+    counted by branch-free scans, then only the entries between them move by one place. The result is
+    the same array as a removal by bisection followed by an insertion scan, without their data-dependent
+    branches (innovations are noise: their order is unpredictable, each mispredicted jump costs more
+    than the whole scan).
+    """
+    p = _count_below(S, n, new, True)
     if full:
-        lo, hi = 0, n - 1
-        while lo < hi:  # first index with S >= old (old is present)
-            mid = (lo + hi) >> 1
-            if S[mid] < old:
-                lo = mid + 1
-            else:
-                hi = mid
-        for i in range(lo, n - 1):
-            S[i] = S[i + 1]
-        n -= 1
-    i = n
-    while i > 0 and S[i - 1] > new:
+        r = _count_below(S, n, old, False)
+        if old <= new:
+            p -= 1  # ``old`` was counted and leaves
+        if p >= r:
+            for i in range(r, p):
+                S[i] = S[i + 1]
+        else:
+            for i in range(r, p, -1):
+                S[i] = S[i - 1]
+        S[p] = new
+        return n
+    for i in range(n, p, -1):
         S[i] = S[i - 1]
-        i -= 1
-    S[i] = new
+    S[p] = new
     return n + 1
 
 
@@ -256,25 +282,23 @@ def _median_sorted(S, n):
 
 @njit(cache=True, inline="always")
 def _mad_sorted(S, n, med):
-    """Median of ``|S[:n] - med|`` for sorted ``S`` by merging the two monotone halves (no sort)."""
-    lo, hi = 0, n
-    while lo < hi:  # first index with S >= med
-        mid = (lo + hi) >> 1
-        if S[mid] < med:
-            lo = mid + 1
-        else:
-            hi = mid
+    """Median of ``|S[:n] - med|`` for sorted ``S`` by merging the two monotone halves (no sort).
+
+    The merge takes ``n // 2 + 1`` steps with selects instead of branches (an exhausted side reads as
+    ``inf``); the values are exactly those of ``abs(S - med)``.
+    """
+    lo = _count_below(S, n, med, False)  # first index with S >= med
     i, j = lo - 1, lo  # left walks down, right walks up
     h = n // 2
     prev = cur = 0.0
     for _ in range(h + 1):
         prev = cur
-        if j >= n or (i >= 0 and abs(S[i] - med) <= abs(S[j] - med)):
-            cur = abs(S[i] - med)
-            i -= 1
-        else:
-            cur = abs(S[j] - med)
-            j += 1
+        dl = med - S[max(i, 0)] if i >= 0 else math.inf
+        dr = S[min(j, n - 1)] - med if j < n else math.inf
+        left = dl <= dr
+        cur = dl if left else dr
+        i -= 1 if left else 0
+        j += 0 if left else 1
     if n % 2 == 1:
         return cur
     return 0.5 * (prev + cur)
