@@ -14,6 +14,7 @@ Two tables for ``docs/tilt-bench.md``:
 
     python -m benchmarks.tilt_bench stats
     python -m benchmarks.tilt_bench errors --runs runs/tilt --seeds 1 2 3
+    python -m benchmarks.tilt_bench explain --runs runs/tilt --seeds 1 2 3
 """
 
 from __future__ import annotations
@@ -132,6 +133,11 @@ def stats_markdown(items: list[tuple[str, dict]]) -> str:
     return "".join(rows)
 
 
+def _mean(x: np.ndarray) -> float:
+    """Mean, NaN for no samples (a phase absent from short recordings)."""
+    return float(x.mean()) if x.size else float("nan")
+
+
 def condition_errors(run_dir: Path) -> dict:
     """Squared tilt error (deg^2) of a tuning run's best parameters on its held-out recordings, by
     recording and by phase.
@@ -146,14 +152,8 @@ def condition_errors(run_dir: Path) -> dict:
         recordings}), ``share`` ({phase: share of held-out samples}), ``K_per_phase`` ({phase: mean
         fuzzy scale}, adaptive KF only), ``fitness`` (the run's stored test fitness, rad^2).
     """
-    from tuner.config import config_from_dict
-    from tuner.run import _build
-
     best = yaml.safe_load((run_dir / "best.yaml").read_text())
-    raw = yaml.safe_load((run_dir / "config.yaml").read_text())  # as tuner.run.resume reads it
-    source, base_dir = raw.pop("source", str(run_dir / "config.yaml")), Path(raw.pop("base_dir", run_dir))
-    raw.setdefault("parallel", {})["n_jobs"] = 1
-    objective, _ = _build(config_from_dict(raw, source=source, base_dir=base_dir))
+    objective = _objective(run_dir)
     score = objective.score(best["params"], "test", keep_outputs=True)
     per_rec, sq, codes, ks = [], [], [], []
     for rec in objective.recordings("test"):
@@ -166,11 +166,11 @@ def condition_errors(run_dir: Path) -> dict:
             ks.append(res.diagnostics["K"])
     sq, codes = np.concatenate(sq), np.concatenate(codes)
     out = {"per_recording": per_rec, "fitness": best["evaluation"]["test_fitness"],
-           "per_phase": {p: float(sq[codes == c].mean()) for c, p in PHASE_NAMES.items()},
+           "per_phase": {p: _mean(sq[codes == c]) for c, p in PHASE_NAMES.items()},
            "share": {p: float(np.mean(codes == c)) for c, p in PHASE_NAMES.items()}}
     if ks:
         k = np.concatenate(ks)
-        out["K_per_phase"] = {p: float(k[codes == c].mean()) for c, p in PHASE_NAMES.items()}
+        out["K_per_phase"] = {p: _mean(k[codes == c]) for c, p in PHASE_NAMES.items()}
     return out
 
 
@@ -192,10 +192,86 @@ def errors_markdown(runs: Path, seeds: list[int]) -> str:
     return "".join(lines)
 
 
+def _objective(run_dir: Path):
+    """The objective of a run directory's ``config.yaml`` (as ``tuner.run.resume`` reads it), serial."""
+    from tuner.config import config_from_dict
+    from tuner.run import _build
+
+    raw = yaml.safe_load((run_dir / "config.yaml").read_text())
+    source, base_dir = raw.pop("source", str(run_dir / "config.yaml")), Path(raw.pop("base_dir", run_dir))
+    raw.setdefault("parallel", {})["n_jobs"] = 1
+    return _build(config_from_dict(raw, source=source, base_dir=base_dir))[0]
+
+
+def start_errors(run_dir: Path, p0_bias: float = 1e-4, head_s: float = 60.0) -> dict:
+    """Held-out MSE (deg^2) of a KF-family run's best parameters as tuned (thesis 3.1.3.1: ``P0 = 0``) and
+    with an initial bias variance ``p0_bias`` ((rad/s)^2), with the share of the squared error in the
+    first ``head_s`` seconds of each recording."""
+    best = yaml.safe_load((run_dir / "best.yaml").read_text())["params"]
+    objective = _objective(run_dir)
+    out = {}
+    for label, params in (("p0_0", best), ("p0_bias", {**best, "p0_bias": p0_bias})):
+        sc = objective.score(params, "test", keep_outputs=True)
+        head = tot = 0.0
+        for rec in objective.recordings("test"):
+            e2 = (sc.outputs[rec.name].diagnostics["angle"] - rec.extra["angle"]) ** 2
+            k = int(round(head_s / rec.dt))
+            head, tot = head + float(e2[:k].sum()), tot + float(e2.sum())
+        out[label] = sc.fitness * DEG2
+        out[label + "_head_share"] = head / tot
+    return out
+
+
+#: integral gains Ki (1/s^2) of :func:`damping_sweep`: four per decade from 1e-5 to 0.1
+KI_GRID = tuple(float(k) for k in np.logspace(-5, -1, 17))
+
+
+def damping_sweep(zetas: tuple[float, ...] = (0.4, 0.707, 1.0, 2.0), ki_grid: tuple[float, ...] = KI_GRID) -> dict:
+    """Best training MSE (deg^2) of the Mahony tilt filter with ``Kp = 2 zeta sqrt(Ki)`` for each damping
+    ``zeta`` (its loop ``s^2 + Kp s + Ki``), and its held-out MSE there.
+
+    A steady-state KF of eqs. 3.9-3.10 has the same loop with ``K1^2 = q00/rho + 2 K2`` (continuous
+    Riccati solution; rates per second), so its damping ``K1 / (2 sqrt(K2))`` is at least ``1/sqrt(2)``
+    whatever rho, q00, q11 and the fuzzy scale of R: Mahony's ``Kp, Ki`` reach below it.
+    """
+    from tuner.config import load_config
+    from tuner.run import _build
+
+    objective, _ = _build(load_config(PAPERS / "thesis_mahony1d.yaml", n_jobs=1))
+    base = objective.default_params()
+    out = {}
+    for z in zetas:
+        scored = [(objective.score({**base, "Kp": 2 * z * math.sqrt(ki), "Ki": ki}, "train").fitness, ki)
+                  for ki in ki_grid]
+        f, ki = min(scored)
+        kp = 2 * z * math.sqrt(ki)
+        out[z] = {"Kp": kp, "Ki": ki, "train": f * DEG2,
+                  "test": objective.score({**base, "Kp": kp, "Ki": ki}, "test").fitness * DEG2}
+    return out
+
+
+def explain_markdown(runs: Path, seeds: list[int]) -> str:
+    """The two measurements behind the ordering (docs/tilt-bench.md section 4)."""
+    lines = ["| run | held-out MSE deg^2, P0 = 0 | share in first 60 s | with p0_bias 1e-4 | share in first 60 s |\n",
+             "|---|---|---|---|---|\n"]
+    for f in ("kf1d", "akf1d", "akf1d_fuzzy"):
+        for s in seeds:
+            d = runs / f"{f}_s{s}"
+            if (d / "best.yaml").exists() and "evaluation" in yaml.safe_load((d / "best.yaml").read_text()):
+                r = start_errors(d)
+                lines.append(f"| {f} s{s} | {r['p0_0']:.3f} | {r['p0_0_head_share']:.2f} | {r['p0_bias']:.3f} | "
+                             f"{r['p0_bias_head_share']:.2f} |\n")
+    lines += ["\n| damping zeta (Mahony, Kp = 2 zeta sqrt(Ki)) | Kp 1/s | Ki 1/s^2 | training MSE deg^2 | held-out |\n",
+              "|---|---|---|---|---|\n"]
+    for z, r in damping_sweep().items():
+        lines.append(f"| {z} | {r['Kp']:.4f} | {r['Ki']:.3g} | {r['train']:.3f} | {r['test']:.3f} |\n")
+    return "".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``stats`` (bench table) or ``errors`` (tuned filters by condition), markdown on stdout."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=("stats", "errors"))
+    ap.add_argument("what", choices=("stats", "errors", "explain"))
     ap.add_argument("--runs", type=Path, default=ROOT / "runs" / "tilt")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     args = ap.parse_args(argv)
@@ -203,8 +279,10 @@ def main(argv: list[str] | None = None) -> int:
         items = [(f"thesis {split} seed {kw['seed']}", kw) for split, kw in config_recordings()]
         items += [(f"default 60 s seed {s}", {"generator": "tilt1d", "duration_s": 60, "seed": s}) for s in (1, 2)]
         print(stats_markdown(items))
-    else:
+    elif args.what == "errors":
         print(errors_markdown(args.runs, args.seeds))
+    else:
+        print(explain_markdown(args.runs, args.seeds))
     return 0
 
 
