@@ -94,6 +94,8 @@ def test_gyro_bias_magnitude_option():
     ({"profile": "thesys"}, "profile"),
     ({"lever_arm_m": -0.01}, "lever_arm_m"),
     ({"lever_arm_m": float("nan")}, "lever_arm_m"),
+    ({"lever_arm_m": True}, "lever_arm_m"),
+    ({"profile": ["thesis"]}, "profile"),
     ({"gyr_bias_dps": -1.0}, "gyr_bias_dps"),
     ({"start_at_rest": "yes"}, "start_at_rest"),
 ])

@@ -186,19 +186,18 @@ def tilt1d(
     return replace(rec, acc=acc)
 
 
-
-
 def _profile_values(profile: str, lever_arm_m: float | None, gyr_bias_dps: float | None,
                     start_at_rest: bool | None) -> tuple[float, float | None, bool]:
     """``(lever_arm_m, gyr_bias_dps, start_at_rest)`` of a profile with the explicit values winning; validated."""
-    if profile not in TILT1D_PROFILES:
+    if not isinstance(profile, str) or profile not in TILT1D_PROFILES:
         raise ValueError(f"tilt1d: profile must be one of {', '.join(TILT1D_PROFILES)}, got {profile!r}")
     prof = TILT1D_PROFILES[profile]
     lever = prof["lever_arm_m"] if lever_arm_m is None else lever_arm_m
     bias = prof["gyr_bias_dps"] if gyr_bias_dps is None else gyr_bias_dps
-    if not (isinstance(lever, (int, float)) and math.isfinite(lever) and lever >= 0):
+    if isinstance(lever, bool) or not (isinstance(lever, (int, float)) and math.isfinite(lever) and lever >= 0):
         raise ValueError(f"tilt1d: lever_arm_m must be a finite distance >= 0 m, got {lever!r}")
-    if bias is not None and not (isinstance(bias, (int, float)) and math.isfinite(bias) and bias >= 0):
+    if bias is not None and (isinstance(bias, bool) or not (isinstance(bias, (int, float)) and math.isfinite(bias)
+                                                             and bias >= 0)):
         raise ValueError(f"tilt1d: gyr_bias_dps must be a finite rate >= 0 deg/s (or None), got {bias!r}")
     at_rest = prof["start_at_rest"] if start_at_rest is None else start_at_rest
     if not isinstance(at_rest, (bool, np.bool_)):
