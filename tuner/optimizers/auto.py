@@ -22,7 +22,7 @@ same method. :meth:`Auto.describe` names it (printed when the run starts; :attr:
 method name). The chosen method receives every common option (``target``, ``patience``, ``x0``, ...);
 for the CMA-ES family and ``trust_region`` a ``generations`` budget is converted to
 ``max_evals = population x generations`` (their population is their own default, pycma's
-``4 + floor(3 ln dim)`` or ``max(4, dim + 1)``, unless ``population`` is given), so the evaluation budget is
+``4 + floor(3 ln dim)`` or ``max(3, dim + 1)``, unless ``population`` is given), so the evaluation budget is
 the same whichever method is picked.
 """
 
