@@ -54,7 +54,8 @@ __all__ = ["TrustRegion", "quadratic_features"]
 #: Gaussian draws an exploring point gets to land outside the failures' cells
 _EXPLORE_TRIES = 20
 #: half-width (in radii) of the wide model step once a failure is known (2 without): 4 reached 1 % on pid_wmp
-#: in 108.5 evaluations (median of seeds 0-59, median final 0.06247); 2 never did (0.06291), 8 in 108 (0.06250)
+#: in 108.5 evaluations (median of seeds 0-59, median final 0.06247); 2 never did (0.06291), 8 in 108 (0.06250);
+#: measured before the space-filling spare point, without the failure cells 4 was worse than 2 (0.06293, 0.06271)
 _WIDE_WITH_FAILURES = 4.0
 
 
@@ -172,7 +173,8 @@ class TrustRegion(Optimizer):
 
         Penalties (an unstable loop, a diverged filter) are orders of magnitude above the rest and would bend
         the whole fit: usable are the points within 20 spreads of the best, the spread being measured at the
-        lower quartile (or the ``n_coef``-th best). The others are failures for :meth:`_feasible`."""
+        lower quartile (or the ``n_coef``-th best). Only the failures proper (non-finite, the engine's
+        ``PENALTY``) also fence off a region (:meth:`_feasible`); a merely bad point does not."""
         ok = np.isfinite(self.F)
         if not np.any(ok):
             return ok
@@ -199,7 +201,8 @@ class TrustRegion(Optimizer):
 
     def _feasible(self, cand: np.ndarray, failed: np.ndarray) -> np.ndarray:
         """Nearest-neighbour feasibility of the points ``cand`` (m, dim): True where the nearest evaluated point
-        is usable (all True when nothing failed, so a landscape without failures sees no change).
+        did not fail (``failed``: a mask over the evaluated points; all True when nothing failed, so a landscape
+        without failures sees no change).
 
         A failed evaluation marks an unknown infeasible region (an unstable loop past a stability boundary).
         Its Voronoi cell is where a step is predicted to fail: a model step towards a failure stops at the
