@@ -7,8 +7,9 @@ Rules (measured on the benchmark test functions and problems; numbers in
 0. ``dim <= 4`` and ``budget < 100 dim``: ``trust_region`` (a quadratic model after a Latin hypercube).
    With few parameters and about a hundred evaluations a fitted quadratic finds the basin's bottom
    sooner than a population adapts: at 120 evaluations it beats ``cmaes`` on 12 of the 12 test-function
-   rows in 2-4-D (10 seeds) and is the best of ours on madgwick_broad, mahony_broad and ekf_bench6dof
-   (56, 13 and 33 evaluations to 1 %; ``cmaes`` 70, 37 and 38.5).
+   rows in 2-4-D (10 seeds), is the best of ours on madgwick_broad and ekf_bench6dof (38.5 and 31.5
+   evaluations to 1 %; ``cmaes`` 70 and 38.5), on mahony_broad within half an evaluation of the best
+   (17.5; ``cmaes`` 37), and has the best median final fitness on pid_wmp (0.0629).
 1. ``dim == 1`` or ``budget < 30 dim``: ``pso`` with ``preset: lowbudget`` (pycma does not do 1-D;
    with under 30 evaluations per dimension CMA-ES has barely adapted: at 120 evaluations in 10-D the
    PSO preset wins on all four test functions, in 5-D on all four).
@@ -22,7 +23,7 @@ same method. :meth:`Auto.describe` names it (printed when the run starts; :attr:
 method name). The chosen method receives every common option (``target``, ``patience``, ``x0``, ...);
 for the CMA-ES family and ``trust_region`` a ``generations`` budget is converted to
 ``max_evals = population x generations`` (their population is their own default, pycma's
-``4 + floor(3 ln dim)`` or ``max(4, dim + 1)``, unless ``population`` is given), so the evaluation budget is
+``4 + floor(3 ln dim)`` or ``max(3, dim + 1)``, unless ``population`` is given), so the evaluation budget is
 the same whichever method is picked.
 """
 
