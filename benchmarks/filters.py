@@ -98,6 +98,10 @@ def _ahrs_call(mod, cls: str, g, a, m, f: float):
     return lambda: C(gyr=g, acc=a, mag=m, frequency=f)
 
 
+#: least samples/s of the quaternion UKFs as a fraction of the EKF's in the same run
+UKF_VS_EKF = {"qukf": 0.2, "qraukf": 0.12}
+
+
 def _measure(rec, names: list[str], repeats: int, slow_n: int) -> dict[str, Any]:
     from objectives.attitude.filters import get_filter
 
@@ -198,6 +202,12 @@ def run(smoke: bool = False, **_: Any) -> dict[str, Any]:
                     if rate:
                         targets.append({"target": f"{name} >= {lib} per sample ({title})",
                                         "value": r["rate"] / rate, "pass": r["rate"] >= rate})
+        ekf_r = d["ours"].get("ekf", {}).get("rate")
+        for name, least in UKF_VS_EKF.items():  # issue 16: the UKFs' cost relative to the EKF, same run
+            rate = d["ours"].get(name, {}).get("rate")
+            if ekf_r and rate:
+                targets.append({"target": f"{name} >= {least}x the ekf's samples/s ({title})",
+                                "value": rate / ekf_r, "pass": rate / ekf_r >= least})
         lines.append(md_table(["filter", "samples/s", "cost vs floor (x)", "x ahrs same algo", "x BasicVQF batch",
                                "x imufusion", "x VQF batch"], rows))
         prow = [[k, v.get("rate"), v.get("samples"), v.get("same_as"), v.get("error", "")]
