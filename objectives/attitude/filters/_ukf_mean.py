@@ -1,9 +1,9 @@
 """Sigma-point means of the quaternion UKF kernels (eqs. 5, 13-14 of Chiella et al. 2019).
 
-The iterative intrinsic mean and covariance of equally weighted unit quaternions, in two layouts:
-:func:`_wmean_cov` over sigma points stored one per column (the forecast's 18: its deviation pass
-is a branch-free loop the compiler turns into vector code) and :func:`_wmean_cov_rows` over points
-stored one per row (the measurement UT's 12, scalar code, measured faster at that count). Used by
+The iterative intrinsic mean and covariance of equally weighted unit quaternions stored one per
+column (:func:`_wmean_cov`): for the forecast's 18 sigma points its deviation pass is a branch-free
+loop the compiler turns into vector code (``vector``), for the measurement UT's 12 the exact scalar
+pass (measured faster at that count). Used by
 :mod:`objectives.attitude.filters._ukf_kernels`, which documents the layouts and the profile.
 """
 
@@ -147,62 +147,6 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D, vector):
                 dx, dy, dz = D[0, j], D[1, j], D[2, j]
                 dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
                 D[0, j], D[1, j], D[2, j] = dx, dy, dz
-                cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
-            break
-    return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
-
-
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
-def _put3(D, j, dx, dy, dz):
-    """``D[j, :3] = (dx, dy, dz)``."""
-    D[j, 0] = dx
-    D[j, 1] = dy
-    D[j, 2] = dz
-
-
-@njit(cache=True, error_model="numpy", fastmath=_FM)
-def _wmean_cov_rows(Y, m, r0, r1, r2, r3, D):
-    """Eqs. 13-14 for equally weighted quaternions Y[:m] (one per row, scalar code: the measurement UT's
-    12 points, where it measured faster than the vectorised :func:`_wmean_cov`): iterative mean from
-    (r0..r3) and covariance.
-
-    D[:m, :3] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
-    (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
-
-    The iteration stops when a step is below 1e-12 rad, or when the step ``s`` just taken is below
-    1e-8 rad and the next one is predicted below 1e-13 rad (the contraction per step is at most the
-    trace of the covariance): the deviations then move to the new mean by the first-order
-    Baker-Campbell-Hausdorff form ``D_j - s + s x D_j / 2`` (error O(|s|^2 |D|)) instead of one
-    more pass of logarithms.
-    """
-    w = 1.0 / m
-    cxx = cxy = cxz = cyy = cyz = czz = 0.0
-    for _ in range(_MAX_MEAN_ITER):
-        sx = sy = sz = 0.0
-        cxx = cxy = cxz = cyy = cyz = czz = 0.0
-        for j in range(m):
-            dx, dy, dz = _qdiff(Y[j, 0], Y[j, 1], Y[j, 2], Y[j, 3], r0, r1, r2, r3)
-            _put3(D, j, dx, dy, dz)
-            sx += dx
-            sy += dy
-            sz += dz
-            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
-        sx *= w
-        sy *= w
-        sz *= w
-        s2 = sx * sx + sy * sy + sz * sz
-        if s2 < _TOL_MEAN * _TOL_MEAN:
-            break
-        e0, e1, e2, e3 = _r2q(sx, sy, sz)
-        r0, r1, r2, r3 = _qm(e0, e1, e2, e3, r0, r1, r2, r3)
-        tr = (cxx + cyy + czz) * w
-        if s2 < _BCH_STEP2 and s2 * tr * tr < _BCH_NEXT2:
-            hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz
-            cxx = cxy = cxz = cyy = cyz = czz = 0.0
-            for j in range(m):
-                dx, dy, dz = D[j, 0], D[j, 1], D[j, 2]
-                dx, dy, dz = dx - sx + (hy * dz - hz * dy), dy - sy + (hz * dx - hx * dz), dz - sz + (hx * dy - hy * dx)
-                _put3(D, j, dx, dy, dz)
                 cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
             break
     return r0, r1, r2, r3, cxx * w, cxy * w, cxz * w, cyy * w, cyz * w, czz * w
