@@ -19,7 +19,9 @@ def _fixed_work(params):
 
 def test_a_backend_that_runs_everything_in_the_calling_thread_has_serial_fraction_one():
     # no evaluate_batch hook: the threads backend evaluates in the calling thread, nothing in parallel
-    r = speedup(_fixed_work, [{"x0": 0.1}] * 12, repeats=3, backends=("serial", "threads"))
-    assert 0.8 < r["serial_fraction_threads"] < 1.25
-    assert 0.8 < r["amdahl_bound_threads"] < 1.25
+    # CPU seconds of the same work drift by up to ~30 % between runs on a loaded machine; a backend that
+    # handed the work to other threads would leave the calling thread a fraction near 0
+    r = speedup(_fixed_work, [{"x0": 0.1}] * 12, repeats=5, backends=("serial", "threads"))
+    assert 0.67 < r["serial_fraction_threads"] < 1.5
+    assert 0.67 < r["amdahl_bound_threads"] < 1.5
     assert r["threads_main_cpu_s"] <= r["threads_cpu_s"] + 1e-3
