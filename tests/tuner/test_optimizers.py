@@ -160,3 +160,11 @@ def test_bad_options_are_rejected():
     with pytest.raises(OptionError, match="sigma0"):
         CMAES(2, rng, sigma0=2.0)
     assert "inertia" in PSO.option_names() and "max_evals" in PSO.option_names()
+
+
+@pytest.mark.parametrize("method", sorted(OPTIMIZERS))
+@pytest.mark.parametrize("max_evals", [0, -3])
+def test_a_budget_below_one_evaluation_is_refused(method, max_evals):
+    """``max_evals`` < 1 used to 'finish' a run after no evaluation with best fitness inf."""
+    with pytest.raises(OptionError, match=f"max_evals must be >= 1, got {max_evals}"):
+        OPTIMIZERS[method](dim=2, rng=np.random.default_rng(0), population=4, max_evals=max_evals)

@@ -82,6 +82,8 @@ class Optimizer:
             raise OptionError(f"population must be >= 1, got {population}")
         if generations is not None and int(generations) < 1:
             raise OptionError(f"generations must be >= 1, got {generations}")
+        if max_evals is not None and int(max_evals) < 1:
+            raise OptionError(f"max_evals must be >= 1, got {max_evals}")
         if generations is None and max_evals is None and target is None and patience is None:
             raise OptionError("give a budget: generations, max_evals, target or patience")
         if patience is not None and int(patience) < 1:
