@@ -210,8 +210,13 @@ class TrustRegion(Optimizer):
         boundary of several failures it slides between them instead of falling off it again."""
         if not np.any(failed):
             return np.ones(len(cand), dtype=bool)
+        return ~failed[self._nearest(cand)[0]]
+
+    def _nearest(self, cand: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Index of the nearest evaluated point of each of ``cand`` (m, dim) and the squared distance to it."""
         d2 = (np.sum(cand**2, axis=1)[:, None] - 2.0 * cand @ self.X.T) + np.sum(self.X**2, axis=1)[None, :]
-        return ~failed[np.argmin(d2, axis=1)]
+        idx = np.argmin(d2, axis=1)
+        return idx, d2[np.arange(len(cand)), idx]
 
     def _argmin_in_box(self, coef: np.ndarray, xb: np.ndarray, half: float, failed: np.ndarray) -> np.ndarray:
         lo, hi = np.clip(xb - half, 0.0, 1.0), np.clip(xb + half, 0.0, 1.0)
@@ -232,10 +237,9 @@ class TrustRegion(Optimizer):
         """The point of the cube farthest from every evaluated point, among the ``n_candidates`` uniform samples
         outside the failures' cells (:meth:`_feasible`; all of them if none is outside)."""
         cand = self.rng.random((self.n_candidates, self.dim))
-        d2 = (np.sum(cand**2, axis=1)[:, None] - 2.0 * cand @ self.X.T) + np.sum(self.X**2, axis=1)[None, :]
-        gap = np.min(d2, axis=1)
+        nearest, gap = self._nearest(cand)
         if np.any(failed):
-            ok = ~failed[np.argmin(d2, axis=1)]
+            ok = ~failed[nearest]
             if np.any(ok):
                 gap[~ok] = -np.inf
         return cand[int(np.argmax(gap))]
