@@ -1,7 +1,8 @@
 """Parallel scaling, engine overhead and memory: serial vs loky processes vs threads (one numba kernel).
 
 * Speed-up from 1 to 2 workers on each real problem (:mod:`benchmarks.problems`): the same batch of
-  candidates (about 1.5 s of serial work, :data:`BATCH_S`) through :class:`tuner.evaluate.Evaluator` serially, with 2 loky workers and with the
+  candidates (about 1.5 s of serial work, :data:`BATCH_S`) through :class:`tuner.evaluate.Evaluator`
+  serially, with 2 loky workers and with the
   ``threads`` backend (the objective's ``evaluate_batch``: one numba kernel, 2 threads), after a
   warm-up batch (worker start, data loading, compilation); the backends take turns within each of 7
   repeats and a speed-up is the median of the ratios of neighbouring batches. Besides wall
