@@ -255,3 +255,58 @@ def test_a_settled_model_step_spends_the_spare_point_on_unexplored_space():
             assert gap >= np.quantile(gaps, 0.99)
         o.tell(u, np.array([f(x) for x in u]))
     assert settled >= 1
+
+
+def test_pattern_move_continues_along_the_last_improvement():
+    # in 4-D (batches of 5) a model batch's third point is the Hooke-Jeeves move x_b + 2 (x_b - x_prev), x_prev
+    # being the best point before the last improvement (halved while it falls in a failure's cell)
+    f = _scaled("rosenbrock")
+    o = TrustRegion(4, np.random.default_rng(3), max_evals=300, generations=None)
+    checked = 0
+    while not o.done:
+        model_batch = not o._pending_lhs
+        prev, xb = o._previous_incumbent(), o.best_x.copy()
+        u = o.ask()
+        if model_batch and prev is not None:
+            moves = [np.clip(xb + s * (xb - prev), 0.0, 1.0) for s in (2.0, 1.0, 0.5)]
+            assert any(np.allclose(u[2], m) for m in moves)
+            checked += 1
+        o.tell(u, np.array([f(x) for x in u]))
+    assert checked >= 10
+    # x_prev is the incumbent before the last improvement, read off the history
+    F = np.where(np.isfinite(o.F), o.F, np.inf)
+    improved = [k for k in range(len(F)) if F[k] < np.min(F[:k], initial=np.inf)]
+    np.testing.assert_array_equal(o._previous_incumbent(), o.X[improved[-2]])
+
+
+def test_shaped_exploration_spreads_along_the_flat_directions():
+    o = TrustRegion(2, np.random.default_rng(0), max_evals=50, generations=None, shaped=1.0)
+    d = 2
+    coef = np.zeros(o.n_coef)
+    c, s = np.cos(0.3), np.sin(0.3)
+    R = np.array([[c, -s], [s, c]])
+    H = R @ np.diag([100.0, 1.0]) @ R.T  # steep along R[:, 0], flat along R[:, 1]
+    coef[1 + d:1 + 2 * d] = np.diag(H)
+    coef[1 + 2 * d:] = H[0, 1]
+    B = o._shape(coef)
+    cov = B @ B.T
+    np.testing.assert_allclose(R.T @ cov @ R, np.diag([0.01, 1.0]), atol=1e-12)  # std 1/sqrt(curvature), max 1
+    assert o._shape(np.zeros(o.n_coef)) is None
+
+
+def test_small_batches_keep_their_exploring_point():
+    # with batches of 3 (1-3 parameters) the valley moves would take the only exploring point: they are off there
+    f = _scaled("rosenbrock")
+
+    def run(**kw):
+        o = TrustRegion(2, np.random.default_rng(5), max_evals=90, generations=None, **kw)
+        asked = []
+        while not o.done:
+            u = o.ask()
+            asked.append(u)
+            o.tell(u, np.array([f(x) for x in u]))
+        return np.vstack(asked)
+
+    np.testing.assert_array_equal(run(), run(pattern=0.0, shaped=0.0))
+    with pytest.raises(OptionError, match="pattern and shaped"):
+        TrustRegion(2, np.random.default_rng(0), max_evals=10, pattern=-1.0)
