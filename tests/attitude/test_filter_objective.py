@@ -114,6 +114,28 @@ def test_kfold_split_holds_out_every_kth_recording(tmp_path):
     assert [r.name for r in obj.recordings("test")] == ["bench6dof-1", "bench6dof-3"]
 
 
+def test_score_keeps_the_outputs_of_the_first_recordings_only_when_limited(tmp_path):
+    # the run report draws one recording: it keeps that one's estimates, not all of them, with the same scores
+    specs = [{"synthetic": {"generator": "bench6dof", "duration_s": 3, "seed": s}} for s in range(3)]
+    obj = FilterObjective.from_config({"kind": "filter", "filter": "madgwick", "data": specs}, tmp_path)
+    full = obj.score({"beta": 0.1}, keep_outputs=True)
+    one = obj.score({"beta": 0.1}, keep_outputs=True, outputs_limit=1)
+    none = obj.score({"beta": 0.1}, keep_outputs=True, outputs_limit=0)
+    assert list(full.outputs) == ["bench6dof-0", "bench6dof-1", "bench6dof-2"]
+    assert list(one.outputs) == ["bench6dof-0"] and not none.outputs
+    np.testing.assert_array_equal(one.outputs["bench6dof-0"].quat, full.outputs["bench6dof-0"].quat)
+    assert one.fitness == none.fitness == full.fitness and one.recordings == full.recordings
+
+
+def test_run_metadata_reads_versions_without_importing_the_packages():
+    # importing pandas and cma only for their versions cost about 100 MB of resident memory in every run
+    code = ("import sys, tuner.run as r; v = r._versions(); "
+            "print(all(v[m] for m in ('numpy', 'pandas', 'cma', 'yaml')), "
+            "'pandas' in sys.modules, 'cma' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["True", "False", "False"]
+
+
 def _tiny_kf_job(tmp_path):
     return {"name": "kf", "seed": 4,
             "objective": {"kind": "filter", "filter": "kf1d", "metric": "mse_1d",
