@@ -401,11 +401,13 @@ class FilterObjective:
             mask[: int(round(self.warmup_s / rec.dt))] = False
         return mask
 
-    def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False) -> Score:
+    def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False,
+              outputs_limit: int | None = None) -> Score:
         """Fitness and per-recording metrics of ``params`` on the train or test recordings.
 
         ``Score.recordings`` is ``{name: {metric: value}}``; with ``keep_outputs`` ``Score.outputs`` is
-        ``{name: FilterResult}``.
+        ``{name: FilterResult}``, for the first ``outputs_limit`` recordings only when it is given (a report
+        that draws one recording need not hold the estimates of all sixteen BROAD trials).
         """
         recs = self.recordings(which)
         if not recs:
@@ -436,7 +438,7 @@ class FilterObjective:
             if self.metric == "mse_1d":
                 m["mse_1d"] = self._mse_1d(rec, res, mask)
             per[rec.name] = m
-            if keep_outputs:
+            if keep_outputs and (outputs_limit is None or len(outputs) < outputs_limit):
                 outputs[rec.name] = res
         fitness = self._combine(sums, per, [r.name for r in recs], which)
         return Score(float(fitness), per, failed, outputs)

@@ -70,8 +70,9 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
 
     figs = run_dir / "figures"
     figs.mkdir(parents=True, exist_ok=True)
-    train = obj.score(best, "train", keep_outputs=True)
-    test = obj.score(best, "test", keep_outputs=True) if obj.test_specs else None
+    # the figures draw one recording (the first test one, else the first train one): only its estimates are kept
+    test = obj.score(best, "test", keep_outputs=True, outputs_limit=1) if obj.test_specs else None
+    train = obj.score(best, "train", keep_outputs=True, outputs_limit=0 if test and test.outputs else 1)
     out: dict[str, Any] = {
         "train_fitness": train.fitness,
         "test_fitness": test.fitness if test else None,
