@@ -23,6 +23,18 @@ def _drive(opt, f, budget=None):
     return best, n
 
 
+def _asked(dim, seed, budget, **kw):
+    """Every point a run on the scaled Rosenbrock function asks, in order."""
+    f = _scaled("rosenbrock")
+    o = TrustRegion(dim, np.random.default_rng(seed), max_evals=budget, generations=None, **kw)
+    asked = []
+    while not o.done:
+        u = o.ask()
+        asked.append(u)
+        o.tell(u, np.array([f(x) for x in u]))
+    return np.vstack(asked)
+
+
 def _scaled(name):
     fun, (lo, hi) = FUNCTIONS[name]
     return lambda u: float(fun(lo + (hi - lo) * np.asarray(u)))
@@ -221,20 +233,9 @@ def test_model_steps_avoid_the_cells_of_failed_points():
 
 def test_without_failures_the_feasibility_filter_changes_nothing(monkeypatch):
     # the nearest-neighbour filter is inert on a landscape where nothing fails: the same points as with no filter
-    f = _scaled("rosenbrock")
-
-    def run():
-        o = TrustRegion(3, np.random.default_rng(4), max_evals=150, generations=None)
-        asked = []
-        while not o.done:
-            u = o.ask()
-            asked.append(u)
-            o.tell(u, np.array([f(x) for x in u]))
-        return np.vstack(asked)
-
-    with_filter = run()
+    with_filter = _asked(3, 4, 150)
     monkeypatch.setattr(TrustRegion, "_feasible", lambda self, cand, failed: np.ones(len(cand), dtype=bool))
-    np.testing.assert_array_equal(run(), with_filter)
+    np.testing.assert_array_equal(_asked(3, 4, 150), with_filter)
 
 
 def test_a_settled_model_step_spends_the_spare_point_on_unexplored_space():
@@ -296,17 +297,6 @@ def test_shaped_exploration_spreads_along_the_flat_directions():
 
 def test_small_batches_keep_their_exploring_point():
     # with batches of 3 (1-3 parameters) the valley moves would take the only exploring point: they are off there
-    f = _scaled("rosenbrock")
-
-    def run(**kw):
-        o = TrustRegion(2, np.random.default_rng(5), max_evals=90, generations=None, **kw)
-        asked = []
-        while not o.done:
-            u = o.ask()
-            asked.append(u)
-            o.tell(u, np.array([f(x) for x in u]))
-        return np.vstack(asked)
-
-    np.testing.assert_array_equal(run(), run(pattern=0.0, shaped=0.0))
+    np.testing.assert_array_equal(_asked(2, 5, 90), _asked(2, 5, 90, pattern=0.0, shaped=0.0))
     with pytest.raises(OptionError, match="pattern and shaped"):
         TrustRegion(2, np.random.default_rng(0), max_evals=10, pattern=-1.0)
