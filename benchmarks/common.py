@@ -9,6 +9,7 @@ import os
 import platform
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -25,11 +26,21 @@ PEERS = {"ahrs": "ahrs", "imufusion": "imufusion", "vqf": "vqf", "pyswarms": "py
 
 
 def peer(name: str) -> Any | None:
-    """Import a peer library, or None when it is not installed (the benchmark then reports it missing)."""
-    try:
-        return importlib.import_module(name)
-    except ImportError:
-        return None
+    """Import a peer library, or None when it is not installed (the benchmark then reports it missing).
+
+    The import runs in a temporary working directory: pyswarms opens a log file ``report.log`` in the
+    working directory when it is imported, which left a stray file in the checkout after every benchmark."""
+    if name in sys.modules:
+        return sys.modules[name]
+    cwd = os.getcwd()
+    with tempfile.TemporaryDirectory() as d:
+        os.chdir(d)
+        try:
+            return importlib.import_module(name)
+        except ImportError:
+            return None
+        finally:
+            os.chdir(cwd)
 
 
 def _version(mod: str) -> str | None:
