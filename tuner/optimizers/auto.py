@@ -7,10 +7,11 @@ Rules (measured on the benchmark test functions and problems; numbers in
 0. ``dim <= 4`` and ``budget < 100 dim``: ``trust_region`` (a quadratic model after a Latin hypercube).
    With few parameters and about a hundred evaluations a fitted quadratic finds the basin's bottom
    sooner than a population adapts: at 120 evaluations it beats ``cmaes`` on 11 of the 12 test-function
-   rows in 2-4-D (10 seeds; 4-D Rastrigin is lost since the valley moves of ``trust_region``), is the best of ours on madgwick_broad and ekf_bench6dof (38.5 and 30.5
-   evaluations to 1 %; ``cmaes`` 70 and 38.5), on mahony_broad within half an evaluation of the best
-   (17.5; ``cmaes`` 37), and the only method, ours or a peer's, that reaches 1 % on pid_wmp in half the
-   seeds (6 of 10 in 113 evaluations; ``cmaes`` 1 of 10).
+   rows in 2-4-D (10 seeds; 4-D Rastrigin is lost since the valley moves of ``trust_region``), is the
+   best of ours on madgwick_broad and ekf_bench6dof (38.5 and 30.5 evaluations to 1 %; ``cmaes`` 70 and
+   38.5), on mahony_broad within half an evaluation of the best (17.5; ``cmaes`` 37), and the only
+   method, ours or a peer's, that reaches 1 % on pid_wmp in half the seeds (6 of 10 in 113 evaluations;
+   ``cmaes`` 1 of 10).
 1. ``dim == 1`` or ``budget < 30 dim``: ``pso`` with ``preset: lowbudget`` (pycma does not do 1-D;
    with under 30 evaluations per dimension CMA-ES has barely adapted: at 120 evaluations in 10-D the
    PSO preset wins on all four test functions, in 5-D on all four).
