@@ -77,15 +77,21 @@ def quadratic_features(z: np.ndarray, full: bool) -> np.ndarray:
     return np.hstack(cols)
 
 
+def _curvature(coef: np.ndarray, d: int, full: bool) -> np.ndarray:
+    """The (d, d) curvature matrix ``H`` of the model ``coef`` (of :func:`quadratic_features`)."""
+    H = np.diag(coef[1 + d:1 + 2 * d]).astype(float)
+    if full and d > 1:
+        i, j = np.triu_indices(d, 1)
+        H[i, j] = H[j, i] = coef[1 + 2 * d:]
+    return H
+
+
 def _box_coordinate_descent(coef: np.ndarray, d: int, full: bool, z: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                             sweeps: int = 30) -> np.ndarray:
     """Lower the model ``coef`` (of :func:`quadratic_features`) from ``z`` within ``[lo, hi]``, one coordinate
     at a time: exact along a coordinate with positive curvature, to the better bound otherwise."""
     g = coef[1:1 + d]
-    H = np.diag(coef[1 + d:1 + 2 * d]).astype(float)
-    if full and d > 1:
-        i, j = np.triu_indices(d, 1)
-        H[i, j] = H[j, i] = coef[1 + 2 * d:]
+    H = _curvature(coef, d, full)
     z = z.copy()
     for _ in range(sweeps):
         for k in range(d):
@@ -306,12 +312,7 @@ class TrustRegion(Optimizer):
         """``B`` such that ``r B z`` (z standard normal) spreads along the model's flat directions: in the
         eigenbasis of the model's curvature ``H`` the standard deviation is ``1 / sqrt(|eigenvalue|)``
         (floored at 1e-4 of the largest), scaled so the largest is ``shaped`` radii. None when ``H`` is 0."""
-        d = self.dim
-        H = np.diag(coef[1 + d:1 + 2 * d]).astype(float)
-        if self.full and d > 1:
-            i, j = np.triu_indices(d, 1)
-            H[i, j] = H[j, i] = coef[1 + 2 * d:]
-        lam, V = np.linalg.eigh(H)
+        lam, V = np.linalg.eigh(_curvature(coef, self.dim, self.full))
         lam = np.abs(lam)
         if not np.all(np.isfinite(lam)) or lam.max() <= 0:
             return None
@@ -323,11 +324,8 @@ class TrustRegion(Optimizer):
     def _previous_incumbent(self) -> np.ndarray | None:
         """The best point before the last improvement of the best (None before a second improvement)."""
         F = np.where(np.isfinite(self.F), self.F, np.inf)
-        if len(F) < 2:
-            return None
-        run = np.minimum.accumulate(F)
-        new = np.flatnonzero(F[1:] < run[:-1]) + 1  # evaluations that improved the best
-        new = np.concatenate(([0], new)) if np.isfinite(F[0]) else new
+        before = np.concatenate(([np.inf], np.minimum.accumulate(F)[:-1]))  # the best before each evaluation
+        new = np.flatnonzero(F < before)  # evaluations that improved the best
         if len(new) < 2:
             return None
         return self.X[new[-2]]
