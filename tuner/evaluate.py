@@ -80,6 +80,22 @@ class _SigintWatch:
         raise KeyboardInterrupt
 
 
+def watch_sigint() -> int:
+    """Count this process's SIGINTs from now on (main thread, default handler only); the count so far.
+
+    A run compares the count at each generation's end: a Ctrl-C whose KeyboardInterrupt was swallowed
+    (by an objective that catches it, or raised inside a ``__del__`` where Python only prints it) still
+    stops the run there.
+    """
+    _SigintWatch.install()
+    return _SigintWatch.count
+
+
+def sigint_count() -> int:
+    """SIGINTs counted since :func:`watch_sigint` (0 when not watched)."""
+    return _SigintWatch.count
+
+
 def _failure(exc: BaseException) -> Evaluation:
     tb = traceback.extract_tb(exc.__traceback__)
     where = f" at {tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno}" if tb else ""

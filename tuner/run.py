@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from tuner.config import ConfigError, RunConfig, config_from_dict
-from tuner.evaluate import EvalRecord, Evaluator
+from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
@@ -256,6 +256,7 @@ class Run:
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
         t_session, wall0 = time.perf_counter(), self.meta.timing.wall_s
         state = {"gens": 0, "t0": time.perf_counter()}
+        sigints = watch_sigint()
 
         def on_generation(g: Generation) -> None:
             state["gens"] += 1
@@ -282,6 +283,8 @@ class Run:
             now = time.perf_counter()
             self._progress(g, stages, now - state["t0"])
             state["t0"] = now
+            if sigint_count() != sigints:  # a Ctrl-C whose KeyboardInterrupt was swallowed on the way
+                raise _Interrupted()
 
         def on_term(signum, frame):  # SIGTERM behaves like Ctrl-C
             raise _Interrupted()

@@ -124,7 +124,7 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
 
 
 def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
-    job_file = _write_job(tmp_path, "int", sleep_s=0.05)
+    job_file = _write_job(tmp_path, "int", sleep_s=0.1)
     run_dir = tmp_path / "int"
     proc = start_cli_run(job_file, run_dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     ck = run_dir / "checkpoint.json"
@@ -132,8 +132,8 @@ def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     while not ck.exists() and time.time() < deadline:
         time.sleep(0.02)
     proc.send_signal(signal.SIGINT)
-    proc.wait(timeout=60)
-    assert proc.returncode == 1
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 1, (err, (run_dir / "meta.json").read_text())
     assert yaml.safe_load((run_dir / "meta.json").read_text())["status"] == "interrupted"
     res = resume(run_dir, quiet=True)
     assert res.status == "finished" and res.n_evals == 72

@@ -11,9 +11,17 @@ import pytest
 import yaml
 
 OBJ = '''
-import os, time
+import os, signal, time
+CALLS = []
 def f(p, mode="ok"):
     a = p["a"]
+    CALLS.append(a)
+    if mode == "swallow" and len(CALLS) == 3:  # the user's Ctrl-C, caught by the objective's own code
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        except KeyboardInterrupt:
+            pass
     if mode == "hang" and a > 0.8:
         time.sleep(3600)
     if mode == "exit" and a > 0.7:
@@ -101,6 +109,15 @@ def test_ctrl_c_from_the_user_still_interrupts(tmp_path):
     stdout, stderr = proc.communicate(timeout=60)
     assert proc.returncode == 1, stderr
     assert "status: interrupted" in stdout and "tuner resume" in stderr
+
+
+def test_ctrl_c_swallowed_by_the_objective_stops_the_run_at_the_generation_end(tmp_path):
+    """A KeyboardInterrupt that never reaches the run (caught by the objective, or raised in a
+    ``__del__``) still stops it: the run counts SIGINTs and checks the count after each generation."""
+    out = run(tmp_path, job(tmp_path, "swallow", pop=4, gens=5))
+    assert out.returncode == 1, out.stderr
+    assert "status: interrupted" in out.stdout and "tuner resume" in out.stderr
+    assert len(history(out)) == 4  # the generation in progress is completed and kept
 
 
 def test_a_crashed_loky_worker_gives_recorded_failures(tmp_path):
