@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import json
 import math
@@ -11,13 +12,14 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["RESULTS_DIR", "PEERS", "machine_facts", "peer", "median_rate", "write_result", "fmt", "md_table"]
+__all__ = ["RESULTS_DIR", "PEERS", "machine_facts", "peer", "scratch_cwd", "median_rate", "write_result", "fmt",
+           "md_table"]
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 
@@ -25,22 +27,32 @@ RESULTS_DIR = Path(__file__).resolve().parent / "results"
 PEERS = {"ahrs": "ahrs", "imufusion": "imufusion", "vqf": "vqf", "pyswarms": "pyswarms", "optuna": "optuna"}
 
 
-def peer(name: str) -> Any | None:
-    """Import a peer library, or None when it is not installed (the benchmark then reports it missing).
+@contextlib.contextmanager
+def scratch_cwd() -> Iterator[None]:
+    """Run the block in a temporary working directory, then return to the one before.
 
-    The import runs in a temporary working directory: pyswarms opens a log file ``report.log`` in the
-    working directory when it is imported, which left a stray file in the checkout after every benchmark."""
-    if name in sys.modules:
-        return sys.modules[name]
+    pyswarms opens ``report.log`` in the working directory when it is imported and again whenever it
+    builds an optimiser (each of its ``Reporter`` objects configures a file handler there); peers run in
+    here leave no stray file in the checkout. The benchmarks' objectives use absolute paths only."""
     cwd = os.getcwd()
     with tempfile.TemporaryDirectory() as d:
         os.chdir(d)
         try:
+            yield
+        finally:
+            os.chdir(cwd)
+
+
+def peer(name: str) -> Any | None:
+    """Import a peer library (in :func:`scratch_cwd`), or None when it is not installed (the benchmark
+    then reports it missing)."""
+    if name in sys.modules:
+        return sys.modules[name]
+    with scratch_cwd():
+        try:
             return importlib.import_module(name)
         except ImportError:
             return None
-        finally:
-            os.chdir(cwd)
 
 
 def _version(mod: str) -> str | None:

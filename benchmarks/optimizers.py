@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.common import RESULTS_DIR, fmt, md_table, peer, write_result
+from benchmarks.common import RESULTS_DIR, fmt, md_table, peer, scratch_cwd, write_result
 from benchmarks.problems import FULL_PROBLEMS
 
 __all__ = ["run", "METHODS", "OURS", "PEERS_Q", "run_method", "Budget", "evals_to_band"]
@@ -112,9 +112,12 @@ def _pyswarms(fn: Budget, dim: int, pop: int, seed: int) -> None:
     state = np.random.get_state()
     np.random.seed(seed)  # pyswarms draws from the global RNG
     try:
-        opt = ps.single.GlobalBestPSO(n_particles=pop, dimensions=dim, options={"c1": 0.5, "c2": 0.3, "w": 0.9},
-                                      bounds=(np.zeros(dim), np.ones(dim)))
-        opt.optimize(lambda X: np.array([fn(x) for x in X]), iters=math.ceil(fn.budget / pop) + 1, verbose=False)
+        with scratch_cwd():  # its Reporters open report.log in the working directory
+            opt = ps.single.GlobalBestPSO(n_particles=pop, dimensions=dim,
+                                          options={"c1": 0.5, "c2": 0.3, "w": 0.9},
+                                          bounds=(np.zeros(dim), np.ones(dim)))
+            opt.optimize(lambda X: np.array([fn(x) for x in X]), iters=math.ceil(fn.budget / pop) + 1,
+                         verbose=False)
     finally:
         np.random.set_state(state)
 
