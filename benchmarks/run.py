@@ -68,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
                       "BROAD config for broad_cv)")
     mode.add_argument("--smoke", action="store_true", help="tiny sizes, to check the suite works")
     ap.add_argument("--only", nargs="+", choices=BENCHMARKS, help="run only these benchmarks")
+    ap.add_argument("--summary-only", action="store_true",
+                    help="run nothing: rebuild SUMMARY.md from the results stored in the output directory (e.g. "
+                         "after benchmarks.optimizers_merge)")
     ap.add_argument("--out", type=Path, default=None, help="output directory")
     ap.add_argument("--n-jobs", type=int, default=2, help="worker processes where a benchmark uses them")
     args = ap.parse_args(argv)
@@ -76,11 +79,12 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     root = str(Path(__file__).resolve().parent.parent)
     os.environ["PYTHONPATH"] = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
-    missing = [pip for mod, pip in PEERS.items() if peer(mod) is None]
+    to_run = [] if args.summary_only else (args.only or BENCHMARKS)
+    missing = [pip for mod, pip in PEERS.items() if to_run and peer(mod) is None]
     if missing:
         print(f"peers not installed, skipped: {', '.join(missing)}  (to compare: {INSTALL_HINT})", flush=True)
     sections = []
-    for name in args.only or BENCHMARKS:
+    for name in to_run:
         print(f"[bench] {name} ...", flush=True)
         t = time.perf_counter()
         try:
@@ -96,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
         path = write_result(name, {"mode": "smoke" if smoke else "full", **res}, out)
         print(f"[bench] {name}: {res['seconds']:.1f} s -> {path}", flush=True)
         sections.append((name, res))
-    if args.only:  # keep the other benchmarks' latest results in the summary
+    if args.only or args.summary_only:  # keep the other benchmarks' latest results in the summary
         import json
 
         ran = dict(sections)
