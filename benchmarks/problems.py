@@ -14,7 +14,7 @@ madgwick_broad     Madgwick (beta, zeta) on the first 90 s of BROAD 07 (undistur
 mahony_broad       Mahony (Kp, Ki) on the same trials and metric
 ekf_bench6dof      quaternion EKF (q_q, q_w, rho) on a 20 s synthetic 6-DOF bench recording,
                    FAEKF paper eq. 35 (2 s warm-up left out)
-faekf_bench6dof    fuzzy-adaptive EKF (q_q, q_w, rho, K1..K7), same data and metric
+faekf_bench6dof    fuzzy-adaptive EKF (q_q, q_w, rho, K2..K7; K1 = 1), same data and metric
 kf1d_tilt1d        the thesis 1-D tilt KF (rho, q00, q11) on a 20 s tilt bench, thesis eq. 3.18
 pid_wmp            PID equivalents on the wheeled mobile pendulum, 10 s thesis profile, eq. 2.39
                    (``configs/wmp_pid.yaml``)
@@ -99,7 +99,7 @@ def _faekf(smoke: bool) -> Problem:
     return _filter("faekf_bench6dof", {"filter": "faekf", "data": _bench_data("bench6dof", smoke),
                                        "fixed": {"window": 400, "fft_length": 512, "f_thr": 10.0, "omega_thr": 0.26},
                                        "metric": "euler_mse_geomean", "warmup_s": 2.0},
-                   {}, "FAEKF (q_q, q_w, rho, K1..K7), bench6dof 20 s, eq. 35")
+                   {}, "FAEKF (q_q, q_w, rho, K2..K7), bench6dof 20 s, eq. 35")
 
 
 def _kf1d(smoke: bool) -> Problem:

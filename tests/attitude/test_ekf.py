@@ -248,9 +248,10 @@ def test_faekf_scale_changes_estimate_in_the_right_direction():
 # --- parameters, space, validation ------------------------------------------------------------
 def test_space_dimensions_and_defaults():
     assert EKF.space().dim == 3
-    assert FAEKF.space().dim == 3 + 7
+    assert FAEKF.space().dim == 3 + 6  # K1 stays at 1: test_faekf_rho_and_singletons_share_one_scale
+    assert FAEKF.space().fixed["K1"] == 1.0 and "K1" not in FAEKF.space().free_names
     big = FAEKF.space(tune_fuzzy=True)
-    assert big.dim == 3 + 7 + 18
+    assert big.dim == 3 + 6 + 18
     assert EKF.defaults["q_q"] == 1.45e-6 and EKF.defaults["q_w"] == 9.71e-10 and EKF.defaults["rho"] == 3.53
     paper = {"window": 400, "fft_length": 512, "f_thr": 10.0, "omega_thr": 0.26}  # section 5.2
     assert {k: FAEKF.defaults[k] for k in paper} == paper
@@ -319,6 +320,28 @@ def test_bench_noise_ekf_beats_gyro_and_triad():
     mse_tri = euler_stats(triad_batch(rec.acc, rec.mag, "NED"), rec.quat).mse_rad2
     assert np.all(mse_ekf < mse_gyr), (mse_ekf, mse_gyr)
     assert np.all(mse_ekf < mse_tri), (mse_ekf, mse_tri)
+
+
+def test_faekf_rho_and_singletons_share_one_scale():
+    """R_k = K_k rho (eq. 31): (c rho, K / c) is the same filter, bit for bit when c is a power of two (the
+    products are then exact), to rounding otherwise. This is why the default space holds K1 at 1."""
+    from objectives.attitude.data.synthetic import bench6dof
+
+    rec = bench6dof(12.0, 1000.0, seed=2)
+    ks = {f"K{i + 1}": k for i, k in enumerate((1.0, 3.0, 7.0, 40.0, 90.0, 300.0, 800.0))}
+    base = FAEKF(rho=0.3, **ks)
+    dist = base.disturbances(rec)
+    ref = base.run(rec, disturbances=dist)
+    assert base.scale(dist).max() > 10.0  # the recording's disturbances really scale R
+    for c, exact in ((4.0, True), (0.125, True), (10.0, False), (0.03, False)):
+        other = FAEKF(rho=0.3 * c, **{k: v / c for k, v in ks.items()}).run(rec, disturbances=dist)
+        if exact:
+            np.testing.assert_array_equal(other, ref)
+        else:
+            np.testing.assert_allclose(other, ref, rtol=0, atol=1e-9)
+    # a change that is not along that direction does change the estimate
+    moved = FAEKF(rho=0.3, **{**ks, "K5": 80.0}).run(rec, disturbances=dist)
+    assert np.abs(moved - ref).max() > 1e-6
 
 
 @pytest.mark.parametrize("seed", [1, 2])

@@ -1,8 +1,8 @@
 """The FAEKF paper's claim (Odry et al. 2020, Sensors 20, 803, Table 2) with the project's engine.
 
 On short ``bench6dof`` recordings with vibration, external acceleration and magnetic perturbation,
-PSO tunes the EKF (q_q, q_w, rho of eq. 36) and the fuzzy-adaptive EKF (the same plus K1..K7 of
-Table 1) with the same budget and seed; the tuned FAEKF must score better than the tuned EKF on the
+PSO tunes the EKF (q_q, q_w, rho of eq. 36) and the fuzzy-adaptive EKF (the same plus K2..K7 of
+Table 1; K1 = 1) with the same budget and seed; the tuned FAEKF must score better than the tuned EKF on the
 training recordings and on held-out ones. Table 2 reports the FAEKF ahead on all three measurements
 (M1-M3; the eq.-35 product of its MSEs is 3-50x smaller than the EKF's), so the test asserts a
 margin, not just a win. Fitness: eq. 35 with ``normalize: true`` (the geometric mean of the
