@@ -328,7 +328,7 @@ NOTES = """## Deviations and open points
   Tilt (thesis profile, deg^2): with P0 = 0 tuned Mahony stays best (0.25; KF 0.55, AKF 0.73,
   AKF+fuzzy 0.78 at seed 1): target "AKF best" not met, explained by the KF's start with P0 = 0; with
   the initial bias variance searched the KF family leads and AKF+fuzzy is best at one seed of three
-  (docs/tilt-bench.md). FAEKF vs EKF -56 % (paper 52-87 %: met).
+  (docs/tilt-bench.md). FAEKF vs EKF -73 % (paper 52-87 %: met; -56 % while K1 was searched too).
   F_init +6.9 % (target 5 %: not met) and PSO -57.3 % (target 40-55 %: not met), both explained above.
 - **Control.** F_init and the 150 x 150 PSO are measured by `make papers`; the four-controller
   comparison is quoted from docs/control-cost.md, not rerun here.
