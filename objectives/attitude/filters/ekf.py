@@ -146,8 +146,8 @@ K_BOUNDS = (1.0, 1000.0)
 #: bit when c is a power of two): one direction of (rho, K1..K7) changes nothing. Holding K1 at 1, the undisturbed
 #: state where "the adaptive strategy does not modify the noise variances", removes it: rho is then the
 #: undisturbed R and K2..K7 >= 1 its growth with the disturbance. With K1 searched, the better optimum of the
-#: bench6dof problem needs rho and K1..K7 to line up along that direction; PSO with the paper's settings
-#: (30 x 30) found it in 2 of 10 seeds with K1 searched and in 10 of 10 with K1 = 1
+#: bench6dof problem was a thin ridge along that direction; PSO with the paper's settings (30 x 30) found it
+#: in 2 of 10 seeds with K1 searched and in 19 of 30 with K1 = 1, the trust region in 26 of 30
 #: (benchmarks/results/auto_rules.md). A ``parameters:`` section that gives K1 bounds searches it.
 SEARCHED_K = ("K2", "K3", "K4", "K5", "K6", "K7")
 
