@@ -99,7 +99,7 @@ def _ours(method: str, fn: Budget, dim: int, pop: int, seed: int) -> None:
     if method == "cmaes":
         if dim < 2:
             return
-        opt = get_optimizer("cmaes")(dim, rng, max_evals=fn.budget)
+        opt = get_optimizer("cmaes")(dim, rng, generations=None, max_evals=fn.budget)  # else capped at 50
     else:
         opt = get_optimizer(name)(dim, rng, population=pop, generations=gens, **opts)
     # the unit cube as a Space decodes u to itself (0 + u * 1), so fn sees exactly what the optimiser asked
