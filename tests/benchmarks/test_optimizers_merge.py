@@ -34,4 +34,3 @@ def test_merge_keeps_each_problem_and_rebuilds_the_report(tmp_path):
         assert f"| {prob} |" in merged["markdown"] and (tmp_path / "all" / f"quality_{prob}.png").exists()
     assert set(merged["results"]["verdicts"]) == {"kf1d_tilt1d", "ekf_bench6dof"}
     assert all(isinstance(t["pass"], bool) for t in merged["targets"])
-
