@@ -9,10 +9,12 @@ from tuner.optimizers.auto import choose
 
 
 @pytest.mark.parametrize("dim, budget, expected", [
-    (1, 100, "pso"), (1, None, "pso"), (5, 120, "pso"), (5, 150, "cmaes"), (10, 299, "pso"),
+    (1, 100, "pso"), (1, None, "pso"), (5, 120, "pso"), (5, 149, "pso"), (10, 299, "pso"),
     (1, 99, "trust_region"), (2, 120, "trust_region"), (4, 399, "trust_region"), (4, 400, "cmaes"),
     (2, 40, "trust_region"), (2, None, "cmaes_restart"),
-     (5, 1499, "cmaes"), (5, 1500, "cmaes_restart"),
+    (5, 150, "trust_region"), (5, 499, "trust_region"), (5, 500, "cmaes"), (10, 300, "trust_region"),
+    (10, 999, "trust_region"), (10, 1000, "cmaes"), (11, 330, "cmaes"), (15, 900, "cmaes"),
+    (5, 1499, "cmaes"), (5, 1500, "cmaes_restart"),
     (10, 6000, "cmaes_restart"), (3, None, "cmaes_restart"),
 ])
 def test_rules(dim, budget, expected):
@@ -20,15 +22,15 @@ def test_rules(dim, budget, expected):
 
 
 def test_budget_is_population_times_generations_and_is_kept():
-    o = Auto(5, np.random.default_rng(0), population=20, generations=15)  # 300 evaluations
-    assert o.chosen == "cmaes" and o.max_evals == 300 and o.generations is None
+    o = Auto(5, np.random.default_rng(0), population=20, generations=30)  # 600 evaluations
+    assert o.chosen == "cmaes" and o.max_evals == 600 and o.generations is None
     assert o.describe() == "auto -> cmaes"
     n = 0
     while not o.done:
         u = o.ask()
         o.tell(u, np.sum(u * u, axis=1))
         n += len(u)
-    assert 300 <= n < 300 + o.population
+    assert 600 <= n < 600 + o.population
     assert OPTIMIZERS["auto"] is Auto
 
 
@@ -49,8 +51,8 @@ def test_auto_matches_the_chosen_method_run_directly():
     from tuner.optimizers import CMAES
 
     f, (lo, hi) = FUNCTIONS["rastrigin"]
-    a = Auto(5, np.random.default_rng(4), max_evals=400, generations=None)
-    b = CMAES(5, np.random.default_rng(4), max_evals=400, generations=None)
+    a = Auto(5, np.random.default_rng(4), max_evals=600, generations=None)
+    b = CMAES(5, np.random.default_rng(4), max_evals=600, generations=None)
     for _ in range(10):
         ua, ub = a.ask(), b.ask()
         np.testing.assert_array_equal(ua, ub)
