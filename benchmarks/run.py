@@ -74,6 +74,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=None, help="output directory")
     ap.add_argument("--n-jobs", type=int, default=2, help="worker processes where a benchmark uses them")
     args = ap.parse_args(argv)
+    if args.summary_only and args.only:
+        ap.error("--summary-only runs nothing; leave out --only")
     smoke = bool(args.smoke)
     out = args.out or (Path(tempfile.gettempdir()) / "tuner-bench-smoke" if smoke else RESULTS_DIR)
     out.mkdir(parents=True, exist_ok=True)
@@ -113,6 +115,10 @@ def main(argv: list[str] | None = None) -> int:
                 if prev.get("mode") == ("smoke" if smoke else "full"):
                     prev["markdown"] = f"(from an earlier run, {prev['machine']['utc']})\n\n" + prev.get("markdown", "")
                     sections.append((name, prev))
+    if not sections:  # --summary-only on a directory without results: keep whatever SUMMARY.md is there
+        print(f"error: {out}: no stored {'smoke' if smoke else 'full'} benchmark results to summarise",
+              file=sys.stderr)
+        return 2
     summary = _summary(out, sections, machine_facts(), smoke, sum(float(r.get("seconds") or 0) for _, r in sections))
     print(f"[bench] summary: {summary}")
     return 1 if any("error" in r for _, r in sections) else 0
