@@ -153,6 +153,16 @@ def _metrics(m: dict[str, Any]) -> dict[str, Any]:
     return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
 
 
+def _preload_report() -> None:
+    """Import the live report's modules (pandas among them) before the first generation. Imported on the
+    first generation's report instead, a Ctrl-C landing inside that import (it takes about a second)
+    leaves the modules half-initialised, and the interrupted run could not write its final report."""
+    try:
+        import tuner.report  # noqa: F401
+    except Exception:  # the report is a view: _live_report warns when it cannot be written
+        pass
+
+
 class _Interrupted(Exception):
     pass
 
@@ -299,6 +309,7 @@ class Run:
         if self.progress and hasattr(optimizer, "describe"):  # e.g. the method `auto` picked
             self.progress(f"optimizer: {optimizer.describe()}")
         try:
+            _preload_report()
             while True:
                 res = minimize(SeededCall(self.objective), space, optimizer, replay, on_generation,
                                seed=self.cfg.seed, stage=stage, first_eval=n_evals, best=best, n_failed=n_failed)
@@ -406,9 +417,9 @@ class Run:
 
     def _live_report(self, final: bool = False) -> None:
         """report.html of the running run (throttled), or a last non-reloading one when ``final``."""
-        from tuner.report import write_live_report
+        try:  # the import too: a Ctrl-C that cut its first import short leaves pandas half-initialised
+            from tuner.report import write_live_report
 
-        try:
             write_live_report(self.dir, self.meta.to_dict(), final=final)
         except Exception as exc:  # pragma: no cover - a live view must not stop the run
             if self.progress:

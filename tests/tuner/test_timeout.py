@@ -22,6 +22,11 @@ def f(p, mode="ok"):
             time.sleep(5)
         except KeyboardInterrupt:
             pass
+    if mode == "brokenreport" and len(CALLS) == 5:  # Ctrl-C after the report modules broke (half-imported)
+        import sys
+        sys.modules["tuner.report"] = None
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(5)
     if mode == "hang" and a > 0.8:
         time.sleep(3600)
     if mode == "exit" and a > 0.7:
@@ -118,6 +123,17 @@ def test_ctrl_c_swallowed_by_the_objective_stops_the_run_at_the_generation_end(t
     assert out.returncode == 1, out.stderr
     assert "status: interrupted" in out.stdout and "tuner resume" in out.stderr
     assert len(history(out)) == 4  # the generation in progress is completed and kept
+
+
+def test_ctrl_c_ends_the_run_as_interrupted_even_when_the_report_cannot_be_imported(tmp_path):
+    """A Ctrl-C that lands inside the report's first import leaves pandas half-initialised; the final report
+    of the interrupted run then fails to import. That is a warning, not a traceback: the run still ends
+    `interrupted`, resumable, with what it computed."""
+    out = run(tmp_path, job(tmp_path, "brokenreport", pop=2, gens=5))
+    assert out.returncode == 1, out.stderr
+    assert "status: interrupted" in out.stdout and "tuner resume" in out.stderr
+    assert "warning: live report not written" in out.stderr and "Traceback" not in out.stderr
+    assert len(history(out)) == 2  # the first generation, kept
 
 
 def test_a_crashed_loky_worker_gives_recorded_failures(tmp_path):
