@@ -5,7 +5,7 @@ controller parameter array (a design that cannot be built fails as in the serial
 ``@njit(parallel=True)`` kernel then runs the closed-loop driver :func:`objectives.control.wmp._simulate`
 for every candidate, threads sharing the reference profile and the sensor noise, and scores the run
 where it was simulated: the error measures of eqs. 2.34-2.35, the means and F of eq. 2.39, the rise
-times and peaks of :meth:`ClosedLoopObjective._evaluation`, with the summation order of NumPy
+times, IB settling time and peaks of :meth:`ClosedLoopObjective._evaluation`, with the summation order of NumPy
 (:func:`objectives.control.metrics._measures_kernel`). Python only turns each candidate's row of
 :data:`_N_STATS` numbers into its :class:`~tuner.objective.Evaluation`, as ``_evaluation`` does, so each
 result equals what ``__call__`` returns, bit for bit (tests/control/test_closed_loop_batch.py).
@@ -28,7 +28,13 @@ import numpy as np
 from numba import njit, prange
 
 from objectives.batch_threads import _pairwise_sum, claim, counter, use_threads
-from objectives.control.metrics import _measures_kernel, _weighted_cost_kernel, cost_exponents, log10_product
+from objectives.control.metrics import (
+    SETTLE_BAND_DEG,
+    _measures_kernel,
+    _weighted_cost_kernel,
+    cost_exponents,
+    log10_product,
+)
 from objectives.control.wmp import STATUS_NAMES, STATUS_OK, _simulate
 from tuner.objective import Evaluation
 
@@ -37,9 +43,10 @@ __all__ = ["evaluate_batch"]
 #: a candidate's row of the kernel's statistics: 4 measures (SAE, SSE, STAE, STSE) of each error ...
 _ERRORS = ("nu", "xi", "omega3")
 _MEASURES = ("sae", "sse", "stae", "stse")
-#: ... then these (rise: the first sample index reaching 90 %, -1 if none; peaks: |.| maxima, NaN if none)
-_MAE_NU, _MAE_XI, _MAE_W3, _MS_I, _RISE_NU, _RISE_XI, _PEAK_TH3, _PEAK_I, _COST = range(12, 21)
-_N_STATS = 21
+#: ... then these (rise: the first sample index reaching 90 %, -1 if none; peaks: |.| maxima, NaN if none;
+#: settle: samples until the IB angle stays within the band, -1 if the speed reference never steps)
+_MAE_NU, _MAE_XI, _MAE_W3, _MS_I, _RISE_NU, _RISE_XI, _PEAK_TH3, _PEAK_I, _COST, _SETTLE = range(12, 22)
+_N_STATS = 22
 
 
 @njit(cache=False)
@@ -53,6 +60,21 @@ def _rise_index(y, col, win):
         if (y[k, col] - win[2]) / (win[3] - win[2]) >= 0.9:
             return k - k0
     return -1
+
+
+@njit(cache=False)
+def _settle_count(y, win, band):
+    """Samples from the speed step until the IB angle (deg) stays within ``band`` of its value at the end
+    of the window ``win = (k0, end, r0, r1)`` (:func:`objectives.control.metrics.settling_time_s`); -1 if
+    ``k0 < 0`` (no step)."""
+    k0, end = int(win[0]), int(win[1])
+    if k0 < 0:
+        return -1
+    last = y[end - 1, 1] * (180.0 / np.pi)  # np.degrees
+    for k in range(end - 1, k0 - 1, -1):
+        if not abs(y[k, 1] * (180.0 / np.pi) - last) <= band:
+            return k + 1 - k0
+    return 0
 
 
 @njit(cache=False)
@@ -91,6 +113,7 @@ def _score_run(ref, y, ts, wins, expo, e, tmp, out):
     out[_MS_I] = _pairwise_sum(tmp, 0, n) / n
     out[_RISE_NU] = _rise_index(y, 0, wins[0])
     out[_RISE_XI] = _rise_index(y, 3, wins[1])
+    out[_SETTLE] = _settle_count(y, wins[0], SETTLE_BAND_DEG)
     for i in range(4):
         terms[i] = out[_MAE_NU + i]
     out[_COST] = _weighted_cost_kernel(terms, expo)
@@ -172,7 +195,8 @@ def _evaluation(obj: Any, st: int, done: int, s: np.ndarray, wins: np.ndarray) -
     rise = [float(int(s[k])) * ts if s[k] >= 0 else (math.inf if wins[i, 0] >= 0 else math.nan)
             for i, k in enumerate((_RISE_NU, _RISE_XI))]
     metrics.update({"mae_nu": float(s[_MAE_NU]), "mae_xi": float(s[_MAE_XI]), "mae_omega3": float(s[_MAE_W3]),
-                    "ms_current": float(s[_MS_I]), "rise_time_nu_s": rise[0], "rise_time_xi_s": rise[1]})
+                    "ms_current": float(s[_MS_I]), "rise_time_nu_s": rise[0], "rise_time_xi_s": rise[1],
+                    "settle_theta3_s": float(int(s[_SETTLE])) * ts if s[_SETTLE] >= 0 else math.nan})
     metrics.update(peak)
     return obj._scored(float(s[_COST]), metrics)
 

@@ -39,6 +39,8 @@ class ControllerResult:
     peak_theta3_deg, peak_current_A : peak |IB angle| (deg) and peak |average current| (A), tuned.
     rise_time_nu_s, rise_time_xi_s : 0-90 % rise times of the first speed and yaw steps (s), tuned.
     response : path of ``response_best.npz`` (``None`` if the run has none).
+    settle_theta3_s : time until the IB angle stays within 5 deg after the first speed step (s, Table
+        2.4's T_5deg), tuned; NaN for runs stored before the metric existed.
     """
 
     job: str
@@ -51,6 +53,7 @@ class ControllerResult:
     rise_time_xi_s: float
     response: pathlib.Path | None
     initial_error: str = ""
+    settle_theta3_s: float = math.nan
 
 
 def collect_runs(sweep_dir: str | pathlib.Path) -> list[ControllerResult]:
@@ -82,6 +85,7 @@ def collect_runs(sweep_dir: str | pathlib.Path) -> list[ControllerResult]:
                 rise_time_xi_s=float(m.get("rise_time_xi_s", math.nan)),
                 response=npz if npz.exists() else None,
                 initial_error=str(ev.get("initial_error", "")),
+                settle_theta3_s=float(m.get("settle_theta3_s", math.nan)),
             )
         )
     return out
@@ -91,7 +95,7 @@ def comparison_table(results: list[ControllerResult]) -> str:
     """Markdown table, best F first."""
     head = (
         "| controller | F tuned | F initial | improvement % | peak IB angle (deg) | peak current (A) "
-        "| rise speed (s) | rise yaw rate (s) |\n|---|---|---|---|---|---|---|---|"
+        "| rise speed (s) | rise yaw rate (s) | IB settles (s) |\n|---|---|---|---|---|---|---|---|---|"
     )
     rows = []
     for r in sorted(results, key=lambda r: r.fitness):
@@ -101,7 +105,7 @@ def comparison_table(results: list[ControllerResult]) -> str:
             init = f"failed: {r.initial_error or 'see the run'} | -"
         rows.append(
             f"| {r.controller} | {r.fitness:.4f} | {init} | {r.peak_theta3_deg:.1f} "
-            f"| {r.peak_current_A:.3f} | {r.rise_time_nu_s:.2f} | {r.rise_time_xi_s:.2f} |"
+            f"| {r.peak_current_A:.3f} | {r.rise_time_nu_s:.2f} | {r.rise_time_xi_s:.2f} | {r.settle_theta3_s:.2f} |"
         )
     return "\n".join([head, *rows])
 

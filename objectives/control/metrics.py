@@ -4,7 +4,7 @@
 - the overall value of a measure as log10 of the product over the errors (eq. 2.36);
 - the MAE-weighted cost F of eq. 2.39, in SI units;
 - the rise time of a step response (Table 2.4's T_rise, the "reference achieved in less than 0.7 s"
-  of section 2.3.4).
+  of section 2.3.4) and the settling time into a band (Table 2.4's T_5deg of the IB angle).
 
 Units. The thesis states none for eqs. 2.34-2.39; two different sets are consistent with its numbers.
 
@@ -48,7 +48,12 @@ __all__ = [
     "DEFAULT_COST_WEIGHTS",
     "error_integrals",
     "rise_time_s",
+    "settling_time_s",
+    "SETTLE_BAND_DEG",
 ]
+
+#: Table 2.4's T_5deg: the band (deg) the IB angle settles into after a speed step
+SETTLE_BAND_DEG = 5.0
 
 #: alpha1 (speed), alpha2 (yaw rate), beta (IB rate), gamma (current) of eq. 2.39
 DEFAULT_COST_WEIGHTS = {"alpha1": 1.4, "alpha2": 0.85, "beta": 1.6, "gamma": 0.4}
@@ -221,3 +226,30 @@ def rise_time_s(y, ref, Ts: float, k0: int, frac: float = 0.9) -> float:
     progress = (y[k0:end] - r0) / (r1 - r0)
     hit = np.flatnonzero(progress >= frac)
     return float(hit[0]) * Ts if hit.size else float("inf")
+
+
+def settling_time_s(y, ref, Ts: float, k0: int, band: float) -> float:
+    """Time from the reference step at sample ``k0`` until ``y`` stays within ``band`` of its value at
+    the end of the step's window (Table 2.4's T_5deg with ``y`` the IB angle in deg and ``band = 5``).
+
+    The window is that of :func:`rise_time_s`: from ``k0`` to where ``ref`` changes again (or the end).
+    A first-order decay ``A exp(-t / tau)`` that has died out by the window's end settles at
+    ``tau ln(A / band)``.
+
+    Returns
+    -------
+    (k + 1 - k0) Ts for the last k in the window with ``|y_k - y_end| > band`` (0 if ``y`` never
+    leaves the band). NaN in ``y`` counts as outside the band.
+    """
+    y, ref = _e(y), _e(ref)
+    if y.size != ref.size:
+        raise ValueError(f"y and ref must have equal length, got {y.size} and {ref.size}")
+    if not (0 <= k0 < ref.size):
+        raise ValueError(f"k0 must index the signals (0..{ref.size - 1}), got {k0}")
+    if not band > 0 or not Ts > 0:
+        raise ValueError(f"need band > 0 and Ts > 0, got band={band}, Ts={Ts}")
+    change = np.flatnonzero(ref[k0:] != ref[k0])
+    end = k0 + (int(change[0]) if change.size else ref.size - k0)
+    seg = y[k0:end]
+    out = np.flatnonzero(~(np.abs(seg - seg[-1]) <= band))
+    return float(out[-1] + 1) * Ts if out.size else 0.0

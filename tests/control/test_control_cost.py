@@ -160,3 +160,49 @@ def test_comparison_table_and_figure_from_runs(pid_run):
     assert "| pid |" in table and "peak current" in table
     out = write_comparison(sweep_dir)
     assert out.exists() and (sweep_dir / "figures" / "responses.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_settling_time_closed_form_first_order_decay():
+    from objectives.control.metrics import settling_time_s
+
+    ts, tau, a, band = 0.01, 0.2, 30.0, 5.0
+    t = np.arange(200) * ts
+    ref = np.full(t.size, 0.4)
+    y = a * np.exp(-t / tau)
+    # first sample within the band of the end value, which is where the decay stays inside it
+    expected = math.ceil(tau * math.log(a / (band + y[-1])) / ts - 1e-9) * ts
+    assert settling_time_s(y, ref, ts, 0, band) == pytest.approx(expected)
+    assert expected == pytest.approx(tau * math.log(a / band), abs=ts)
+    assert settling_time_s(np.full(t.size, 3.0), ref, ts, 0, band) == 0.0  # never leaves the band
+    y_nan = y.copy()
+    y_nan[150] = np.nan  # a NaN counts as outside
+    assert settling_time_s(y_nan, ref, ts, 0, band) == pytest.approx(1.51)
+    # the window ends where the reference changes: a late excursion after it does not count
+    ref2 = np.where(t < 1.0, 0.4, 0.0)
+    y2 = np.where(t < 1.0, y, 20.0)
+    assert settling_time_s(y2, ref2, ts, 0, band) == pytest.approx(expected)
+    with pytest.raises(ValueError, match="band"):
+        settling_time_s(y, ref, ts, 0, 0.0)
+
+
+@pytest.mark.parametrize("controller, thesis_settle_s", [("flc", 1.19), ("lqg", 0.85)])
+def test_ib_settling_times_match_table_2_4(controller, thesis_settle_s):
+    # Table 2.4 (simulation): the IB oscillation settles within 5 deg in 0.85 s (linear) and 1.19 s
+    # (fuzzy), section 2.2's initial designs; ours 0.87 s and 1.07 s
+    obj = ClosedLoopObjective(controller=controller, profile="thesis_2s")
+    assert obj(obj.defaults).metrics["settle_theta3_s"] == pytest.approx(thesis_settle_s, abs=0.15)
+
+
+def test_ib_settling_requirement_is_optional_and_enforced(fuzzy):
+    # "the oscillation of the IB is ... quickly suppressed (similarly, in less than 0.7 sec)" (2.3.4):
+    # a requirement key, not in the preset (docs/control-cost.md section 4)
+    assert "max_settle_theta3_s" not in THESIS_REQUIREMENTS and fuzzy.max_settle_theta3_s is None
+    ev = fuzzy(fuzzy.defaults)
+    assert ev.status == "ok" and ev.metrics["settle_theta3_s"] > 0.7  # the initial design: 1.22 s
+    strict = _objective("wmp_fuzzy_protective.yaml", max_settle_theta3_s=0.7)
+    ev = strict(strict.defaults)
+    assert ev.status == "failed" and "settles within 5 deg" in ev.error and "max_settle_theta3_s" in ev.error
+    loose = _objective("wmp_fuzzy_protective.yaml", requirements={"max_settle_theta3_s": 2.0})
+    assert loose(loose.defaults).status == "ok"
+    with pytest.raises(ValueError, match="max_settle_theta3_s"):
+        _objective("wmp_fuzzy_protective.yaml", max_settle_theta3_s=-1.0)
