@@ -31,7 +31,9 @@ Q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])
 
 
 # Computed with the kernels of commit 743dcad (before the robust blocks existed), on the recordings below; they
-# hold for the pinned NumPy/numba on x86-64 (see tests/attitude/test_synthetic_identity.py after an upgrade).
+# hold for the pinned NumPy/numba on x86-64 (see tests/attitude/test_synthetic_identity.py after an upgrade). The two
+# ``*_imu`` digests are kept for the record only: those outputs differ in the last bits between x86-64 CPUs, and
+# the test checks them against the slow reference.
 PAPER_DIGESTS = {
     "madgwick": "24877de877c26ac86f22a36ad5ff678e774b50d3ffdf71de89fb9a36bcc34725",
     "madgwick_zeta_c": "e45c3011386b4b5204b83bfa1f8ce7c40cfc00b94d327a480b75beb36cf68023",
@@ -55,9 +57,7 @@ def test_blocks_off_is_the_recorded_paper_filter(options):
     got = {}
     for key, f, r in (("madgwick", Madgwick(**options), rec),
                       ("madgwick_zeta_c", Madgwick(beta=0.05, zeta=0.02, variant="original_c", **options), rec2),
-                      ("madgwick_imu", Madgwick(use_mag=False, zeta=0.01, **options), rec),
-                      ("mahony", Mahony(**options), rec), ("mahony_ki", Mahony(Kp=0.8, Ki=0.05, **options), rec2),
-                      ("mahony_imu", Mahony(use_mag=False, Ki=0.02, **options), rec)):
+                      ("mahony", Mahony(**options), rec), ("mahony_ki", Mahony(Kp=0.8, Ki=0.05, **options), rec2)):
         res = f.run_detailed(r)
         got[key] = digest(res.quat, *([res.diagnostics["gyr_bias"]] if "gyr_bias" in res.diagnostics else []))
     g, a, m = degenerate_arrays(rec)
@@ -67,7 +67,15 @@ def test_blocks_off_is_the_recorded_paper_filter(options):
                    ("mahony_stream", Mahony(Kp=0.8, Ki=0.05, **options))):
         s = f.stream(rate_hz=100.0, frame=rec.frame)
         got[key] = digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
-    assert got == PAPER_DIGESTS
+    assert got == {k: v for k, v in PAPER_DIGESTS.items() if not k.endswith("_imu")}
+    # Gravity only, the heading is unobservable and keeps whatever rounding it picked up, so the IMU outputs
+    # are not the same bits on every CPU (the fastmath kernels compile to other operation orders; seen: two
+    # x86-64 targets 1e-4 apart from the first sample). They are checked against the slow reference instead.
+    nan = np.full_like(rec.mag, np.nan)  # the reference skips a non-finite magnetometer sample
+    got = madgwick_batch(rec.gyr, rec.acc, None, DT, Q0, beta=0.1, zeta=0.01, **options)
+    assert np.abs(got - madgwick_ref(rec.gyr, rec.acc, nan, DT, Q0, beta=0.1, zeta=0.01)).max() < 1e-9
+    got = mahony_batch(rec.gyr, rec.acc, None, DT, Q0, kp=1.0, ki=0.02, **options)
+    assert np.abs(got - mahony_ref(rec.gyr, rec.acc, nan, DT, Q0, kp=1.0, ki=0.02)).max() < 1e-9
 
 
 # --- the robust kernels against the slow references: blocks on, nothing to reject -----------------------------
