@@ -328,9 +328,10 @@ NOTES = """## Deviations and open points
 - **Thesis ch. 2 (pendulum).** F_init = 0.1122 (+6.9 %). No reading of the text closes the gap
   (docs/control-cost.md section 3): the units, sensor noise (0.1120 with ideal sensors), the gyro
   instead of the true IB rate, the current per motor (0.1123) and the integration step (0.1122 at
-  0.25 ms) move F by 0.2 % at most; the step spacing (2 s) is fixed by Table 2.5's time-weighted
-  integrals; the run length after the last step is not stated, and F scales with it (8.5 s instead
-  of 8 s: 0.1056, within 5 %). Nothing supports one value over another, and the model's own limits
+  0.25 ms) move F by 0.2 % at most. Only the profile's timing moves it: Table 2.5's time-weighted
+  integrals fit step spacings of 1.94-2.08 s equally well, over which F_init spans 0.1092-0.1145
+  (+4.1 to +9.2 %; we use the round 2 s), and the run length after the last step is not stated
+  (8.5 s instead of 8 s: 0.1056, within 5 %). Nothing supports one value over another, and the model's own limits
   show elsewhere: Table 2.5's absolute error integrals are not reproduced (SAE of the speed error of
   the section 2.2 fuzzy design 79 vs 30.5, of the IB rate 3-4x), and the thesis's tuned parameters
   improve F by 40 % on our model for every run length (thesis 46.8 %). The PSO (150 x 150, 22,500
