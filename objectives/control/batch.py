@@ -31,8 +31,10 @@ from objectives.batch_threads import _pairwise_sum, claim, counter, use_threads
 from objectives.control.metrics import (
     SETTLE_BAND_DEG,
     _measures_kernel,
+    _step_window,
     _weighted_cost_kernel,
     cost_exponents,
+    first_step,
     log10_product,
 )
 from objectives.control.wmp import STATUS_NAMES, STATUS_OK, _simulate
@@ -164,14 +166,11 @@ def _windows(ref: np.ndarray) -> np.ndarray:
     wins = np.full((2, 4), -1.0)
     for i in range(2):
         r = ref[:, i]
-        steps = np.flatnonzero(np.diff(np.concatenate(([0.0], r))) != 0)
-        if not steps.size:
+        k0 = first_step(r)
+        if k0 is None:
             continue
-        k0 = int(steps[0])
-        r0 = float(r[k0 - 1]) if k0 > 0 else 0.0
-        r1 = float(r[k0])
-        change = np.flatnonzero(r[k0:] != r1)
-        wins[i] = (k0, k0 + (int(change[0]) if change.size else r.size - k0), r0, r1)
+        _, _, end = _step_window(r, r, k0)
+        wins[i] = (k0, end, float(r[k0 - 1]) if k0 > 0 else 0.0, float(r[k0]))
     return wins
 
 

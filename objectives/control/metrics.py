@@ -47,6 +47,7 @@ __all__ = [
     "mae_weighted_cost",
     "DEFAULT_COST_WEIGHTS",
     "error_integrals",
+    "first_step",
     "rise_time_s",
     "settling_time_s",
     "SETTLE_BAND_DEG",
@@ -190,6 +191,25 @@ def cost_exponents(weights: Mapping[str, float] | None = None) -> np.ndarray:
     return np.array([w["alpha1"], w["alpha2"], w["beta"], w["gamma"]], dtype=float)
 
 
+def first_step(ref) -> int | None:
+    """Index of the first sample where ``ref`` differs from the sample before (from 0 before the start);
+    None if it never steps."""
+    steps = np.flatnonzero(np.diff(np.concatenate(([0.0], _e(ref)))) != 0)
+    return int(steps[0]) if steps.size else None
+
+
+def _step_window(y, ref, k0: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """``y`` and ``ref`` as float arrays and the end of the step window that starts at ``k0``: where ``ref``
+    changes again, or the end (:func:`rise_time_s`, :func:`settling_time_s`)."""
+    y, ref = _e(y), _e(ref)
+    if y.size != ref.size:
+        raise ValueError(f"y and ref must have equal length, got {y.size} and {ref.size}")
+    if not (0 <= k0 < ref.size):
+        raise ValueError(f"k0 must index the signals (0..{ref.size - 1}), got {k0}")
+    change = np.flatnonzero(ref[k0:] != ref[k0])
+    return y, ref, k0 + (int(change[0]) if change.size else ref.size - k0)
+
+
 def rise_time_s(y, ref, Ts: float, k0: int, frac: float = 0.9) -> float:
     """Time from the reference step at sample ``k0`` until ``y`` first covers ``frac`` of the step.
 
@@ -210,19 +230,13 @@ def rise_time_s(y, ref, Ts: float, k0: int, frac: float = 0.9) -> float:
     (k - k0) Ts for the first k >= k0 in the window with (y_k - r0) / (r1 - r0) >= frac, or ``inf``
     if the response never gets there within the window.
     """
-    y, ref = _e(y), _e(ref)
-    if y.size != ref.size:
-        raise ValueError(f"y and ref must have equal length, got {y.size} and {ref.size}")
-    if not (0 <= k0 < ref.size):
-        raise ValueError(f"k0 must index the signals (0..{ref.size - 1}), got {k0}")
     if not (0.0 < frac <= 1.0) or not Ts > 0:
         raise ValueError(f"need 0 < frac <= 1 and Ts > 0, got frac={frac}, Ts={Ts}")
+    y, ref, end = _step_window(y, ref, k0)
     r0 = float(ref[k0 - 1]) if k0 > 0 else 0.0
     r1 = float(ref[k0])
     if r1 == r0:
         raise ValueError(f"no reference step at sample {k0} (ref = {r1} before and after)")
-    change = np.flatnonzero(ref[k0:] != r1)
-    end = k0 + (int(change[0]) if change.size else ref.size - k0)
     progress = (y[k0:end] - r0) / (r1 - r0)
     hit = np.flatnonzero(progress >= frac)
     return float(hit[0]) * Ts if hit.size else float("inf")
@@ -241,15 +255,9 @@ def settling_time_s(y, ref, Ts: float, k0: int, band: float) -> float:
     (k + 1 - k0) Ts for the last k in the window with ``|y_k - y_end| > band`` (0 if ``y`` never
     leaves the band). NaN in ``y`` counts as outside the band.
     """
-    y, ref = _e(y), _e(ref)
-    if y.size != ref.size:
-        raise ValueError(f"y and ref must have equal length, got {y.size} and {ref.size}")
-    if not (0 <= k0 < ref.size):
-        raise ValueError(f"k0 must index the signals (0..{ref.size - 1}), got {k0}")
     if not band > 0 or not Ts > 0:
         raise ValueError(f"need band > 0 and Ts > 0, got band={band}, Ts={Ts}")
-    change = np.flatnonzero(ref[k0:] != ref[k0])
-    end = k0 + (int(change[0]) if change.size else ref.size - k0)
+    y, ref, end = _step_window(y, ref, k0)
     seg = y[k0:end]
     out = np.flatnonzero(~(np.abs(seg - seg[-1]) <= band))
     return float(out[-1] + 1) * Ts if out.size else 0.0

@@ -60,6 +60,7 @@ from objectives.control.metrics import (
     DEFAULT_COST_WEIGHTS,
     SETTLE_BAND_DEG,
     error_integrals,
+    first_step,
     mae_weighted_cost,
     rise_time_s,
     settling_time_s,
@@ -377,16 +378,14 @@ class ClosedLoopObjective:
 
     def _rise_time(self, y: np.ndarray, ref: np.ndarray) -> float:
         """0-90 % rise time (s) of the first step of ``ref`` away from 0 (NaN if it never steps)."""
-        steps = np.flatnonzero(np.diff(np.concatenate(([0.0], ref))) != 0)
-        return rise_time_s(y, ref, self._sensors.Ts_s, int(steps[0])) if steps.size else math.nan
+        k0 = first_step(ref)
+        return math.nan if k0 is None else rise_time_s(y, ref, self._sensors.Ts_s, k0)
 
     def _settle_time(self, theta3_deg: np.ndarray, ref_nu: np.ndarray) -> float:
         """Time (s) the IB angle takes to stay within 5 deg of its end value after the first speed step
         (Table 2.4's T_5deg; NaN if the speed reference never steps)."""
-        steps = np.flatnonzero(np.diff(np.concatenate(([0.0], ref_nu))) != 0)
-        if not steps.size:
-            return math.nan
-        return settling_time_s(theta3_deg, ref_nu, self._sensors.Ts_s, int(steps[0]), SETTLE_BAND_DEG)
+        k0 = first_step(ref_nu)
+        return math.nan if k0 is None else settling_time_s(theta3_deg, ref_nu, self._sensors.Ts_s, k0, SETTLE_BAND_DEG)
 
     def _violated(self, m: Mapping[str, float]) -> str:
         """The first tracking requirement ``m`` violates, as a message ('' if none)."""
