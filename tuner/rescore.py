@@ -53,10 +53,12 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     elif best_params is not None:
         params = best_params
     else:
-        default_params = hook(objective, "default_params")
-        if default_params is None:
+        from tuner.deployment import defaults_baseline
+
+        baseline = defaults_baseline(objective, space)  # the config's fixed values, searched ones at defaults
+        if baseline is None:
             raise ConfigError(target, "", "no parameters: give --params (a config has no best)")
-        params = {k: v for k, v in default_params().items() if k in space}
+        params = {k: v for k, v in baseline.items() if k in space}
     full = {**space.fixed, **params}
     missing = [n for n in space.free_names if n not in full]
     if missing:

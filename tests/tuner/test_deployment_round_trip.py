@@ -266,3 +266,36 @@ def test_function_objective_deploys_its_point(tmp_path):
     best = yaml.safe_load((run_dir / "best.yaml").read_text())
     dep = load_deployment(run_dir)
     assert dep.kind == "function" and dep.name == "sphere" and dep.values == best["params"]
+
+
+# --- baselines that mean one thing ---------------------------------------------------------------
+def test_both_ways_of_writing_a_fixed_value_give_the_same_defaults_baseline(tmp_path):
+    """"Defaults" = the config's fixed values with the searched parameters at the objective's defaults,
+    in ``tuner cv`` (cv.md) and ``tuner evaluate CONFIG``, whether a value is fixed under
+    ``objective.fixed`` or ``parameters: {x: {fixed: v}}``; with ``init: truth`` the two differed."""
+    from tuner.config import config_from_dict
+    from tuner.cv import cross_validate, cv_texts
+
+    data = [{"synthetic": {"generator": "bench6dof", "duration_s": 4.0, "rate_hz": 200.0, "seed": s}} for s in (1, 2)]
+    obj = {"kind": "filter", "filter": "mahony", "data": data, "metric": "euler_rmse_mean"}
+    search = {"Kp": {"low": 0.1, "high": 2.0, "scale": "log"}}
+    base = {"name": "base", "seed": 1, "optimizer": {"method": "pso", "population": 3, "generations": 1},
+            "parallel": {"backend": "serial"}}
+    a = config_from_dict({**base, "objective": {**obj, "fixed": {"init": "truth", "rest_bias": True}},
+                          "parameters": search}, base_dir=tmp_path)
+    b = config_from_dict({**base, "objective": obj,
+                          "parameters": {**search, "init": {"fixed": "truth"}, "rest_bias": True}}, base_dir=tmp_path)
+    c = config_from_dict({**base, "objective": obj, "parameters": search}, base_dir=tmp_path)  # nothing fixed
+    outs = [cross_validate(cfg, k=2, full=False) for cfg in (a, b, c)]
+    da, db, dc = ([f.default_fitness for f in o.folds] for o in outs)
+    assert da == db and all(math.isfinite(x) for x in da)
+    assert da != dc  # the fixed values do count: the baseline is not the bare filter's defaults
+    md, _ = cv_texts(outs[0])
+    assert "searched parameters at the objective's defaults" in md
+    cfgs = []
+    for name, cfg in (("a", a), ("b", b)):
+        p = tmp_path / f"{name}.yaml"
+        p.write_text(yaml.safe_dump({k: v for k, v in cfg.raw.items()}))
+        cfgs.append(evaluate_target(p)["fitness"])
+    assert cfgs[0] == cfgs[1] == pytest.approx(np.mean([outs[0].folds[0].default_fitness,
+                                                        outs[0].folds[1].default_fitness]), rel=1e-12)

@@ -121,7 +121,8 @@ def test_c_choices_are_defines_and_booleans_0_1(tmp_path):
     assert "Scoring only" in text and "M_WARMUP_S" not in text  # scoring settings are never values
     (tmp_path / "main.c").write_text(
         '#include <stdio.h>\n#include "t.h"\nint main(void) {\n'
-        '  printf("%d %d %d %d\\n", M_VARIANT == M_VARIANT_ORIGINAL_C, M_INIT == M_INIT_BROAD, M_USE_MAG, M_REST_BIAS);\n'
+        '  printf("%d %d %d %d\\n", M_VARIANT == M_VARIANT_ORIGINAL_C, M_INIT == M_INIT_BROAD,'
+        ' M_USE_MAG, M_REST_BIAS);\n'
         "  return 0;\n}\n")
     cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-o", "main", "main.c"],
                         cwd=tmp_path, capture_output=True, text=True, timeout=120)
