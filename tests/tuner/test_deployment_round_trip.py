@@ -138,7 +138,7 @@ def test_every_filter_kind_has_non_default_options():
     assert sorted(NONDEFAULT) == sorted(FILTERS)
 
 
-@pytest.mark.parametrize("name", FILTERS)
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "qraukf" else n for n in FILTERS])
 def test_filter_deployment_round_trip(name, tmp_path):
     from objectives.attitude import metrics as M
     from objectives.attitude.data.synthetic import synthetic
@@ -236,7 +236,7 @@ def _controller_fixed(cls):
     return out
 
 
-@pytest.mark.parametrize("name", CONTROLLERS)
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "flc" else n for n in CONTROLLERS])
 def test_controller_deployment_round_trip(name, tmp_path):
     from objectives.control.controllers import get_controller
     from objectives.control.objective import ClosedLoopObjective
