@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from tuner.config import ConfigError, RunConfig, config_from_dict
-from tuner.deployment import attach_deployment, load_deployment
+from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.objective import Evaluation
@@ -101,11 +101,6 @@ class RunResult:
 def read_meta(run_dir: Path) -> dict[str, Any]:
     """``meta.json`` of a run directory as a plain dict (typed: :meth:`tuner.rundir.RunDir.meta`)."""
     return RunDir(run_dir).meta().to_dict()
-
-
-def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """Every value of the run's deployed filter or controller (:func:`tuner.deployment.load_deployment`)."""
-    return dict(load_deployment(run_dir).values)
 
 
 def _git_commit() -> str:
