@@ -58,7 +58,9 @@ C_MAG_NEW_MIN_GYR = 39  # rad/s
 C_MAG_MIN_UNDIST = 40
 C_MAG_MAX_REJ = 41
 C_MAG_REJ_FACTOR = 42
-COEF_LEN = 43
+C_MAG_FIRST_AT_REST = 43  # 0/1: the first field is accepted without rotation
+C_K_MAG_REC = 44  # heading gain while the rejection budget recovers (0: k_mag)
+COEF_LEN = 45
 
 # --- state layout ------------------------------------------------------------------------------------
 S_GYR_Q = 0  # 4: strapdown quaternion (sensor to the drifting inertial frame)
@@ -151,6 +153,8 @@ def coefficients(v: dict, dt: float, use_mag: bool) -> np.ndarray:
     c[C_MAG_MIN_UNDIST] = v["mag_min_undisturbed_s"]
     c[C_MAG_MAX_REJ] = v["mag_max_rejection_s"]
     c[C_MAG_REJ_FACTOR] = v["mag_rejection_factor"]
+    c[C_MAG_FIRST_AT_REST] = float(v["mag_first_at_rest"])
+    c[C_K_MAG_REC] = _gain(v["mag_recover_tau_s"], dt) if v["mag_recover_tau_s"] > 0.0 else 0.0
     return c
 
 
@@ -486,7 +490,7 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                     cn = s[S_MAG_CAND_NORM]
                     if abs(nd - cn) < c[C_MAG_NORM_TH] * cn and abs(dip - s[S_MAG_CAND_DIP]) < c[C_MAG_DIP_TH]:
                         gl = math.sqrt(s[S_REST_GYR] ** 2 + s[S_REST_GYR + 1] ** 2 + s[S_REST_GYR + 2] ** 2)
-                        if gl >= c[C_MAG_NEW_MIN_GYR]:
+                        if gl >= c[C_MAG_NEW_MIN_GYR] or (c[C_MAG_FIRST_AT_REST] != 0.0 and ref_n == 0.0):
                             s[S_MAG_CAND_T] += dt
                         s[S_MAG_CAND_NORM] += kref * (nd - s[S_MAG_CAND_NORM])
                         s[S_MAG_CAND_DIP] += kref * (dip - s[S_MAG_CAND_DIP])
@@ -514,6 +518,9 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                         else:
                             k /= c[C_MAG_REJ_FACTOR]
                     else:
+                        if s[S_MAG_REJECT_T] > 0.0 and c[C_K_MAG_REC] > k:
+                            # fast re-convergence while the rejection budget recovers
+                            k = c[C_K_MAG_REC]
                         s[S_MAG_REJECT_T] = max(s[S_MAG_REJECT_T] - c[C_MAG_REJ_FACTOR] * dt, 0.0)
                 kin = s[S_K_MAG_INIT]
                 if kin != 0.0:

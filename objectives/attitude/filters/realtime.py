@@ -83,6 +83,10 @@ DECL = ParamSet("realtime", (
     Param("mag_rejection_factor", 2.0, (1.0, 10.0), "log", "1",
           "tau_mag_s multiplier after the rejection time; recovery speed of the rejection budget", _REF,
           Interval(1.0)),
+    Param("mag_first_at_rest", False, doc="accept the first field after mag_new_first_s of stable norm and dip "
+          "also at rest (VQF: only while rotating faster than mag_new_min_gyr_dps)"),
+    Param("mag_recover_tau_s", 0.0, unit="s", doc="heading time constant while the rejection budget recovers "
+          "after a disturbance (fast re-convergence; 0: tau_mag_s)", allowed=NONNEG),
 ))
 
 
