@@ -85,14 +85,15 @@ DECL = ParamSet("realtime", (
           Interval(1.0)),
     Param("mag_first_at_rest", False, doc="accept the first field after mag_new_first_s of stable norm and dip "
           "also at rest (VQF: only while rotating faster than mag_new_min_gyr_dps)"),
-    Param("mag_recover_tau_s", 0.0, unit="s", doc="heading time constant while the rejection budget recovers "
-          "after a disturbance (fast re-convergence; 0: tau_mag_s)", allowed=NONNEG),
+    Param("mag_recover_tau_s", 0.0, (1.0, 60.0), "log", "s", "heading time constant while the rejection budget "
+          "recovers after a disturbance (fast re-convergence; 0: tau_mag_s)", allowed=NONNEG),
 ))
 
 
 class Realtime(AttitudeFilter):
     """The causal ``realtime`` filter (see module docstring); searched by default: ``tau_acc_s``,
-    ``tau_mag_s``, ``mag_rejection_factor``."""
+    ``tau_mag_s``, ``mag_rejection_factor``, ``mag_recover_tau_s`` (default 0, off: on the lower bound for
+    a prior)."""
 
     name = "realtime"
     working_frame = "ENU"
