@@ -49,7 +49,8 @@ from tuner.figures import convergence_table
 from tuner.importance import importance_caption, quadratic_anova
 from tuner.render import md_escape
 
-__all__ = ["available", "install_assets", "SCRIPTS", "run_figures", "read_traces", "MAX_POINTS"]
+__all__ = ["available", "install_assets", "SCRIPTS", "run_figures", "sweep_figures", "read_traces", "best_so_far",
+           "MAX_POINTS"]
 
 #: the scripts an interactive page loads, in order (file names beside the page)
 SCRIPTS = ("plotly.min.js", "tuner_report.js")
@@ -64,7 +65,8 @@ def available() -> bool:
 
 def _plotly_js() -> Path:
     spec = find_spec("plotly")
-    assert spec is not None and spec.submodule_search_locations  # only called when available()
+    if spec is None or not spec.submodule_search_locations:
+        raise RuntimeError("plotly is not installed: interactive reports need pip install 'attitude-tuner[report]'")
     return Path(next(iter(spec.submodule_search_locations))) / "package_data" / "plotly.min.js"
 
 
@@ -231,3 +233,38 @@ def run_figures(run_dir: Path, hist: pd.DataFrame, space: Any, best: dict[str, A
             name = png.stem.replace("_", " ")
             md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
     return md, data
+
+
+def best_so_far(run_dir: Path, points: int = 200) -> dict[str, list[float]] | None:
+    """A run's best fitness so far against evaluations (``x``, ``y``; at most ``points``), or None."""
+    try:
+        h = pd.read_csv(run_dir / "history.csv", usecols=["eval", "fitness", "status"])
+    except (OSError, ValueError, pd.errors.ParserError, pd.errors.EmptyDataError):
+        return None
+    f = pd.to_numeric(h["fitness"], errors="coerce").where(h["status"] == "ok")
+    best = f.cummin().to_numpy()
+    x = (h["eval"].to_numpy() + 1).astype(float)
+    keep = np.isfinite(best)
+    if not keep.any():
+        return None
+    x, best = x[keep], best[keep]
+    if len(x) > points:
+        idx = np.unique(np.linspace(0, len(x) - 1, points).round().astype(int))
+        x, best = x[idx], best[idx]
+    return {"x": x.tolist(), "y": best.tolist()}
+
+
+def sweep_figures(sweep_dir: Path, job_ids: list[str]) -> tuple[list[str], dict[str, Any]]:
+    """The interactive section of a sweep report: every job's best-so-far fitness on one zoomable plot."""
+    runs = []
+    for job in job_ids:
+        c = best_so_far(Path(sweep_dir) / "jobs" / job)
+        if c is not None:
+            runs.append({"name": job, **c})
+    if not runs:
+        return [], {}
+    best = [min(r["y"]) for r in runs]
+    md = ["## Convergence of every job (interactive)", "", "Best fitness so far of each job against its evaluations; "
+          "click a job in the legend to hide it, double-click to show it alone.", "", "{{plot:convergence}}", ""]
+    return md, {"convergence": {"runs": runs}, "log_fitness": bool(min(best) > 0 and max(r["y"][0] for r in runs)
+                                                                   / min(best) > 20)}

@@ -321,7 +321,21 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     html_md = text if data is None else "\n".join(md[:at_figures] + fig_md + md[after_figures:])
     write_html(run_dir / "report.html", html_md, run_dir, title=title, refresh_s=refresh_s if running else None,
                scripts=interactive.SCRIPTS if data is not None else (), data=data)
+    _refresh_dashboard(run_dir, live)
     return path
+
+
+def _refresh_dashboard(run_dir: Path, live: bool) -> None:
+    """Rewrite the runs dashboard above ``run_dir`` (:mod:`tuner.dashboard`), if there is one (live: throttled)."""
+    from tuner.dashboard import find_dashboard, write_dashboard
+
+    root = find_dashboard(run_dir)
+    if root is None:
+        return
+    if live:
+        throttled(f"dashboard:{root}", lambda: write_dashboard(root, LIVE_REFRESH_S))
+    else:
+        write_dashboard(root, LIVE_REFRESH_S)
 
 
 def _interactive(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[str], dict[str, Any] | None]:

@@ -85,7 +85,7 @@ window.addEventListener('load', function () {
     var input = document.querySelector('input[type=search]');
     if (input) {
       var rows = document.querySelectorAll('#runs-table tbody tr');
-      var first = rows.length ? rows[0].cells[2].textContent : '';
+      var first = rows.length ? rows[rows.length - 1].cells[4].textContent : '';
       input.value = first;
       input.dispatchEvent(new Event('input'));
       res.dashboard = {rows: rows.length, filter: first, shown: [].filter.call(rows, function (r) {
@@ -150,7 +150,7 @@ def measure(page_path: Path, tmp_path: Path, width: int = 1200) -> dict:
 MIN_WINDOW = 500
 
 
-def _frame(page: Path, width: int, height: int, copy_result: bool = False) -> Path | None:
+def _frame(page: Path, width: int, height: int, copy_result: bool = False, fragment: str = "") -> Path | None:
     """For ``width`` < :data:`MIN_WINDOW`: a page beside ``page`` showing it in a ``width`` px iframe."""
     if width >= MIN_WINDOW:
         return None
@@ -165,22 +165,23 @@ setInterval(function () {
 </script>""" if copy_result else ""
     frame = page.parent / f"_frame_{page.stem}.html"
     frame.write_text(f'<!DOCTYPE html><html><head><meta charset="utf-8"></head><body style="margin:0">'
-                     f'<iframe src="{page.name}" style="width:{width}px;height:{height}px;border:0;display:block">'
+                     f'<iframe src="{page.name}{fragment}" style="width:{width}px;height:{height}px;border:0;display:block">'
                      f"</iframe>{copy}</body></html>")
     return frame
 
 
-def screenshot(page_path: Path, out: Path, tmp_path: Path, width: int = 1200, height: int = 3000) -> Path:
-    """A PNG of the top ``height`` px of the page at ``width`` px, after its scripts ran.
+def screenshot(page_path: Path, out: Path, tmp_path: Path, width: int = 1200, height: int = 3000,
+               fragment: str = "") -> Path:
+    """A PNG of the top ``height`` px of the page (URL + ``fragment``) at ``width`` px, after its scripts ran.
 
     Below :data:`MIN_WINDOW` px the window is 500 px wide and the page fills the left ``width`` px.
     """
     out.parent.mkdir(parents=True, exist_ok=True)
-    frame = _frame(Path(page_path), width, height)
+    frame = _frame(Path(page_path), width, height, fragment=fragment)
     try:
         subprocess.run([chromium(), *_FLAGS, f"--user-data-dir={tmp_path / 'profile2'}", f"--screenshot={out}",
                         f"--window-size={max(width, MIN_WINDOW)},{height}", "--virtual-time-budget=8000",
-                        f"file://{frame or Path(page_path)}"], capture_output=True, timeout=240)
+                        f"file://{frame}" if frame else f"file://{Path(page_path)}{fragment}"], capture_output=True, timeout=240)
     finally:
         if frame:
             frame.unlink()

@@ -227,6 +227,8 @@
 
   function dashboard(div, d) {
     var runs = d.runs, picked = store('tuner-dash-picked') || [], filt = store('tuner-dash-filter') || '';
+    var m = /^#compare=(.*)$/.exec(window.location.hash);  /* a shareable selection: index.html#compare=a,b */
+    if (m) { picked = decodeURIComponent(m[1]).split(','); }
     var controls = el('div', {'class': 'controls'});
     var lab = el('label', {}, 'filter: ');
     var input = el('input', {type: 'search', placeholder: 'name, filter, status ...', 'aria-label': 'filter runs'});
@@ -267,7 +269,8 @@
         } else {
           cell.textContent = fmt(r[c[0]]);
         }
-        if (c[0] === 'status') { cell.className = 'st-' + String(r.status).replace(/[^a-z]/g, ''); }
+        if (typeof r[c[0]] !== 'number') { cell.className = 'txt'; }
+        if (c[0] === 'date') { cell.textContent = String(r.date || '-').replace('T', ' ').slice(0, 16); }
         tr.appendChild(cell);
       });
       body.appendChild(tr);
