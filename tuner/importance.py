@@ -147,7 +147,8 @@ def quadratic_anova(u: np.ndarray, y: np.ndarray, names: list[str] | tuple[str, 
     for k, (i, j) in enumerate(pairs):
         inter[i, j] = inter[j, i] = coef[1 + 2 * d + k] ** 2 / 144.0
     total = float(main.sum() + np.triu(inter, 1).sum())
-    share = (main + 0.5 * inter.sum(axis=1)) / total if total > 0 else np.zeros(d)
+    # a constant fitness has nothing to explain (its fitted coefficients are rounding noise)
+    share = (main + 0.5 * inter.sum(axis=1)) / total if total > 0 and ss > 0 else np.zeros(d)
     return Importance(names, share, main, inter, r2, terms, n)
 
 
@@ -156,7 +157,7 @@ def importance_caption(imp: Importance) -> str:
     top = imp.order()[0]
     fit = ("closely" if imp.r2 >= 0.8 else "roughly" if imp.r2 >= 0.4 else "poorly")
     return (f"How much of the change in fitness rank over the searched region each parameter explains. A "
-            f"{imp.terms} model was fitted to the ranks of {imp.n} successful evaluations in the optimiser's "
+            f"model ({imp.terms} terms) was fitted to the ranks of {imp.n} successful evaluations in the optimiser's "
             f"coordinates (log scale for log parameters), and its variance split into each parameter's own "
             f"effect plus half of its joint effects with others (functional ANOVA). The model follows the "
             f"data {fit} (R^2 = {imp.r2:.2f}). Here {top} matters most: changing it moves the fitness most. "

@@ -10,7 +10,7 @@ it, and returns what it found as a dict:
 - ``plots``: per ``div.tuner-plot``: its name, whether the script marked it drawn, its size and the number
   of drawn traces (plotly ``g.trace`` groups) -- an empty or failed plot has 0;
 - ``sorts``: per sortable table, a column's cells before and after a click on its header;
-- ``dashboard``: rows shown after typing into the filter, and plots after ticking two runs.
+- ``dashboard``: rows shown after typing into the filter, and plots after ticking the last two rows.
 """
 
 from __future__ import annotations
@@ -53,7 +53,10 @@ function __plots() {
   return [].slice.call(document.querySelectorAll('div.tuner-plot')).map(function (d) {
     var r = d.getBoundingClientRect();
     return {name: d.getAttribute('data-plot'), rendered: d.getAttribute('data-rendered') === '1',
-            width: Math.round(r.width), height: Math.round(r.height), traces: d.querySelectorAll('g.trace').length};
+            width: Math.round(r.width), height: Math.round(r.height), traces: d.querySelectorAll('g.trace').length,
+            drawn: [].filter.call(d.querySelectorAll('g.trace path, g.trace image'),
+              function (p) { return p.tagName.toLowerCase() === 'image' || (p.getAttribute('d') || '').length > 10; }
+            ).length};
   });
 }
 function __wide() {
@@ -92,7 +95,7 @@ window.addEventListener('load', function () {
         return r.style.display !== 'none'; }).length};
       input.value = '';
       input.dispatchEvent(new Event('input'));
-      [].slice.call(document.querySelectorAll('#runs-table tbody input[type=checkbox]'), 0, 2).forEach(
+      [].slice.call(document.querySelectorAll('#runs-table tbody input[type=checkbox]'), -2).forEach(
         function (cb) { if (!cb.checked) { cb.click(); } });
     }
     setTimeout(function () {
@@ -100,7 +103,8 @@ window.addEventListener('load', function () {
       res.scrollWidth = document.documentElement.scrollWidth;
       res.innerWidth = window.innerWidth;
       res.images = imgs.length;
-      res.broken = imgs.filter(function (i) { return !(i.complete && i.naturalWidth > 0); }).map(function (i) { return i.alt; });
+      res.broken = imgs.filter(function (i) { return !(i.complete && i.naturalWidth > 0); })
+        .map(function (i) { return i.alt; });
       res.plots = __plots();
       res.wide = __wide();
       res.sorts = __sorts();
@@ -165,7 +169,8 @@ setInterval(function () {
 </script>""" if copy_result else ""
     frame = page.parent / f"_frame_{page.stem}.html"
     frame.write_text(f'<!DOCTYPE html><html><head><meta charset="utf-8"></head><body style="margin:0">'
-                     f'<iframe src="{page.name}{fragment}" style="width:{width}px;height:{height}px;border:0;display:block">'
+                     f'<iframe src="{page.name}{fragment}" '
+                     f'style="width:{width}px;height:{height}px;border:0;display:block">'
                      f"</iframe>{copy}</body></html>")
     return frame
 
@@ -181,7 +186,8 @@ def screenshot(page_path: Path, out: Path, tmp_path: Path, width: int = 1200, he
     try:
         subprocess.run([chromium(), *_FLAGS, f"--user-data-dir={tmp_path / 'profile2'}", f"--screenshot={out}",
                         f"--window-size={max(width, MIN_WINDOW)},{height}", "--virtual-time-budget=8000",
-                        f"file://{frame}" if frame else f"file://{Path(page_path)}{fragment}"], capture_output=True, timeout=240)
+                        f"file://{frame}" if frame else f"file://{Path(page_path)}{fragment}"],
+                       capture_output=True, timeout=240)
     finally:
         if frame:
             frame.unlink()

@@ -158,8 +158,8 @@
     return plot(div, [{type: 'bar', orientation: 'h', x: im.share.slice().reverse(),
                        y: im.names.slice().reverse().map(esc),
                        hovertemplate: '%{y}: %{x:.1%}<extra></extra>'}],
-                baseLayout({height: 80 + 30 * im.names.length, xaxis: {title: {text: 'share of explained variance'},
-                            tickformat: '.0%', range: [0, 1]}, margin: {l: 120, r: 20, t: 10, b: 50}}));
+                baseLayout({height: 105 + 30 * im.names.length, xaxis: {title: {text: 'share of explained variance'},
+                            tickformat: '.0%', range: [0, 1]}, margin: {l: 120, r: 20, t: 35, b: 50}}));
   }
 
   function contour(div, d) {
