@@ -22,9 +22,11 @@ An interactive page (:mod:`tuner.interactive`, when plotly is installed) differs
 its policy allows scripts from the page's own folder (``script-src 'self'``: ``plotly.min.js`` and
 ``tuner_report.js`` beside the page; still no inline script, no remote resource), its data is one
 ``<script type="application/json">`` block (JSON with ``<``, ``>`` and ``&`` written as JSON unicode
-escapes, so no text in it can close the block), and a paragraph that is exactly ``{{plot:NAME}}`` (``NAME`` of
-letters, digits and ``-``; Markdown from :func:`md_escape` cannot produce it, braces are escaped)
-becomes an empty ``<div class="tuner-plot" data-plot="NAME">`` the script fills.
+escapes, so no text in it can close the block), and a Markdown source line that is exactly
+``{{plot:NAME}}`` (``NAME`` of letters, digits and ``-``) outside a code block becomes an empty
+``<div class="tuner-plot" data-plot="NAME">`` the script fills. The line is swapped for a random token
+before rendering, so text escaped with :func:`md_escape` (a backslash before each brace, shown as
+``{{plot:x}}``) never becomes a slot.
 
 Names, descriptions and string values that go into the Markdown are escaped with :func:`md_escape`
 so that they are shown literally in both the Markdown and the HTML.
@@ -264,7 +266,7 @@ def markdown_to_html(markdown: str, base_dir: str | Path | None = None) -> str:
 
 
 _SCRIPT_NAME = re.compile(r"^[A-Za-z0-9_.-]+\.js$")
-_PLOT_SLOT = re.compile(r"<p>\{\{plot:([A-Za-z0-9-]+)\}\}</p>")
+_PLOT_SLOT = re.compile(r"^\{\{plot:([A-Za-z0-9-]+)\}\}$", re.M)
 
 
 def json_for_html(data: Any) -> str:
@@ -297,6 +299,12 @@ def render_page(markdown: str, base_dir: str | Path | None, title: str, refresh_
         if not (math.isfinite(refresh_s) and refresh_s > 0):
             raise ValueError(f"refresh_s: expected a positive number of seconds, got {refresh_s!r}")
         refresh = f'<meta http-equiv="refresh" content="{int(math.ceil(refresh_s))}">\n'
+    token = ""
+    if scripts:
+        import secrets
+
+        token = f"tunerslot{secrets.token_hex(8)}x"
+        markdown = _PLOT_SLOT.sub(lambda m: token + m.group(1), markdown)
     body = markdown_to_html(markdown, base_dir)
     script_src, tags = "", ""
     if scripts:
@@ -307,8 +315,9 @@ def render_page(markdown: str, base_dir: str | Path | None, title: str, refresh_
         if data is not None:
             tags += f'<script type="application/json" id="tuner-data">{json_for_html(data)}</script>\n'
         tags += "".join(f'<script src="{s}" defer></script>\n' for s in scripts)
-        body = _PLOT_SLOT.sub(lambda m: f'<div class="tuner-plot" id="plot-{m.group(1)}" data-plot="{m.group(1)}">'
-                                        "</div>", body)
+        body = re.sub(f"<p>{token}([A-Za-z0-9-]+)</p>", lambda m: f'<div class="tuner-plot" id="plot-{m.group(1)}" '
+                      f'data-plot="{m.group(1)}"></div>', body)
+        body = body.replace(token, "{{plot:")  # a slot line inside a code block stays as it was written
     return PAGE.format(refresh=refresh, title=html.escape(title), css=CSS, body=body, footer=html.escape(footer),
                        csp=f"default-src 'none';{script_src} img-src data:; style-src 'unsafe-inline'", scripts=tags)
 
