@@ -317,7 +317,7 @@ def render_page(markdown: str, base_dir: str | Path | None, title: str, refresh_
         tags += "".join(f'<script src="{s}" defer></script>\n' for s in scripts)
         body = re.sub(f"<p>{token}([A-Za-z0-9-]+)</p>", lambda m: f'<div class="tuner-plot" id="plot-{m.group(1)}" '
                       f'data-plot="{m.group(1)}"></div>', body)
-        body = body.replace(token, "{{plot:")  # a slot line inside a code block stays as it was written
+        body = re.sub(f"{token}([A-Za-z0-9-]+)", r"{{plot:\1}}", body)  # a slot line in a code block stays text
     return PAGE.format(refresh=refresh, title=html.escape(title), css=CSS, body=body, footer=html.escape(footer),
                        csp=f"default-src 'none';{script_src} img-src data:; style-src 'unsafe-inline'", scripts=tags)
 
