@@ -80,7 +80,7 @@ th[aria-sort=descending]::after { content: " \25BC"; font-size: .7em; }
 .controls { margin: .5em 0; }
 .controls select, .controls input { font: inherit; max-width: 100%; }
 .muted { color: var(--muted); }
-td.txt { text-align: left; white-space: nowrap; }
+td.txt, th.txt { text-align: left; white-space: nowrap; }
 img { max-width: 100%; height: auto; display: block; margin: .8em auto; }
 .missing-image { color: var(--muted); font-style: italic; }
 .status { display: inline-block; padding: .15em .7em; border-radius: 1em; font-weight: 600;

@@ -242,7 +242,8 @@
     var table = el('table', {id: 'runs-table'});
     var head = el('tr');
     head.appendChild(el('th', {}, 'compare'));
-    COLS.forEach(function (c) { head.appendChild(el('th', {}, c[1])); });
+    var TEXT = ['name', 'kind', 'objective', 'target', 'status', 'date'];
+    COLS.forEach(function (c) { head.appendChild(el('th', TEXT.indexOf(c[0]) >= 0 ? {'class': 'txt'} : {}, c[1])); });
     var thead = el('thead');
     thead.appendChild(head);
     table.appendChild(thead);
@@ -307,7 +308,10 @@
       names.forEach(function (n) {
         var row = el('tr');
         row.appendChild(el('td', {}, n));
-        sel.forEach(function (r) { row.appendChild(el('td', {}, fmt((r[key] || {})[n]))); });
+        sel.forEach(function (r) {
+          var v = (r[key] || {})[n];
+          row.appendChild(el('td', typeof v === 'number' ? {} : {'class': 'txt'}, fmt(v)));
+        });
         tb.appendChild(row);
       });
       t.appendChild(tb);
