@@ -9,6 +9,7 @@ default, so a user sees what can be set. The data are synthetic benches, so the 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 __all__ = ["filter_starter", "closed_loop_starter"]
@@ -17,6 +18,8 @@ __all__ = ["filter_starter", "closed_loop_starter"]
 def _num(v: Any) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
+    if isinstance(v, float) and not math.isfinite(v):
+        return ".nan" if v != v else (".inf" if v > 0 else "-.inf")  # YAML's spelling
     if isinstance(v, float):
         text = repr(v) if v != int(v) or abs(v) >= 1e16 else f"{v:.1f}"
         mant, e, exp = text.partition("e")  # YAML 1.1 reads 1e-05 as a string, 1.0e-05 as a number
