@@ -43,7 +43,8 @@ def _blocks(params: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
                             f"   # {note}; default {_num(p['default'])}")
         else:
             allowed = p.get("allowed")
-            allowed = f" ({', '.join(map(str, allowed))})" if p.get("kind") == "choice" and allowed and allowed != [True, False] else ""
+            listed = p.get("kind") == "choice" and allowed and allowed != [True, False]
+            allowed = f" ({', '.join(map(str, allowed))})" if listed else ""
             fixed.append(f"    # {p['name']}: {_num(p['default'])}   # {note}{allowed}")
     return searched, fixed
 
