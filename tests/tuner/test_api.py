@@ -185,3 +185,35 @@ def test_readme_example_runs_and_build_reproduces_the_score(tmp_path, monkeypatc
     score = float(np.mean(euler_stats(q, rec.quat, mask).rmse_deg))
     assert score == pytest.approx(res.fitness, rel=1e-12)
     assert "gen " in capsys.readouterr().out  # the example's callback printed each generation
+
+
+def test_build_gives_the_tuned_controller(tmp_path):
+    """Result.build() of a closed-loop run: the controller, simulated on the run's plant and profile, gives the
+    run's cost (eq. 2.39); its values are the complete tuned configuration."""
+    from objectives.control.wmp import simulate_closed_loop
+    from tuner.api import _objective_of
+    from tuner.starter import starter_text
+
+    job = yaml.safe_load(starter_text("pid"))
+    job.update(optimizer={"method": "pso", "population": 4, "generations": 2}, parallel={"backend": "serial"})
+    res = tuner.tune(job, run_dir=tmp_path / "pid", progress=False)
+    ctl = res.build()
+    assert type(ctl).__name__ == "PID" and dict(ctl.values) == res.best
+    assert set(res.best) > set(res.params) and res.deployment.kind == "closed_loop"
+    obj, _ = _objective_of(res.run_dir)
+    obj({**obj.fixed, **res.params})  # sets the objective up (plant, profile, noise)
+    sim = simulate_closed_loop(type(ctl).kind, ctl.param_array(), type(ctl).state_size, obj._ref, obj._noise,
+                               obj._plant, obj._sensors, None, obj.n_sub, obj.fall_limit_deg)
+    ev = obj._evaluation({"t": sim["t"], "references": obj._ref, "outputs": sim["y"], "measurements": sim["meas"],
+                          "voltages": sim["u"], "currents": sim["x"][:, 6:8], "state": sim["x"],
+                          "status": sim["status"], "status_name": sim["status_name"], "n_done": sim["n_done"]})
+    assert ev.status == "ok" and ev.fitness == res.fitness
+
+
+def test_demo_runs_a_packaged_job_from_any_directory(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli_main(["demo", "rosenbrock", "-q"]) == 0
+    (run_dir,) = (tmp_path / "runs").iterdir()
+    res = tuner.load(run_dir)
+    assert res.status == "finished" and res.n_evals == 30 * 100
+    assert "tuner/data/configs/rosenbrock.yaml" in yaml.safe_load((run_dir / "config.yaml").read_text())["source"]
