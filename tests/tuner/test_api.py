@@ -80,6 +80,11 @@ def test_load_gives_the_same_result(tmp_path):
         if f.name != "history":
             assert getattr(again, f.name) == getattr(res, f.name), f.name
     pd.testing.assert_frame_equal(again.history, res.history)
+    doc = {"cv_score": 1.5, "gap": 0.25, "folds": [{"name": "a", "score": 1.5}]}
+    from tuner.rundir import RunDir
+
+    RunDir(res.run_dir).write_validation(doc)
+    assert tuner.load(res.run_dir).validation == doc  # validation.json, as a run with `validation:` writes it
     html = again.report()
     assert html == res.run_dir / "report.html" and html.is_file()
 

@@ -39,7 +39,7 @@ def test_packaged_jobs_are_the_repository_jobs_that_need_no_shared_data():
 def test_every_filter_and_controller_gets_a_starter_that_builds_and_preflights(tmp_path, monkeypatch):
     """Each starter job is valid YAML, a valid config, names only parameters its objective has, and its
     default parameters evaluate (the preflight that `tuner run` does before the first generation)."""
-    from tuner.run import _build
+    from tuner.run import _build, new_optimizer
 
     names = starter_names()
     assert {"madgwick", "ekf", "kf1d", "vqf", "pid", "lqr", "protective_fuzzy"} <= set(names)
@@ -58,6 +58,7 @@ def test_every_filter_and_controller_gets_a_starter_that_builds_and_preflights(t
             raw["objective"]["data"] = {"train": [short], "test": [short]}
         cfg = config_from_dict(raw, source=f"{name}.yaml", base_dir=tmp_path)
         objective, space = _build(cfg)
+        assert new_optimizer(cfg, 0, space, None).population >= 1  # `auto` accepts the budget
         declared = set(objective.parameter_names())
         assert set(space.names) <= declared and space.free_names, name
         commented = [ln.split(":")[0].strip("# ") for ln in text.splitlines() if ln.startswith("    # ")]
