@@ -33,8 +33,9 @@ def __getattr__(name: str) -> Any:
 
 
 def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """Every value of a run's deployed filter or controller (:func:`tuner.deployment.load_deployment`)."""
-    from tuner.run import load_best as _load_best
+    """Every value of a run's deployed filter or controller (searched, fixed and defaults; see
+    :func:`tuner.deployment.load_deployment` for their sources and the scoring-only settings)."""
+    from tuner.deployment import load_best as _load_best
 
     return _load_best(run_dir)
 

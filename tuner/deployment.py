@@ -27,7 +27,7 @@ from typing import Any
 from tuner.objective import hook
 
 __all__ = ["Deployment", "SOURCES", "DEFAULTS_MEANING", "as_deployment", "attach_deployment", "defaults_baseline",
-           "deployment_for", "load_deployment"]
+           "deployment_for", "load_best", "load_deployment"]
 
 #: where a value of :attr:`Deployment.values` comes from
 SOURCES = ("searched", "fixed", "default")
@@ -207,6 +207,11 @@ def load_deployment(run_dir: str | Path) -> Deployment:
         raise RunError(f"{rd.file('best.yaml')}: no deployment recorded and the objective does not "
                        f"rebuild from config.yaml: {exc}") from None
     return deployment_for(objective, {**space.fixed, **best.params}, space.free_names, list(space.fixed))
+
+
+def load_best(run_dir: str | Path) -> dict[str, Any]:
+    """Every value of the run's deployed filter or controller (``load_deployment(run_dir).values``)."""
+    return dict(load_deployment(run_dir).values)
 
 
 def attach_deployment(best: Any, objective: Any, space: Any) -> Any:

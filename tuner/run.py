@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from tuner.config import ConfigError, RunConfig, config_from_dict
-from tuner.deployment import attach_deployment, load_deployment
+from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.objective import Evaluation
@@ -51,7 +51,7 @@ from tuner.rundir import (
 )
 from tuner.space import Space
 
-__all__ = ["RunResult", "run", "resume", "atomic_write", "load_best", "RunError"]
+__all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "RunError"]
 
 
 @dataclass(frozen=True)
@@ -98,9 +98,9 @@ class RunResult:
         return dict(self.best.metrics) if self.best else {}
 
 
-def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """Every value of the run's deployed filter or controller (:func:`tuner.deployment.load_deployment`)."""
-    return dict(load_deployment(run_dir).values)
+def read_meta(run_dir: Path) -> dict[str, Any]:
+    """``meta.json`` of a run directory as a plain dict (typed: :meth:`tuner.rundir.RunDir.meta`)."""
+    return RunDir(run_dir).meta().to_dict()
 
 
 def _git_commit() -> str:

@@ -17,6 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 BROAD = ROOT.parent / "shared" / "data" / "broad"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not BROAD.is_dir(), reason="needs ../shared/data/broad (BROAD, CC-BY-4.0)")
 def test_broad_mahony_from_run_on_plain_arrays_gives_the_run_fitness(tmp_path):
     from objectives.attitude.data.loaders import load_recordings
