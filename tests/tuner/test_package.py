@@ -24,9 +24,10 @@ def test_packaged_jobs_are_the_repository_jobs_that_need_no_shared_data():
     repo = {p.name for p in (ROOT / "configs").glob("*.yaml")}
     shipped = set(packaged_configs())
     needs_data = {n for n in repo if "broad:" in (ROOT / "configs" / n).read_text()}
-    assert needs_data and shipped == repo - needs_data
-    for name in shipped:  # copies, kept equal (cp configs/<name> tuner/data/configs/ after an edit)
-        assert (PACKAGED / name).read_bytes() == (ROOT / "configs" / name).read_bytes(), name
+    assert needs_data and shipped == repo - needs_data, "run `make package-configs`"
+    for name in shipped:  # copies, kept equal
+        assert (PACKAGED / name).read_bytes() == (ROOT / "configs" / name).read_bytes(), \
+            f"tuner/data/configs/{name} differs from configs/{name}: run `make package-configs`"
         assert "../shared" not in (PACKAGED / name).read_text()
     # a sweep's base files ship beside it
     for name in ("demo.yaml", "thesis_tilt_sweep.yaml", "wmp_compare.yaml"):
