@@ -148,3 +148,13 @@ def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
     meta = yaml.safe_load((run_dirs[0] / "meta.json").read_text())
     assert meta["git_commit"] == ""  # not the commit of a repository the venv happens to sit in
     shutil.rmtree(venv)
+
+
+def test_default_broad_dir_is_not_read_relative_to_an_installed_package(tmp_path, monkeypatch):
+    import objectives.attitude.data.broad as broad
+
+    assert broad.default_broad_dir() == ROOT.parent / "shared" / "data" / "broad"  # a clone: beside it
+    site = tmp_path / "venv" / "lib" / "python3" / "site-packages"
+    monkeypatch.setattr(broad, "__file__", str(site / "objectives" / "attitude" / "data" / "broad.py"))
+    monkeypatch.chdir(tmp_path)
+    assert broad.default_broad_dir() == tmp_path.parent / "shared" / "data" / "broad"
