@@ -129,6 +129,17 @@ def _phys(p: Any, u: np.ndarray) -> np.ndarray:
     return p.low + u * (p.high - p.low)
 
 
+def _bands(k: int, n: int = 5) -> dict[str, list]:
+    """Colour bands of ``k`` candidates sorted best first: ``band`` per candidate (n - 1 = the best fifth) and a
+    label per band (``rank 1-6``; empty bands get ``""``)."""
+    band = [n - 1 - (i * n) // k for i in range(k)]
+    labels = []
+    for b in range(n):
+        ranks = [i + 1 for i in range(k) if band[i] == b]
+        labels.append(f"rank {ranks[0]}-{ranks[-1]}" if len(ranks) > 1 else f"rank {ranks[0]}" if ranks else "")
+    return {"band": band, "band_labels": labels}
+
+
 def _contour(ok: pd.DataFrame, px: Any, py: Any, best: dict[str, Any], log: bool, n: int = 40) -> dict | None:
     """Fitness over two parameters, linearly interpolated between the evaluations (inside their hull)."""
     from scipy.interpolate import griddata
@@ -196,29 +207,27 @@ def run_figures(run_dir: Path, hist: pd.DataFrame, space: Any, best: dict[str, A
         md += ["### Fitness against each parameter", "", "Every successful evaluation (colour: evaluation number; "
                "dotted lines: the search bounds; star: the best)" + (f"; {n_fail} failed evaluations not shown."
                                                                      if n_fail else "."), "", "{{plot:slices}}", ""]
+    if len(params) >= 2 and len(ok):  # one axis is no parallel coordinates (the slice above shows it)
         top = ok.sort_values("fitness", kind="stable").head(200)
         ut = np.array([[p.to_unit(float(v)) for p, v in zip(params, row)]
                        for row in top[[p.name for p in params]].to_numpy()])
         k = len(top)
         data["parcoords"] = {"names": [p.name for p in params], "u": np.round(ut, 5).tolist(),
                              "values": top[[p.name for p in params]].astype(float).to_numpy().tolist(),
-                             "fitness": top["fitness"].tolist(),
-                             "band_labels": [f"rank {int(k * (4 - b) / 5) + 1}-{int(k * (5 - b) / 5)}"
-                                             for b in range(5)]}
+                             "fitness": top["fitness"].tolist(), **_bands(k)}
         md += ["### Parallel coordinates of the best candidates", "", f"The {k} best candidates, one line each, "
                "over each parameter's position in its bounds (log10 for log parameters); darker = better.", "",
                "{{plot:parcoords}}", ""]
-        if len(params) >= 2:
-            names = imp.order()[:2] if imp is not None else [params[0].name, params[1].name]
-            px, py = (next(p for p in params if p.name == n) for n in names)
-            c = _contour(thin, px, py, data["best"], log)
-            if c is not None:
-                data["contour"] = c
-                why = "the two most important parameters" if imp is not None else "the first two parameters"
-                md += [f"### Fitness over {md_escape(px.name)} and {md_escape(py.name)}", "",
-                       f"Contour of {'log10 ' if log else ''}fitness over {why}, interpolated linearly between "
-                       "evaluations (blank outside them); the other parameters vary, so this is the landscape "
-                       "the optimiser saw, not a slice at the best point.", "", "{{plot:contour}}", ""]
+        names = imp.order()[:2] if imp is not None else [params[0].name, params[1].name]
+        px, py = (next(p for p in params if p.name == n) for n in names)
+        c = _contour(thin, px, py, data["best"], log)
+        if c is not None:
+            data["contour"] = c
+            why = "the two most important parameters" if imp is not None else "the first two parameters"
+            md += [f"### Fitness over {md_escape(px.name)} and {md_escape(py.name)}", "",
+                   f"Contour of {'log10 ' if log else ''}fitness over {why}, interpolated linearly between "
+                   "evaluations (blank outside them); the other parameters vary, so this is the landscape "
+                   "the optimiser saw, not a slice at the best point.", "", "{{plot:contour}}", ""]
     replaced: set[str] = set()
     traces = None if live else read_traces(run_dir)
     if traces is not None:

@@ -184,6 +184,7 @@ _REPEATS = ("summary_table", "tables_md")
 
 
 def _same(a: Any, b: Any) -> bool:
+    """Equal numbers (a result the report already shows under another name; NaN is never the same)."""
     return isinstance(b, (int, float)) and math.isclose(float(a), float(b), rel_tol=1e-12, abs_tol=0.0)
 
 
@@ -425,9 +426,11 @@ def _results_md(s: dict[str, Any]) -> list[str]:
             elif len(piv):
                 md += ["Metrics of the best candidate on each recording.", "",
                        _frame_md(piv.reset_index()), ""]
+    shown = {str(k).rsplit("/", 1)[-1].rsplit(".", 1)[-1]: v for k, v in s["metrics"].items()}
     scalars = [[k, v] for k, v in ev.items() if not isinstance(v, (dict, list)) and k not in _REPEATS
                and not (isinstance(v, str) and "\n" in v) and k not in _CARD_KEYS
-               and not (k in _SAME_AS_BEST and _same(v, s["best_fitness"]))]
+               and not (k in _SAME_AS_BEST and _same(v, s["best_fitness"]))
+               and not (k.startswith("best_") and isinstance(v, (int, float)) and _same(v, shown.get(k[5:])))]
     nested = {k: v for k, v in ev.items() if k not in ("train", "test", "cv") and isinstance(v, dict) and v
               and all(isinstance(x, dict) for x in v.values())}
     if scalars or nested:

@@ -137,13 +137,14 @@
     for (var b = 0; b < bands; b++) {
       var xs = [], ys = [], txt = [];
       for (var i = 0; i < n; i++) {
-        if (Math.min(bands - 1, Math.floor((n - 1 - i) * bands / n)) !== b) { continue; }
+        if (pc.band[i] !== b) { continue; }
         for (var j = 0; j < names.length; j++) {
           xs.push(j); ys.push(pc.u[i][j]);
           txt.push(esc(names[j]) + ' = ' + fmt(pc.values[i][j]) + '<br>fitness ' + fmt(pc.fitness[i]));
         }
         xs.push(null); ys.push(null); txt.push('');
       }
+      if (!xs.length) { continue; }
       tr.push({x: xs, y: ys, text: txt, hoverinfo: 'text', mode: 'lines+markers', name: pc.band_labels[b],
                line: {color: colors[b], width: b === bands - 1 ? 2 : 1}, marker: {size: 4, color: colors[b]}});
     }
