@@ -74,13 +74,21 @@ def install_assets(folder: str | Path) -> None:
     """Put ``plotly.min.js`` and ``tuner_report.js`` into ``folder`` (once; replaced when they differ)."""
     folder = Path(folder)
     src = _plotly_js()
+    size = src.stat().st_size
     dst = folder / "plotly.min.js"
-    if not (dst.exists() and dst.stat().st_size == src.stat().st_size):
+    if not (dst.exists() and dst.stat().st_size == size):
         tmp = folder / f".plotly.min.js.tmp{os.getpid()}"
         tmp.unlink(missing_ok=True)
-        try:
-            os.link(src, tmp)  # 4.8 MB: a hard link costs nothing where the file system allows it
-        except OSError:
+        # 4.8 MB: a hard link costs nothing where the file system allows it; the copy beside a sweep or a
+        # dashboard above this folder is tried first (same file system as the runs, when the package is not)
+        near = [a / "plotly.min.js" for a in list(folder.resolve().parents)[:3]]
+        for cand in [c for c in near if c.is_file() and c.stat().st_size == size] + [src]:
+            try:
+                os.link(cand, tmp)
+                break
+            except OSError:
+                continue
+        else:
             shutil.copyfile(src, tmp)
         os.replace(tmp, dst)
     js = resources.files("tuner").joinpath("static/tuner_report.js").read_bytes()

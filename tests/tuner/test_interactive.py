@@ -53,3 +53,17 @@ def test_parallel_coordinate_bands_cover_every_rank_once():
         assert len(b["band"]) == k and b["band"][0] == 4 and b["band"] == sorted(b["band"], reverse=True)
         labels = [lab for lab in b["band_labels"] if lab]
         assert labels[-1].startswith("rank 1") and labels[0].endswith(str(k))
+
+
+def test_a_run_below_a_folder_with_plotly_links_to_that_copy(tmp_path):
+    from tuner import interactive
+
+    if not interactive.available():
+        pytest.skip("plotly not installed (the report extra)")
+    import shutil
+
+    shutil.copyfile(interactive._plotly_js(), tmp_path / "plotly.min.js")  # its own inode, not the package's
+    job = tmp_path / "jobs" / "a"
+    job.mkdir(parents=True)
+    interactive.install_assets(job)
+    assert (job / "plotly.min.js").stat().st_ino == (tmp_path / "plotly.min.js").stat().st_ino
