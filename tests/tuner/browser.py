@@ -10,7 +10,8 @@ it, and returns what it found as a dict:
 - ``plots``: per ``div.tuner-plot``: its name, whether the script marked it drawn, its size and the number
   of drawn traces (plotly ``g.trace`` groups) -- an empty or failed plot has 0;
 - ``sorts``: per sortable table, a column's cells before and after a click on its header;
-- ``dashboard``: rows shown after typing into the filter, and plots after ticking the last two rows.
+- ``dashboard``: rows shown after typing into the filter, and plots after ticking the last two rows;
+- ``selector``: a time-series selector switched to its last entry, and whether the plot changed.
 """
 
 from __future__ import annotations
@@ -82,9 +83,21 @@ function __sorts() {
   });
   return out;
 }
+function __lines(div) {
+  return [].map.call(div.querySelectorAll('g.trace path'), function (p) {
+    return p.getAttribute('d') || ''; }).join('|');
+}
 window.addEventListener('load', function () {
   setTimeout(function () {
     var res = {plots_before: __plots()};
+    var sel = document.querySelector('div.tuner-plot select');
+    if (sel) {  /* pick the last recording: the time series must be redrawn */
+      var box = sel.closest('div.tuner-plot'), before = __lines(box);
+      sel.value = String(sel.options.length - 1);
+      sel.dispatchEvent(new Event('change'));
+      res.selector = {options: sel.options.length, before: before.length, changed: null};
+      setTimeout(function () { res.selector.changed = __lines(box) !== before; }, 500);
+    }
     var input = document.querySelector('input[type=search]');
     if (input) {
       var rows = document.querySelectorAll('#runs-table tbody tr');

@@ -404,6 +404,8 @@ def test_pages_in_a_browser(which, width, request, tmp_path):
         assert len(res["plots"]) == want, res["plots"]
         for p in res["plots"]:  # every plot drawn, with data, within the page
             assert p["rendered"] and p["drawn"] > 0 and 0 < p["width"] <= width and p["height"] > 100, p
+        if which == "filter_run":  # the recording selector redraws the time series
+            assert res["selector"]["options"] == 3 and res["selector"]["changed"] is True, res["selector"]
         if which == "dashboard":
             d = res["dashboard"]
             assert d["rows"] == 7 and 1 <= d["shown"] < d["rows"], d  # the filter hides rows
