@@ -338,6 +338,19 @@ def test_dashboard_lists_every_run_and_sweep(dashboard_dir):
     assert "http-equiv=\"refresh\"" not in page  # nothing running
 
 
+def test_dashboard_without_plotly_is_a_static_table(dashboard_dir, tmp_path, monkeypatch):
+    from tuner import interactive
+    from tuner.dashboard import write_dashboard
+
+    root = tmp_path / "runs"
+    shutil.copytree(dashboard_dir, root)
+    monkeypatch.setattr(interactive, "available", lambda: False)
+    page = write_dashboard(root).read_text()
+    _assert_inert(page)
+    assert 'href="madgwick/report.html"' in page and 'href="sweeps/hostile/report.html"' in page
+    assert page.count("<tr>") == 1 + 7 and "madgwick</td>" in page
+
+
 def test_dashboard_refreshes_while_a_run_is_going(dashboard_dir, tmp_path):
     from tuner.report import write_live_report
 
