@@ -425,7 +425,7 @@ def test_pages_in_a_browser(which, width, request, tmp_path):
             assert res["plots"][1]["name"] == "compare-convergence" and res["plots"][1]["traces"] == 2
     else:
         assert res["images"] >= 3
-    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", tmp_path, width, 4000 if width < 500 else 3000,
+    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", tmp_path, width, 7000 if width < 500 else 5000,
                       "#compare=evil,madgwick" if which == "dashboard" else "")
     arr = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert arr.std() > 5 and (arr < 128).mean() > 0.005, "blank screenshot"
