@@ -307,7 +307,11 @@ def _cv(cfg: RunConfig, rd: RunDir, params: dict[str, Any], progress: Callable[[
            "gap_large": v.gap_is_large(s.get("gap", math.nan), s.get("tuning_score", math.nan)),
            "gap_rule": v.gap_rule(), "defaults_cv_score": s["defaults_mean"], "cv_fold_std": s["cv_fold_std"],
            "cv_fold_worst": s["cv_fold_worst"], "seconds": round(time.time() - t0, 1),
-           "per_fold": {f.name: f.cv_fitness for f in out.folds}}
+           "per_fold": {f.name: f.cv_fitness for f in out.folds},
+           "per_fold_recordings": {f.name: list(f.recordings) for f in out.folds}}
+    if out.test:  # the job's test: recordings, never in a fold, keep their own held-out score
+        doc.update(test_score=out.test["tuned"], defaults_test_score=out.test["defaults"],
+                   test_recordings=out.test["recordings"])
     if any(f.selection for f in out.folds):  # which candidate each fold's inner selection chose
         doc["per_fold_selection"] = {f.name: f.selection for f in out.folds}
     return plain(doc)
@@ -325,7 +329,7 @@ def _record(rd: RunDir, best: Best, cv: dict[str, Any] | None, selection: dict[s
         doc["selection"] = selection
     if cv:
         ev.update(tuning_score=cv["tuning_score"], cv_fitness=cv["cv_score"], cv_gap=cv["gap"],
-                  cv_gap_large=cv["gap_large"])
+                  cv_gap_large=cv["gap_large"], defaults_cv_fitness=cv["defaults_cv_score"])
         doc["cv"] = cv
     best = dataclasses.replace(best, evaluation=plain(ev))
     rd.write_best(best)

@@ -25,7 +25,9 @@ def trajectory(t: np.ndarray) -> np.ndarray:
                      c[:, 0] * c[:, 1] * n[:, 2] - n[:, 0] * n[:, 1] * c[:, 2]], 1)
 
 
-def main(path: Path = Path(__file__).with_name("imu.csv")) -> Path:
+def main(path: Path | None = None) -> Path:
+    """Write the CSV to ``path`` (default: ``imu.csv`` beside this file) and return the path."""
+    path = Path(__file__).with_name("imu.csv") if path is None else Path(path)
     t = np.arange(int(6 * RATE_HZ)) / RATE_HZ
     rec = simulate_imu(trajectory(t), 1.0 / RATE_HZ, frame="ENU", rng=np.random.default_rng(24), gyr_noise=0.004,
                        acc_noise=0.03, mag_noise=0.003, gyr_bias=(0.004, -0.003, 0.002))

@@ -55,7 +55,7 @@ def _generator_keys(name: str) -> list[dict[str, Any]]:
 def data_sources() -> dict[str, dict[str, Any]]:
     """``{name: description}`` of every data source a data spec may name (broad, csv, synthetic:<gen>)."""
     from objectives.attitude.data.cache import GENERATORS
-    from objectives.attitude.data.csv import CSV_OPTIONS, csv_keys
+    from objectives.attitude.data.csv import csv_keys
 
     out: dict[str, dict[str, Any]] = {
         "broad": {"summary": "BROAD trials (.mat/.hdf5, Laidig et al. 2021, CC-BY-4.0)",

@@ -530,7 +530,10 @@ class FilterObjective:
 
     # --- cross-validation (tuner cv) -----------------------------------------------------------------
     def cv_folds(self, k: int | None = None) -> list[tuple[str, FilterObjective, FilterObjective]]:
-        """Folds over all the objective's recordings (train and test): ``(name, tune on, held out)``.
+        """Folds over the objective's tuning recordings: ``(name, tune on, held out)``.
+
+        ``test:`` recordings are never pooled into the folds: they keep their own held-out score, which
+        the engine reports next to the CV score (:func:`tuner.cv.cross_validate`).
 
         Without ``k``, recordings that are all BROAD trials (a ``trials.json`` beside them) are grouped by
         BROAD's level-2 motion/disturbance group and each group is held out once (leave-one-group-out);
@@ -541,12 +544,13 @@ class FilterObjective:
         """
         from objectives.attitude.objective_options import recording_groups
 
-        recs = list(self.recordings("train")) + (list(self.recordings("test")) if self.test_specs else [])
+        recs = list(self.recordings("train"))
         names = [r.name for r in recs]
         if len(set(names)) != len(names):
             raise ValueError("objective.data: recording names repeat; cross-validation needs unique names")
         if len(recs) < 2:
-            raise ValueError(f"objective.data: cross-validation needs >= 2 recordings, got {len(recs)}")
+            raise ValueError(f"objective.data{'.train' if self.test_specs else ''}: cross-validation needs >= 2 "
+                             f"tuning recordings, got {len(recs)} (test recordings are never pooled into folds)")
         groups: dict[str, str] | None = None
         if k is None:
             try:
@@ -561,7 +565,7 @@ class FilterObjective:
             if not 2 <= kk <= len(recs):
                 raise ValueError(f"cv: need 2 <= k <= {len(recs)} (recordings), got k={k}")
             parts = [(f"fold-{i}", [n for j, n in enumerate(names) if j % kk == i]) for i in range(kk)]
-        specs = list(self.train_specs) + list(self.test_specs)
+        specs = list(self.train_specs)
         plain = {k: v for k, v in self.metric_options.items() if k not in AGG_KEYS}
         by_name = dict(zip(names, recs))
         out = []

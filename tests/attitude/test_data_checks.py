@@ -256,3 +256,16 @@ def test_start_in_motion_warns_naming_recording_and_fix(tmp_path, moving_and_res
         return
     (w,) = ws
     assert w.startswith("moving: starts in motion") and "init: truth" in w and "warmup_s" in w
+
+
+def test_broad_segment_starting_in_motion_warns():
+    """The issue's case: a ``start_s`` segment that starts in motion (BROAD trial 01 moves at 60 s)."""
+    broad = ROOT.parent / "shared" / "data" / "broad"
+    if not (broad / "01_undisturbed_slow_rotation_A.mat").exists():
+        pytest.skip(f"BROAD data not found under {broad}")
+    specs = [{"broad": {"dir": str(broad), "trial": "01_undisturbed_slow_rotation_A", **cut}}
+             for cut in ({"start_s": 60.0, "stop_s": 70.0}, {"start_s": 0.0, "stop_s": 10.0})]
+    obj = FilterObjective.from_config({"kind": "filter", "filter": "mahony", "data": specs,
+                                       "fixed": {"init": "broad"}}, ROOT)
+    ws = [w for w in obj.preflight() if "starts in motion" in w]
+    assert len(ws) == 1 and "01_undisturbed_slow_rotation_A" in ws[0] and "broad start" in ws[0]

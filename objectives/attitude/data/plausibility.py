@@ -25,8 +25,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["UnitWarning", "unit_warnings", "unit_messages", "warn_units", "motion_start", "START_WINDOW_S", "START_GYR_RAD_S",
-           "START_ACC_DEV"]
+__all__ = ["UnitWarning", "unit_warnings", "unit_messages", "warn_units", "motion_start", "START_WINDOW_S",
+           "START_GYR_RAD_S", "START_ACC_DEV"]
 
 #: |gyr| above this (rad/s, ~2000 deg/s, the largest common MEMS range) at the 99th percentile means deg/s
 GYR_MAX_RAD_S = 35.0
