@@ -47,7 +47,7 @@ from tuner.objective import as_evaluation, hook
 from tuner.rundir import FIXED_COLUMNS, RESULT_COLUMNS, Best, RunDir, RunError, parse_cell, plain
 
 __all__ = ["selection_split", "tuning_objective", "select_best", "validate_run", "cv_run_dir", "inner_split",
-           "defaults_candidate", "tune_and_select", "FALLBACK_FRACTION"]
+           "defaults_candidate", "tune_and_select", "defaults_scores", "FALLBACK_FRACTION"]
 
 #: held-out fraction inside a CV fold whose tuning recordings lack the named ``holdout`` fold
 FALLBACK_FRACTION = 0.25
@@ -338,9 +338,42 @@ def _record(rd: RunDir, best: Best, cv: dict[str, Any] | None, selection: dict[s
     return best
 
 
+def defaults_scores(cfg: RunConfig, objective: Any) -> dict[str, Any]:
+    """The defaults (:func:`tuner.cv.defaults_params`) scored as a run's best is: ``defaults_fitness`` (the
+    tuning fitness, as ``best_fitness``), ``defaults_train_fitness`` and ``defaults_test_fitness`` (the
+    objective's plain ``score`` on its train and test data, as ``train_fitness``/``test_fitness``) where
+    the objective has them. A defaults evaluation that fails or raises scores inf."""
+    from tuner.cv import defaults_params, scored
+
+    params = defaults_params(objective, cfg.space(objective))
+    if params is None:
+        return {}
+    try:
+        seed = {"seed": int(cfg.seed)} if getattr(objective, "takes_seed", False) else {}
+        ev = as_evaluation(objective(params, **seed))
+        out: dict[str, Any] = {"defaults_fitness": float(ev.fitness) if ev.status == "ok" else math.inf}
+    except Exception:  # noqa: BLE001 - defaults that raise are a failed baseline, not a lost run
+        return {"defaults_fitness": math.inf}
+    if hook(objective, "score") is not None:
+        has_test = hook(objective, "has_test_data")
+        for which in ("train", "test") if has_test is not None and has_test() else ("train",):
+            try:
+                fit, failed, _ = scored(objective, params, which)
+            except Exception:  # noqa: BLE001 - as above
+                fit, failed = math.inf, "raised"
+            out[f"defaults_{which}_fitness"] = math.inf if failed or not math.isfinite(fit) else fit
+    return out
+
+
 def validate_run(cfg: RunConfig, rd: RunDir, best: Best, selection: dict[str, Any] | None,
-                 progress: Callable[[str], None] | None = None) -> Best:
-    """After a run (its objective's report step done): record the selection, run the CV if configured."""
+                 progress: Callable[[str], None] | None = None, objective: Any = None) -> Best:
+    """After a run (its objective's report step done): the defaults' scores (with ``objective``, the run's
+    own), the selection, the CV if configured (:data:`cfg.validation`), all recorded in ``best.yaml``."""
+    if objective is not None:
+        best = dataclasses.replace(best, evaluation=plain({**best.evaluation, **defaults_scores(cfg, objective)}))
+        if not cfg.validation.active:
+            rd.write_best(best)
+            return best
     cv = None
     if cfg.validation.cv is not None:
         if progress:
