@@ -338,14 +338,17 @@ def _record(rd: RunDir, best: Best, cv: dict[str, Any] | None, selection: dict[s
     return best
 
 
-def defaults_scores(cfg: RunConfig, objective: Any) -> dict[str, Any]:
+def defaults_scores(cfg: RunConfig, objective: Any, space: Any = None) -> dict[str, Any]:
     """The defaults (:func:`tuner.cv.defaults_params`) scored as a run's best is: ``defaults_fitness`` (the
     tuning fitness, as ``best_fitness``), ``defaults_train_fitness`` and ``defaults_test_fitness`` (the
     objective's plain ``score`` on its train and test data, as ``train_fitness``/``test_fitness``) where
     the objective has them. A defaults evaluation that fails or raises scores inf."""
     from tuner.cv import defaults_params, scored
 
-    params = defaults_params(objective, cfg.space(objective))
+    try:
+        params = defaults_params(objective, space if space is not None else cfg.space(objective))
+    except ConfigError:  # no search space of its own to take the fixed values from: no defaults row
+        return {}
     if params is None:
         return {}
     try:
@@ -366,11 +369,12 @@ def defaults_scores(cfg: RunConfig, objective: Any) -> dict[str, Any]:
 
 
 def validate_run(cfg: RunConfig, rd: RunDir, best: Best, selection: dict[str, Any] | None,
-                 progress: Callable[[str], None] | None = None, objective: Any = None) -> Best:
+                 progress: Callable[[str], None] | None = None, objective: Any = None, space: Any = None) -> Best:
     """After a run (its objective's report step done): the defaults' scores (with ``objective``, the run's
-    own), the selection, the CV if configured (:data:`cfg.validation`), all recorded in ``best.yaml``."""
+    own, and its search ``space``), the selection, the CV if configured, all recorded in ``best.yaml``."""
     if objective is not None:
-        best = dataclasses.replace(best, evaluation=plain({**best.evaluation, **defaults_scores(cfg, objective)}))
+        dflt = defaults_scores(cfg, objective, space)
+        best = dataclasses.replace(best, evaluation=plain({**best.evaluation, **dflt}))
         if not cfg.validation.active:
             rd.write_best(best)
             return best
