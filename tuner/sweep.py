@@ -417,8 +417,8 @@ def show_sweep(sweep_dir: Path, as_json: bool = False) -> str:
     df = collect(Path(sweep_dir))
     if as_json:
         return df.to_json(orient="records", indent=1)
-    cols = [c for c in ["job", "status", "best_fitness", "train_fitness", "test_fitness", "n_evals", "wall_s"]
-            if c in df.columns]
+    cols = [c for c in ["job", "status", "best_fitness", "train_fitness", "test_fitness", "cv_fitness", "cv_gap",
+                        "n_evals", "wall_s"] if c in df.columns]
     return df[cols].to_string(index=False)
 
 
@@ -448,7 +448,7 @@ def summary_text(df: Any, sweep_dir: Path) -> str:
     """The terminal table of a sweep: one row per job with train/test fitness and per-axis RMSE."""
     if df is None or len(df) == 0:
         return "(no jobs)"
-    cols = [c for c in ["method", "seed", "status", "train_fitness", "test_fitness"] if c in df.columns]
+    cols = [c for c in ["method", "seed", "status", "train_fitness", "test_fitness", "cv_fitness"] if c in df.columns]
     split = "test" if any(c.startswith("test.") for c in df.columns) else "train"
     for ax in ("roll", "pitch", "yaw"):
         c = f"{split}.{ax}_rmse_deg"

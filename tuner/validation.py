@@ -11,7 +11,13 @@ job (:class:`tuner.config.ValidationConfig`) measure and act on that, both throu
     *large* above ``gap_warn_rel`` times the tuning score or above ``gap_warn_abs`` (fitness units).
     ``cv.md``, ``cv.csv`` and ``validation.json`` go into the run directory (:mod:`tuner.rundir`), the
     numbers into ``best.yaml``'s ``evaluation`` (``tuning_score``, ``cv_fitness``, ``cv_gap``,
-    ``cv_gap_large``), which the run report and sweep reports show. ``tuner cv RUN_DIR`` does the
+    ``cv_gap_large``, ``defaults_cv_fitness``), which the run report and sweep reports show. Folds hold the
+    tuning recordings only; ``test:`` recordings keep their own score (``test_score``,
+    ``defaults_test_score`` in ``validation.json``).
+
+Every finished run also records its defaults (:func:`tuner.cv.defaults_params`) scored as its best is
+(:func:`defaults_scores`: ``defaults_fitness``, ``defaults_train_fitness``, ``defaults_test_fitness``),
+which sweeps show as each method's defaults row. ``tuner cv RUN_DIR`` does the
     same for a finished run.
 
 ``validation: {select: {top_k: 5, holdout: NAME | fraction}}``
