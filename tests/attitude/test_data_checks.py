@@ -269,3 +269,32 @@ def test_broad_segment_starting_in_motion_warns():
                                        "fixed": {"init": "broad"}}, ROOT)
     ws = [w for w in obj.preflight() if "starts in motion" in w]
     assert len(ws) == 1 and "01_undisturbed_slow_rotation_A" in ws[0] and "broad start" in ws[0]
+
+
+def test_readme_five_line_csv_job_is_the_example():
+    """The README's data section opens with the five lines of ``configs/examples/own_csv.yaml``."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("## Your own data\n", 1)[1]
+    assert section.lstrip().startswith("Your own CSV in five lines")
+    block = section.split("```yaml\n", 1)[1].split("```", 1)[0]
+    assert len(block.strip().splitlines()) == 5
+    doc = yaml.safe_load(block)
+    job = yaml.safe_load((EXAMPLES / "own_csv.yaml").read_text())
+    assert doc["parameters"] == job["parameters"]
+    assert {k: job["objective"][k] for k in doc["objective"]} == doc["objective"]
+    assert "maps/imu.yaml" not in readme and "examples/imu_columns.yaml" in readme
+
+
+def test_start_in_motion_is_one_warning_line_of_tuner_run(tmp_path, moving_and_resting):
+    from objectives.attitude.data.export_csv import to_csv
+
+    to_csv(moving_and_resting["moving"], tmp_path / "moving.csv")
+    cfg = {"name": "m", "seed": 1, "objective": {"kind": "filter", "filter": "madgwick", "metric": "euler_rmse_mean",
+                                                   "data": [{"csv": {"path": "moving.csv", "columns": CSV_MAP}}]},
+           "optimizer": {"method": "pso", "population": 4, "generations": 1}, "parallel": {"backend": "serial"}}
+    (tmp_path / "job.yaml").write_text(yaml.safe_dump(cfg))
+    out = tuner("run", "job.yaml", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    lines = [ln for ln in out.stderr.splitlines() if ln.startswith("warning:")]
+    assert len(lines) == 1 and lines[0].startswith("warning: moving: starts in motion"), lines
+    assert "init: truth" in lines[0] and "warmup_s" in lines[0]
