@@ -348,7 +348,7 @@ def defaults_scores(cfg: RunConfig, objective: Any, space: Any = None) -> dict[s
     """The defaults (:func:`tuner.cv.defaults_params`) scored as a run's best is: ``defaults_fitness`` (the
     tuning fitness, as ``best_fitness``), ``defaults_train_fitness`` and ``defaults_test_fitness`` (the
     objective's plain ``score`` on its train and test data, as ``train_fitness``/``test_fitness``) where
-    the objective has them. A defaults evaluation that fails or raises scores inf."""
+    the objective has them. A defaults evaluation that fails, raises or times out scores inf."""
     from tuner.cv import defaults_params, scored
 
     try:
@@ -357,12 +357,10 @@ def defaults_scores(cfg: RunConfig, objective: Any, space: Any = None) -> dict[s
         return {}
     if params is None:
         return {}
-    try:
-        seed = {"seed": int(cfg.seed)} if getattr(objective, "takes_seed", False) else {}
-        ev = as_evaluation(objective(params, **seed))
-        out: dict[str, Any] = {"defaults_fitness": float(ev.fitness) if ev.status == "ok" else math.inf}
-    except Exception:  # noqa: BLE001 - defaults that raise are a failed baseline, not a lost run
-        return {"defaults_fitness": math.inf}
+    from tuner.evaluate import evaluate_one
+
+    ev = evaluate_one(objective, params).evaluation  # as the preflight scores the defaults (timeout, failures)
+    out: dict[str, Any] = {"defaults_fitness": float(ev.fitness) if ev.status == "ok" else math.inf}
     if hook(objective, "score") is not None:
         has_test = hook(objective, "has_test_data")
         for which in ("train", "test") if has_test is not None and has_test() else ("train",):
