@@ -3,7 +3,7 @@
 Public API::
 
     import tuner
-    params = tuner.load_best("runs/20261122T101500Z-demo-a1b2c3")   # dict of the best parameters
+    params = tuner.load_best("runs/20261122T101500Z-demo-a1b2c3")   # every value of the tuned system
     result = tuner.run_config("configs/demo.yaml", seed=3)          # a RunResult
 """
 
@@ -18,8 +18,9 @@ __all__ = ["__version__", "load_best", "run_config"]
 
 
 def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """The best parameters of a run directory (``best.yaml``) as a plain dict."""
-    from tuner.run import load_best as _load_best
+    """Every value of a run's deployed filter or controller (searched, fixed and defaults; see
+    :func:`tuner.deployment.load_deployment` for their sources and the scoring-only settings)."""
+    from tuner.deployment import load_best as _load_best
 
     return _load_best(run_dir)
 

@@ -330,6 +330,9 @@ def _cmd_evaluate(a) -> int:
         for rec, metrics in out.get("recordings", {}).items():
             vals = "  ".join(f"{k}={v:.4g}" for k, v in metrics.items() if isinstance(v, (int, float)))
             print(f"  {rec}: {vals}")
+        dep = out.get("deployment") or {}
+        if dep:  # every value of the scored filter/controller (searched, fixed, defaults)
+            print(f"deployed {dep['kind']} {dep['name']}: " + ", ".join(f"{k}={v!r}" for k, v in dep["values"].items()))
     return 0
 
 

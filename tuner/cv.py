@@ -38,11 +38,12 @@ from typing import Any
 import numpy as np
 
 from tuner.config import ConfigError, RunConfig, ValidationConfig
+from tuner.deployment import DEFAULTS_MEANING, defaults_baseline
 from tuner.loop import minimize
 from tuner.objective import hook
 
 __all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score",
-           "scored", "defaults_params", "scores_on_test_data"]
+           "scored", "scores_on_test_data"]
 
 
 @dataclass
@@ -105,16 +106,6 @@ def scored(objective: Any, params: dict[str, Any], which: str = "train") -> tupl
         return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), ()
     s = score(params, which)
     return float(s.fitness), s.failed, tuple(str(n) for n in s.recordings)
-
-
-def defaults_params(objective: Any, space: Any) -> dict[str, Any] | None:
-    """What "defaults" means everywhere (CV baseline, sweep defaults rows): the config's fixed values
-    (``objective.fixed`` and ``parameters: {x: {fixed: v}}`` alike) with the searched parameters at the
-    objective's defaults; ``None`` without a ``default_params`` hook."""
-    fn = hook(objective, "default_params")
-    if fn is None:
-        return None
-    return {**dict(fn()), **dict(space.fixed)}
 
 
 def scores_on_test_data(objective: Any, params: dict[str, Any] | None,
@@ -215,7 +206,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
     n_jobs, notes = _n_jobs(cfg, cfg.optimizer.population or 2)
     out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
-    defaults = defaults_params(objective, cfg.space(objective))
+    defaults = defaults_baseline(objective, cfg.space(objective))  # fixed values wherever written
     for i, (name, train, test) in enumerate(folds):
         evaluate = _LiveMap(cfg, n_jobs)
         try:
@@ -305,8 +296,7 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
 
     lines = [f"# Cross-validation of {out.name}", "",
              f"{len(out.folds)} folds, {out.seconds:.0f} s. Each fold: tuned on the other folds, scored on the "
-             "held-out recordings (plain metric, no prior); defaults (the config's fixed values, the searched "
-             "parameters at the objective's defaults) scored on the same recordings."
+             f"held-out recordings (plain metric, no prior); {DEFAULTS_MEANING}, scored on the same recordings."
              + (" Each fold's final choice: the best of the tuning's top candidates"
                 " (and the defaults, where included) on an inner held-out part of the fold's tuning recordings,"
                 " as `validation.select` does in a run." if with_sel else ""), "",

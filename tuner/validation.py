@@ -15,7 +15,7 @@ job (:class:`tuner.config.ValidationConfig`) measure and act on that, both throu
     tuning recordings only; ``test:`` recordings keep their own score (``test_score``,
     ``defaults_test_score`` in ``validation.json``).
 
-Every finished run also records its defaults (:func:`tuner.cv.defaults_params`) scored as its best is
+Every finished run also records its defaults (:func:`tuner.deployment.defaults_baseline`) scored as its best is
 (:func:`defaults_scores`: ``defaults_fitness``, ``defaults_train_fitness``, ``defaults_test_fitness``),
 which sweeps show as each method's defaults row. ``tuner cv RUN_DIR`` does the
     same for a finished run.
@@ -345,14 +345,15 @@ def _record(rd: RunDir, best: Best, cv: dict[str, Any] | None, selection: dict[s
 
 
 def defaults_scores(cfg: RunConfig, objective: Any, space: Any = None) -> dict[str, Any]:
-    """The defaults (:func:`tuner.cv.defaults_params`) scored as a run's best is: ``defaults_fitness`` (the
+    """The defaults (:func:`tuner.deployment.defaults_baseline`) scored as a run's best is: ``defaults_fitness`` (the
     tuning fitness, as ``best_fitness``), ``defaults_train_fitness`` and ``defaults_test_fitness`` (the
     objective's plain ``score`` on its train and test data, as ``train_fitness``/``test_fitness``) where
     the objective has them. A defaults evaluation that fails, raises or times out scores inf."""
-    from tuner.cv import defaults_params, scored
+    from tuner.cv import scored
+    from tuner.deployment import defaults_baseline
 
     try:
-        params = defaults_params(objective, space if space is not None else cfg.space(objective))
+        params = defaults_baseline(objective, space if space is not None else cfg.space(objective))
     except ConfigError:  # no search space of its own to take the fixed values from: no defaults row
         return {}
     if params is None:
