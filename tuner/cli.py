@@ -323,6 +323,8 @@ def _cmd_evaluate(a) -> int:
     from tuner.rescore import evaluate_target
 
     out = evaluate_target(a.target, params_file=a.params, data_file=a.data)
+    for w in out.get("warnings", []):
+        print(f"warning: {w}", file=sys.stderr)
     if a.json:
         print(json.dumps(out, indent=1, default=float))
     else:

@@ -298,3 +298,27 @@ def test_start_in_motion_is_one_warning_line_of_tuner_run(tmp_path, moving_and_r
     lines = [ln for ln in out.stderr.splitlines() if ln.startswith("warning:")]
     assert len(lines) == 1 and lines[0].startswith("warning: moving: starts in motion"), lines
     assert "init: truth" in lines[0] and "warmup_s" in lines[0]
+
+
+def test_evaluate_on_new_data_starting_in_motion_warns(tmp_path, moving_and_resting):
+    """``tuner evaluate CONFIG --params p --data new.yaml``: the new data's start is checked too."""
+    from objectives.attitude.data.export_csv import to_csv
+
+    to_csv(moving_and_resting["moving"], tmp_path / "moving.csv")
+    to_csv(moving_and_resting["resting"], tmp_path / "resting.csv")
+    cfg = {"name": "m", "seed": 1, "objective": {"kind": "filter", "filter": "madgwick", "metric": "euler_rmse_mean",
+                                                   "data": [{"csv": {"path": "resting.csv", "columns": CSV_MAP}}]},
+           "parameters": {"beta": {"low": 0.01, "high": 0.5, "scale": "log"}},
+           "optimizer": {"method": "pso", "population": 4, "generations": 1}}
+    (tmp_path / "job.yaml").write_text(yaml.safe_dump(cfg))
+    (tmp_path / "p.yaml").write_text("beta: 0.05\n")
+    (tmp_path / "new.yaml").write_text(yaml.safe_dump([{"csv": {"path": "moving.csv", "columns": CSV_MAP}}]))
+    out = tuner("evaluate", "job.yaml", "--params", "p.yaml", "--data", "new.yaml", "--json", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    (w,) = [ln for ln in out.stderr.splitlines() if ln.startswith("warning:")]
+    assert "moving: starts in motion" in w
+    import json
+
+    assert json.loads(out.stdout)["warnings"] == [w.removeprefix("warning: ")]
+    out = tuner("evaluate", "job.yaml", "--params", "p.yaml", cwd=tmp_path)
+    assert out.returncode == 0 and "warning" not in out.stderr, out.stderr
