@@ -419,7 +419,18 @@ def show_sweep(sweep_dir: Path, as_json: bool = False) -> str:
         return df.to_json(orient="records", indent=1)
     cols = [c for c in ["job", "status", "best_fitness", "train_fitness", "test_fitness", "cv_fitness", "cv_gap",
                         "n_evals", "wall_s"] if c in df.columns]
-    return df[cols].to_string(index=False)
+    return "\n".join([df[cols].to_string(index=False), *ranking_lines(df)])
+
+
+def ranking_lines(df: Any) -> list[str]:
+    """The sweep's ranking for the terminal: which score ranks, then one line per method and defaults row."""
+    summ = summarize(df)
+    if not len(summ):
+        return []
+    key_col, what = summ.attrs["ranked_by"]
+    return [f"ranking by the median {what}, with each method's defaults scored the same way:",
+            *(f"  {int(r[('rank', '')])}. {name}: {key_col} {r[(key_col, 'median')]:.4g}"
+              for name, r in summ.iterrows())]
 
 
 def list_runs(runs_dir: Path) -> str:
@@ -458,13 +469,7 @@ def summary_text(df: Any, sweep_dir: Path) -> str:
         cols.insert(3, "best_fitness")
     out = df[cols].copy()
     out.columns = [c.replace(f"{split}.", f"{split} ").replace("_rmse_deg", " RMSE (deg)") for c in cols]
-    lines = [out.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
-    summ = summarize(df)
-    if len(summ):
-        key_col, what = summ.attrs["ranked_by"]
-        lines.append(f"ranking by the median {what}, with each method's defaults scored the same way:")
-        for name, r in summ.iterrows():
-            lines.append(f"  {int(r[('rank', '')])}. {name}: {key_col} {r[(key_col, 'median')]:.4g}")
+    lines = [out.to_string(index=False, float_format=lambda v: f"{v:.4g}"), *ranking_lines(df)]
     for _, r in df.iterrows():
         lines.append(f"  {r['job']}: {Path(sweep_dir) / 'jobs' / r['job']}")
     return "\n".join(lines)

@@ -91,6 +91,12 @@ def test_demo_sweep_ranks_by_test_score_with_defaults_rows(tmp_path):
         assert med[r["method"]] == pytest.approx(r["test_fitness"])
     md = (sw / "report.md").read_text()
     assert "Ranked by the median test score" in md and "ekf (defaults)" in md
+    from tuner.sweep import show_sweep
+
+    shown = show_sweep(sw)
+    assert "ranking by the median test score" in shown
+    assert [ln.split(". ", 1)[1].split(":")[0] for ln in shown.splitlines() if ln.startswith("  ") and ". " in ln] \
+        == list(s.index)
 
 
 def test_demo_sweep_with_validation_ranks_by_cv(tmp_path, capsys):
