@@ -333,3 +333,15 @@ def test_older_run_without_deployment_is_rebuilt_and_a_malformed_one_is_an_error
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 2 and out.stderr.startswith("error: ") and "best.yaml" in out.stderr
     assert "deployment.values: missing" in out.stderr
+
+
+def test_objective_q0_start_is_deployed_and_a_truth_q0_is_scoring_only():
+    from objectives.attitude.objective import FilterObjective
+
+    section = {"kind": "filter", "filter": "madgwick", "data": [_data("madgwick")]}
+    broad = FilterObjective.from_config({**section, "q0": "broad"}).deployment({"beta": 0.2})
+    assert broad["values"]["init"] == "broad" and broad["sources"]["init"] == "fixed" and "init" not in broad["scoring"]
+    truth = FilterObjective.from_config({**section, "q0": "truth"})
+    dep = truth.deployment({"beta": 0.2})
+    assert dep["values"]["init"] == "accmag" and dep["scoring"]["init"] == "truth" and dep["notes"]
+    assert truth.build({"beta": 0.2}).values == dep["values"]
