@@ -91,9 +91,12 @@ DECL = ParamSet("realtime", (
 
 
 class Realtime(AttitudeFilter):
-    """The causal ``realtime`` filter (see module docstring); searched by default: ``tau_acc_s``,
-    ``tau_mag_s``, ``mag_rejection_factor``, ``mag_recover_tau_s`` (default 0, off: on the lower bound for
-    a prior)."""
+    """Causal attitude filter on VQF's design with the project's magnetic-field additions (module docstring).
+
+    Searched by default: ``tau_acc_s``, ``tau_mag_s``, ``mag_rejection_factor``, ``mag_recover_tau_s``
+    (default 0, off: on the lower bound for a prior). Raises ``ValueError`` for values outside their
+    declared ranges (at construction) and for a non-positive sample time.
+    """
 
     name = "realtime"
     working_frame = "ENU"
