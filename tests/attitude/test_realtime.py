@@ -179,3 +179,14 @@ def test_registered_and_validated():
     with pytest.raises(ValueError, match="dt"):
         Realtime().coef(0.0, True)
     assert {"tau_acc_s", "tau_mag_s"} <= set(Realtime.space().free_names)
+
+
+def test_stream_from_q0_equals_batch():
+    rec = scenario(duration_s=12.0)
+    f = Realtime(start="q0", mag_first_at_rest=True)
+    q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])
+    want = f.run(rec.gyr, rec.acc, rec.mag, dt=rec.dt, q0=q0)
+    s = f.stream(dt=rec.dt, q0=q0)
+    got = np.array([s.update(g, a, m) for g, a, m in zip(rec.gyr, rec.acc, rec.mag)])
+    np.testing.assert_array_equal(got, want)
+    assert not np.allclose(want[:50], Realtime(mag_first_at_rest=True).run(rec)[:50])  # the start is used

@@ -36,6 +36,7 @@ import numpy as np
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._realtime_kernel import coefficients, initial_state, realtime_kernel
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["Realtime", "DECL"]
@@ -125,3 +126,21 @@ class Realtime(AttitudeFilter):
             diag["mag_dist"] = flags[:, 1] != 0.0
             diag["delta"] = flags[:, 2]
         return FilterResult(out, "ENU", diag)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample filter: the kernel on one sample at a time with its state carried (equal to
+        :meth:`run` on the samples seen so far)."""
+        return _RealtimeStream(self, rate_hz, dt, q0, frame)
+
+
+class _RealtimeStream(StateStream):
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        self._coef = self.filter.coef(self.dt, bool(self.use_mag))
+        self._out = np.empty((1, 4))
+        self._bias = np.empty((1, 3))
+        self._flags = np.empty((1, 3))
+        return initial_state(self._coef, q0 if self.filter.values["start"] == "q0" else None)
+
+    def _step(self, state, gyr, acc, mag):
+        realtime_kernel(gyr, acc, mag, self._coef, state, self._out, self._bias, self._flags)
+        return self._out[0]
