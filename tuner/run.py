@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from tuner.config import ConfigError, RunConfig, config_from_dict
+from tuner.deployment import attach_deployment, load_deployment
 from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.objective import Evaluation
@@ -103,8 +104,8 @@ def read_meta(run_dir: Path) -> dict[str, Any]:
 
 
 def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """The best parameters of a run (from ``best.yaml``) as a plain dict."""
-    return dict(RunDir(run_dir).best().params)
+    """Every value of the run's deployed filter or controller (:func:`tuner.deployment.load_deployment`)."""
+    return dict(load_deployment(run_dir).values)
 
 
 def _git_commit() -> str:
@@ -390,7 +391,7 @@ class Run:
 
     def _finalize(self) -> dict[str, Any]:
         """The objective's report step; ``best.yaml`` rewritten from the history with its results."""
-        assert self.best is not None
+        self.best = attach_deployment(self.best, self.objective, self.base_space)  # the complete tuned system
         self.rd.write_best(self.best)  # derived from the history, whatever happened before
         extra: dict[str, Any] = {}
         finalize = getattr(self.objective, "finalize", None)
