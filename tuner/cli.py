@@ -404,8 +404,8 @@ def _cmd_report(a) -> int:
 
 
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
-            "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "verify-c": _cmd_verify_c, "evaluate": _cmd_evaluate,
-            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report}
+            "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "evaluate": _cmd_evaluate,
+            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report, "verify-c": _cmd_verify_c}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -65,7 +65,7 @@ def c_identifier(prefix: str) -> str:
     """``prefix`` as a C identifier prefix (letters, digits, underscores; not starting with a digit)."""
     p = re.sub(r"\W", "_", str(prefix))
     if not p or p[0].isdigit():
-        raise ValueError(f"prefix must be a C identifier (letters, digits, _; not starting with a digit), got {prefix!r}")
+        raise ValueError(f"prefix must be a C identifier (letters, digits, _; no leading digit), got {prefix!r}")
     return p
 
 
