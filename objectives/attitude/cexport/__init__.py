@@ -199,6 +199,7 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
     state = "\n".join("    " + line for line in state.splitlines())
     header = _template("header.h").replace("@PARAMS@", params).replace("@STATE@", state)
     header = header.replace("@REAL@", precision).replace("@FRAME@", frame.upper())
+    comment = comment.replace("/*", "/ *").replace("*/", "* /")  # nothing in it may end the comment
     header = "/*\n" + "\n".join((" * " + line).rstrip() for line in comment.splitlines()) + "\n */\n" + header
 
     init_vals = ",\n".join(f"    {_literal(f.value, f.ctype)} /* {f.name.split('[')[0]} */" for f in fields)
