@@ -22,6 +22,8 @@ EPILOG = """examples:
   tuner resume runs/20261122T101500Z-demo-a1b2c3   continue an interrupted run
   tuner show runs/20261122T101500Z-demo-a1b2c3     summary of a run (or a sweep directory)
   tuner export RUN_DIR --format c > tuned.h        best parameters as a C header
+  tuner export RUN_DIR --format c-filter --out fw  the tuned filter itself as C99 (fw/<prefix>.h, .c)
+  tuner verify-c RUN_DIR                           that C compiled and scored next to the Python model
   tuner evaluate RUN_DIR --data other.yaml --json  score the best parameters on other data
   tuner sweep configs/thesis_tilt_sweep.yaml       many runs and one report
   tuner list                                       optimizers, objectives, filters, controllers, metrics, data
