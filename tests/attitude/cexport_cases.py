@@ -7,6 +7,7 @@ import pytest
 
 from objectives.attitude.cexport import render_c_filter
 from objectives.attitude.cexport.build import CFilter, compile_shared, find_compiler
+from objectives.attitude.filters.complementary import CCF, LCF, NCF
 from objectives.attitude.filters.ekf import EKF
 from objectives.attitude.filters.madgwick import Madgwick
 from objectives.attitude.filters.mahony import Mahony
@@ -23,6 +24,13 @@ CONFIGS = {
     "ekf_robust": lambda: EKF(p0_b=1e-4, gyro_sample="current", huber_deg=5.0, acc_gate=0.3, mag_rejection=True,
                               rest_bias=True, rho=3.0, acc_lp_tau_s=4.6),
     "ekf_paper_euler": lambda: EKF(integration="euler", use_mag=False),
+    "lcf_tau": lambda: LCF(alpha_mode="tau", tau_s=0.5),
+    "lcf_alpha_rate": lambda: LCF(alpha=0.9, alpha_rate_hz=100.0),
+    "ncf": lambda: NCF(Kp=2.0, Ki=0.05),
+    "ccf_static": lambda: CCF(alpha_mode="static"),
+    "ccf_robust": lambda: CCF(alpha_mode="tau", tau_s=0.2, Kp=2.0, Ki=0.05, acc_gate=0.3, mag_rejection=True,
+                              mag_weight=0.5),
+    "ccf_acc_lp": lambda: CCF(acc_lp_tau_s=3.0, acc_gate=0.3),
 }
 
 

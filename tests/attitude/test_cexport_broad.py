@@ -52,7 +52,8 @@ def _compare(flt, recs, tmp_path, exact: bool) -> dict[str, float]:
     return worst
 
 
-@pytest.mark.parametrize("case", ["madgwick_c_zeta", "mahony_robust", "mahony_imu", "ekf_robust", "ekf_paper_euler"])
+@pytest.mark.parametrize("case", ["madgwick_c_zeta", "mahony_robust", "mahony_imu", "ekf_robust", "ekf_paper_euler",
+                                  "lcf_tau", "ncf", "ccf_robust"])
 def test_every_trial(case, trials, tmp_path):
     _compare(CONFIGS[case](), trials, tmp_path, exact=True)
 

@@ -102,8 +102,8 @@ def test_verify_c_without_a_compiler_is_one_error_line(bench_run, tmp_path):
 
 
 def test_export_refuses_a_filter_without_a_c_port(tmp_path):
-    cfg = {"name": "ccf", "objective": {"kind": "filter", "filter": "ccf", "data": [
-        {"synthetic": {"generator": "bench6dof", "duration_s": 4.0, "rate_hz": 100.0, "seed": 1}}]}}
+    cfg = {"name": "kf1d", "objective": {"kind": "filter", "filter": "kf1d", "metric": "mse_1d", "data": [
+        {"synthetic": {"generator": "tilt1d", "duration_s": 4.0, "rate_hz": 100.0, "seed": 1}}]}}
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
     run_dir = _run(tmp_path, tmp_path / "c.yaml")
     out = _tuner("export", run_dir, "--format", "c-filter", "--out", tmp_path / "x", check=False)

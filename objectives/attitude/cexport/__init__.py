@@ -1,11 +1,10 @@
 """C99 source of the attitude filters firmware runs, with a tuned configuration baked in.
 
-``render_c_filter(flt, ...)`` turns a validated filter (:class:`~objectives.attitude.filters.madgwick.Madgwick`,
-:class:`~objectives.attitude.filters.mahony.Mahony` or :class:`~objectives.attitude.filters.ekf.EKF`, robust
-blocks included) into a header and a source file. The C is a line-by-line port of the numba kernels in
-:mod:`objectives.attitude.filters` (same operations in the same order, the same start orientation, the robust
-blocks in the kernels' order), so that it computes what the tuning scored; ``tests/attitude/test_cexport*.py``
-compile it and compare it with the kernels sample by sample.
+``render_c_filter(flt, ...)`` turns a validated filter (Madgwick, Mahony, the EKF, the LCF, NCF and CCF of
+:mod:`objectives.attitude.filters`; robust blocks included) into a header and a source file. The C is a
+line-by-line port of the numba kernels (same operations in the same order, the same start orientation, the
+robust blocks in the kernels' order), so that it computes what the tuning scored;
+``tests/attitude/test_cexport*.py`` compile it and compare it with the kernels sample by sample.
 
 Each filter is one struct and a streaming API without heap or global state::
 
@@ -14,12 +13,12 @@ Each filter is one struct and a streaming API without heap or global state::
     PREFIX_update(&f, gyr, acc, mag, dt_s);   /* per sample: rad/s, m/s^2, any unit (NULL: none), s */
     PREFIX_quaternion(&f, q);                 /* sensor-to-earth (w, x, y, z), ENU */
 
-Only ``sqrt``, ``exp`` and ``asin`` of libm are called (the EKF's exact quaternion step computes sine and
-cosine with a series; its Huber angle uses ``asin``). ``precision="float"`` writes every literal and call in
-single precision for MCUs without a double FPU.
+Only ``sqrt``, ``exp``, ``asin`` and ``atan2`` of libm are called (sine and cosine, for the EKF's exact
+quaternion step and the complementary filters' Euler angles, are a series; the Huber angle uses ``asin``).
+``precision="float"`` writes every literal and call in single precision for MCUs without a double FPU.
 
 The templates (``templates/*.c``, ``*.h``) name public identifiers ``PFX_`` and use ``real``, ``SQRT``,
-``EXP``, ``ASIN``, ``fabs``; :func:`render_c_filter` replaces them.
+``EXP``, ``ASIN``, ``ATAN2``, ``fabs``; :func:`render_c_filter` replaces them.
 """
 
 from __future__ import annotations
@@ -35,7 +34,9 @@ import numpy as np
 __all__ = ["render_c_filter", "C_FILTERS", "CField", "c_identifier"]
 
 #: filters with a C port: name -> the template of its update
-C_FILTERS = {"madgwick": "madgwick.c", "mahony": "mahony.c", "ekf": "ekf.c"}
+C_FILTERS = {"madgwick": "madgwick.c", "mahony": "mahony.c", "ekf": "ekf.c", "lcf": "cf.c", "ncf": "cf.c",
+             "ccf": "cf.c"}
+_ALPHA_MODES = {"per_sample": 0, "tau": 1, "static": 2}
 _INIT = {"accmag": 0, "broad": 1, "given": 2}
 _FLOAT_LIT = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+|\.\d+(?:[eE][-+]?\d+)?)(?![\w.])")
 _BIAS_STATE = ("PFX_real q[4];   /* sensor-to-earth quaternion, working frame */\n"
@@ -120,7 +121,35 @@ def _fields(name: str, v: dict, dt: float, g: float, init: str, q0) -> list[CFie
                 CField("real", "huber_rad", math.radians(float(v["huber_deg"])), "Huber innovation angle, rad"),
                 CField("int", "gyro_current", v["gyro_sample"] == "current", "1: gyro sample k propagates k-1 -> k")]
         return head + body + start + _robust_fields(v, True)
+    if name in ("lcf", "ncf", "ccf"):
+        return head + _cf_fields(name, v, g) + start
     raise ValueError(f"c-filter: no C port of filter {name!r}; available: {sorted(C_FILTERS)}")
+
+
+def _cf_fields(name: str, v: dict, g: float) -> list[CField]:
+    """LCF, NCF and CCF share one kernel: the LCF has no PI gains, the NCF no blend, only the CCF robust options."""
+    alpha = 1.0 if name == "ncf" else float(v["alpha"])
+    kp, ki = (0.0, 0.0) if name == "lcf" else (float(v["Kp"]), float(v["Ki"]))
+    mode = v.get("alpha_mode", "per_sample")
+    rate = float(v.get("alpha_rate_hz", 0.0))
+    if mode != "per_sample" and rate != 0.0:
+        raise ValueError(f"c-filter: {name}: alpha_rate_hz={rate} applies to alpha_mode per_sample only")
+    return [CField("real", "alpha", alpha, "gyro weight per sample, eq. (8) (1: no blend)"),
+            CField("real", "Kp", kp, "proportional gain, 1/s (eq. (10))"),
+            CField("real", "Ki", ki, "integral gain, 1/s^2 (eq. (10))"),
+            CField("int", "use_mag", bool(v["use_mag"]), "yaw from the magnetometer (1) or the gyro only (0)"),
+            CField("real", "acc_gate", float(v.get("acc_gate", math.inf)), "no correction when | |acc| - g | > "
+                                                                             "acc_gate g"),
+            CField("real", "g", float(g), "gravity in the accelerometer's unit"),
+            CField("int", "alpha_mode", _ALPHA_MODES[mode], "0 per_sample, 1 tau (tau_s), 2 static (eq. (14))"),
+            CField("real", "alpha_rate_hz", rate, "rate at which alpha is per sample (0: every rate)"),
+            CField("real", "tau_s", float(v.get("tau_s", 0.1)), "blend time constant, s (alpha_mode 1)"),
+            CField("real", "acc_lp_tau_s", float(v.get("acc_lp_tau_s", 0.0)), "earth-frame acc low-pass, s (0: off)"),
+            CField("int", "mag_rejection", bool(v.get("mag_rejection", False)), "magnetic disturbance rejection"),
+            CField("real", "mag_norm_th", float(v.get("mag_norm_th", 0.1)), "field norm threshold (fraction)"),
+            CField("real", "mag_dip_th_deg", float(v.get("mag_dip_th_deg", 10.0)), "field dip threshold, deg"),
+            CField("real", "mag_max_rejection_s", float(v.get("mag_max_rejection_s", 60.0)), "longest rejection, s"),
+            CField("real", "mag_weight", float(v.get("mag_weight", 1.0)), "factor on the yaw correction")]
 
 
 def _literal(x: Any, ctype: str) -> str:
@@ -189,7 +218,14 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
     rot = frame_rotation(work, frame.upper())
 
     params = "\n".join(f"    {'PFX_real' if f.ctype == 'real' else 'int'} {f.name}; /* {f.doc} */" for f in fields)
-    if name == "ekf":
+    if name in ("lcf", "ncf", "ccf"):
+        state = ("PFX_real x[3];        /* roll, pitch, yaw (ZYX, NED), rad: the state */\n"
+                 "PFX_real integ[3];    /* the PI integrals, rad/s */\n"
+                 "PFX_real out[3];      /* the last output angles, rad */\n"
+                 "PFX_real alpha;       /* per-sample gains at dt_s */\n"
+                 "PFX_real kp;\n"
+                 "PFX_real mag_gain;    /* the last factor on the yaw correction */\n") + _ROBUST_STATE
+    elif name == "ekf":
         state = ("PFX_real x[7];        /* state: quaternion (working frame NED) and gyro bias, rad/s */\n"
                  "PFX_real P[7][7];     /* its covariance */\n"
                  "PFX_real prev_gyr[3]; /* the previous gyro sample */\n"
@@ -210,12 +246,14 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define SQRT {'sqrtf' if fl else 'sqrt'}",
            f"#define EXP {'expf' if fl else 'exp'}",
            f"#define ASIN {'asinf' if fl else 'asin'}",
+           f"#define ATAN2 {'atan2f' if fl else 'atan2'}",
            "#define ISNAN_(x) isnan(x)",
            f"#define WORK_FRAME {1 if work == 'NED' else 2} /* {work} */",
            f"#define NWU_TO_WORK {_quat_literal(frame_rotation('NWU', work))}",
            f"#define WORK_TO_OUT {_quat_literal(rot)}",
            f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}", ""]
-    parts = ["common.c", "robust.c"] + (["bias_prologue.c"] if name != "ekf" else []) + [C_FILTERS[name], "run.c"]
+    extra = ["bias_prologue.c"] if name in ("madgwick", "mahony") else ["trig.c"]
+    parts = ["common.c", "robust.c", *extra, C_FILTERS[name], "run.c"]
     body = "\n".join(_template(p) for p in parts)
     if name == "madgwick":
         body = body.replace("BIAS_OUT", "int i;\n    for (i = 0; i < 3; i++)\n"

@@ -47,7 +47,7 @@ def usage_comment(name: str, prefix: str, precision: str, rate_hz: float) -> str
         "earth frame ENU (x east, y north, z up).",
         f"The tuned values assume {rate_hz:g} Hz (dt_s = {1.0 / rate_hz:.9g} s); rate-dependent gains are",
         "recomputed when dt_s changes, per-sample variances (the EKF's q_q, q_w) are used as they are.",
-        "No heap, no global state: one struct per filter. libm: sqrt, exp, asin.",
+        "No heap, no global state: one struct per filter. libm: sqrt, exp, asin, atan2.",
         "",
         "    #include \"" + prefix.lower() + ".h\"",
         f"    {p}_filter f;",
