@@ -42,6 +42,11 @@ CONFIGS = {
     "ekf": ("ekf", {}),
     "ekf robust": ("ekf", {"p0_b": 1e-4, "gyro_sample": "current", "huber_deg": 5.0, "acc_gate": 0.3,
                            "mag_rejection": True, "rest_bias": True, "acc_lp_tau_s": 4.6}),
+    "lcf": ("lcf", {}),
+    "ncf": ("ncf", {}),
+    "ccf": ("ccf", {}),
+    "ccf robust": ("ccf", {"alpha_mode": "tau", "tau_s": 0.2, "Kp": 2.0, "Ki": 0.05, "acc_gate": 0.3,
+                           "mag_rejection": True, "mag_weight": 0.5}),
 }
 _VARIANTS = (("double", ("-O2",)), ("float", ("-O2",)), ("double", ("-O2", "-ffast-math")))
 
