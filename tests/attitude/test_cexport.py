@@ -117,9 +117,12 @@ def test_float_close_to_double(case, bench, tmp_path):
 
 
 @pytest.mark.parametrize("precision", ["double", "float"])
-@pytest.mark.parametrize("case", sorted(CONFIGS))
+@pytest.mark.parametrize("case", sorted(CONFIGS) + ["kf1d"])
 def test_objects_use_only_sqrt_exp_asin_atan2_and_no_writable_globals(case, precision, tmp_path):
-    files = render_c_filter(CONFIGS[case](), rate_hz=200.0, precision=precision, prefix="NM")
+    from objectives.attitude.filters.kf1d import KF1D
+
+    flt = KF1D() if case == "kf1d" else CONFIGS[case]()
+    files = render_c_filter(flt, rate_hz=200.0, precision=precision, prefix="NM")
     for name, text in files.items():
         (tmp_path / name).write_text(text)
     obj = tmp_path / "nm.o"
@@ -149,12 +152,58 @@ def test_frames_and_quaternion_output(bench, tmp_path):
     assert angle(to_frame(ned, "NED", "NED"), enu).max() < TOL_RAD
 
 
-def test_render_refuses_what_it_cannot_port():
+@pytest.mark.parametrize("frame", ["NED", "ENU"])
+def test_kf1d_as_the_model(frame, tmp_path):
+    """The thesis's tilt KF (eqs. 3.9-3.13) on the tilt bench (thesis 3.1.2), with a nonzero P0."""
+    from objectives.attitude.cexport.build import CFilter, compile_shared
+    from objectives.attitude.data.tilt1d import tilt1d
     from objectives.attitude.filters.kf1d import KF1D
 
-    with pytest.raises(ValueError, match="no C port of filter 'kf1d'"):
-        render_c_filter(KF1D(), rate_hz=100.0)
+    rec = tilt1d(20.0, 800.0, 3, frame=frame)
+    flt = KF1D(rho=0.35, q00=6.4e-8, q11=3.1e-12, p0_theta=1e-3, p0_bias=1e-6)
+    res = flt.run_detailed(rec)
+    for precision in ("double", "float"):
+        files = render_c_filter(flt, rate_hz=800.0, precision=precision, prefix="KF", frame=frame)
+        c = CFilter(compile_shared(files, tmp_path / precision), "KF", precision)
+        q = c.run(rec.gyr, rec.acc, rec.mag, rec.dt)
+        theta = 2.0 * np.arctan2(q[:, 2], q[:, 0])
+        tol = TOL_RAD if precision == "double" else 1e-4
+        assert np.abs(theta - res.diagnostics["angle"]).max() < tol
+        assert angle(q, res.quat).max() < tol
+
+
+def test_render_refuses_what_it_cannot_port():
+    from objectives.attitude.filters.kf1d import AKF1D
+
+    with pytest.raises(ValueError, match="no C port of filter 'akf1d'"):
+        render_c_filter(AKF1D(), rate_hz=100.0)
     with pytest.raises(ValueError, match="precision must be"):
         render_c_filter(Mahony(), rate_hz=100.0, precision="half")
     with pytest.raises(ValueError, match="C identifier"):
         render_c_filter(Mahony(), rate_hz=100.0, prefix="1x")
+
+
+def test_sine_and_cosine_without_libm(tmp_path):
+    """The series that replaces libm's sin/cos agrees with it to 1 ulp over the angles filters see."""
+    import ctypes
+    import math
+
+    from objectives.attitude.filters.ekf import EKF
+
+    src = render_c_filter(EKF(), rate_hz=100.0, prefix="T")["t.c"]
+    a = src.index("static void sincos_")
+    b = src.index("\n}\n", a) + 3
+    (tmp_path / "s.c").write_text("#include <math.h>\ntypedef double real;\n" + src[a:b]
+                                  + "\nvoid sc(double a, double *s, double *c);\n"
+                                  + "void sc(double a, double *s, double *c) { sincos_(a, s, c); }\n")
+    subprocess.run([find_compiler(), *STRICT_FLAGS, "-O2", "-shared", "-fPIC", "-o", str(tmp_path / "s.so"),
+                    str(tmp_path / "s.c"), "-lm"], check=True)
+    lib = ctypes.CDLL(str(tmp_path / "s.so"))
+    s, c = ctypes.c_double(), ctypes.c_double()
+    xs = np.concatenate([np.linspace(-20.0, 20.0, 40001), np.geomspace(1e-12, 1.0, 200), [math.pi, -math.pi]])
+    for x in xs:
+        lib.sc(ctypes.c_double(x), ctypes.byref(s), ctypes.byref(c))
+        assert abs(s.value - math.sin(x)) <= 4e-16 * max(abs(math.sin(x)), 1e-3), x
+        assert abs(c.value - math.cos(x)) <= 4e-16, x
+    lib.sc(ctypes.c_double(math.inf), ctypes.byref(s), ctypes.byref(c))
+    assert math.isnan(s.value) and math.isnan(c.value)

@@ -102,7 +102,7 @@ def test_verify_c_without_a_compiler_is_one_error_line(bench_run, tmp_path):
 
 
 def test_export_refuses_a_filter_without_a_c_port(tmp_path):
-    cfg = {"name": "kf1d", "objective": {"kind": "filter", "filter": "kf1d", "metric": "mse_1d", "data": [
+    cfg = {"name": "akf1d", "objective": {"kind": "filter", "filter": "akf1d", "metric": "mse_1d", "data": [
         {"synthetic": {"generator": "tilt1d", "duration_s": 4.0, "rate_hz": 100.0, "seed": 1}}]}}
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
     run_dir = _run(tmp_path, tmp_path / "c.yaml")

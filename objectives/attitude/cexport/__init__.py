@@ -35,7 +35,7 @@ __all__ = ["render_c_filter", "C_FILTERS", "CField", "c_identifier"]
 
 #: filters with a C port: name -> the template of its update
 C_FILTERS = {"madgwick": "madgwick.c", "mahony": "mahony.c", "ekf": "ekf.c", "lcf": "cf.c", "ncf": "cf.c",
-             "ccf": "cf.c"}
+             "ccf": "cf.c", "kf1d": "kf1d.c"}
 _ALPHA_MODES = {"per_sample": 0, "tau": 1, "static": 2}
 _INIT = {"accmag": 0, "broad": 1, "given": 2}
 _FLOAT_LIT = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+|\.\d+(?:[eE][-+]?\d+)?)(?![\w.])")
@@ -88,7 +88,7 @@ def _robust_fields(v: dict, ekf: bool) -> list[CField]:
     return out
 
 
-def _fields(name: str, v: dict, dt: float, g: float, init: str, q0) -> list[CField]:
+def _fields(name: str, v: dict, dt: float, g: float, init: str, q0, up_sign: float = 1.0) -> list[CField]:
     """The params struct of filter ``name`` from its validated values ``v``."""
     q0 = [1.0, 0.0, 0.0, 0.0] if q0 is None else [float(x) for x in q0]
     head = [CField("real", "dt_s", float(dt), "nominal sample time, s (coefficients are remade when dt_s changes)")]
@@ -123,6 +123,14 @@ def _fields(name: str, v: dict, dt: float, g: float, init: str, q0) -> list[CFie
         return head + body + start + _robust_fields(v, True)
     if name in ("lcf", "ncf", "ccf"):
         return head + _cf_fields(name, v, g) + start
+    if name == "kf1d":
+        return head + [CField("real", "rho", float(v["rho"]), "accelerometer-angle variance per sample (eq. 3.17)"),
+                       CField("real", "q00", float(v["q00"]), "angle process noise per sample (eq. 3.17)"),
+                       CField("real", "q11", float(v["q11"]), "bias random walk per sample (eq. 3.17)"),
+                       CField("real", "p0_theta", float(v["p0_theta"]), "initial angle variance, rad^2"),
+                       CField("real", "p0_bias", float(v["p0_bias"]), "initial bias variance, (rad/s)^2"),
+                       CField("real", "up_sign", up_sign, "+1: z-up earth frame (ENU), -1: NED"),
+                       CField("int", "use_mag", True, "the start orientation uses the magnetometer when given")] + start
     raise ValueError(f"c-filter: no C port of filter {name!r}; available: {sorted(C_FILTERS)}")
 
 
@@ -213,12 +221,23 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
         raise ValueError(f"c-filter: rate_hz must be a finite number > 0, got {rate_hz!r}")
     pfx = c_identifier(prefix)
     base = pfx.lower()
-    fields = _fields(name, flt.values, 1.0 / rate_hz, g, init, q0)
+    fields = _fields(name, flt.values, 1.0 / rate_hz, g, init, q0, -1.0 if frame.upper() == "NED" else 1.0)
     work = flt.working_frame
-    rot = frame_rotation(work, frame.upper())
+    # the 1-D tilt filter's quaternion is a rotation about y in the frame it is defined in (``frame``)
+    rot = np.array([1.0, 0.0, 0.0, 0.0]) if name == "kf1d" else frame_rotation(work, frame.upper())
 
     params = "\n".join(f"    {'PFX_real' if f.ctype == 'real' else 'int'} {f.name}; /* {f.doc} */" for f in fields)
-    if name in ("lcf", "ncf", "ccf"):
+    if name == "kf1d":
+        state = ("PFX_real th;       /* tilt angle about y, rad */\n"
+                 "PFX_real b;        /* gyro bias, rad/s */\n"
+                 "PFX_real p00;      /* covariance */\n"
+                 "PFX_real p01;\n"
+                 "PFX_real p11;\n"
+                 "PFX_real prev_gyr; /* the previous gyro sample about y, rad/s */\n"
+                 "PFX_real dt_s;\n"
+                 "int started;\n"
+                 "PFX_params p;\n")
+    elif name in ("lcf", "ncf", "ccf"):
         state = ("PFX_real x[3];        /* roll, pitch, yaw (ZYX, NED), rad: the state */\n"
                  "PFX_real integ[3];    /* the PI integrals, rad/s */\n"
                  "PFX_real out[3];      /* the last output angles, rad */\n"
@@ -248,12 +267,12 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define ASIN {'asinf' if fl else 'asin'}",
            f"#define ATAN2 {'atan2f' if fl else 'atan2'}",
            "#define ISNAN_(x) isnan(x)",
-           f"#define WORK_FRAME {1 if work == 'NED' else 2} /* {work} */",
+           f"#define WORK_FRAME {({'ENU': 0, 'NED': 1}).get(work, 2)} /* {work} */",
            f"#define NWU_TO_WORK {_quat_literal(frame_rotation('NWU', work))}",
            f"#define WORK_TO_OUT {_quat_literal(rot)}",
            f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}", ""]
     extra = ["bias_prologue.c"] if name in ("madgwick", "mahony") else ["trig.c"]
-    parts = ["common.c", "robust.c", *extra, C_FILTERS[name], "run.c"]
+    parts = ["common.c", *(["robust.c"] if name != "kf1d" else []), *extra, C_FILTERS[name], "run.c"]
     body = "\n".join(_template(p) for p in parts)
     if name == "madgwick":
         body = body.replace("BIAS_OUT", "int i;\n    for (i = 0; i < 3; i++)\n"

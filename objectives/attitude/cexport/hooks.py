@@ -36,6 +36,16 @@ def _deployed(obj: Any, params: Mapping[str, Any]):
     return flt, ("accmag" if init == "auto" else init)
 
 
+def _frame(obj: Any, flt: Any) -> str:
+    """The output frame: ENU, but for the 1-D tilt filter the frame its training recordings define the tilt in."""
+    if flt.name != "kf1d":
+        return "ENU"
+    frames = {r.frame for r in obj.recordings("train")}
+    if len(frames) != 1:
+        raise ValueError(f"c-filter: kf1d needs one earth frame for its tilt, the recordings have {sorted(frames)}")
+    return frames.pop()
+
+
 def usage_comment(name: str, prefix: str, precision: str, rate_hz: float) -> str:
     """The header's README block: units, rate, how to call."""
     p = prefix
@@ -76,14 +86,16 @@ def export_c_filter(obj: Any, params: Mapping[str, Any], precision: str = "doubl
     text += "\n\nConfiguration (every value of the deployed filter):\n" + values
     if comment:
         text += "\n\n" + comment
-    return render_c_filter(flt, rate_hz=rate, g=G_SI, init=init, precision=precision, prefix=prefix, comment=text)
+    return render_c_filter(flt, rate_hz=rate, g=G_SI, init=init, precision=precision, prefix=prefix, comment=text,
+                           frame=_frame(obj, flt))
 
 
 class _CModel:
     """A filter-like wrapper scoring the compiled C through the objective's own scoring path."""
 
-    def __init__(self, cfilter: Any, flt: Any):
+    def __init__(self, cfilter: Any, flt: Any, frame: str = "ENU"):
         self.c = cfilter
+        self.frame = frame
         self.flt = flt
         self.name = flt.name
         self.values = flt.values
@@ -101,6 +113,11 @@ class _CModel:
         t = time.perf_counter()
         q = self.c.run(rec.gyr, acc, rec.mag if use_mag else None, rec.dt)
         self.seconds += time.perf_counter() - t
+        if self.name == "kf1d":  # the tilt about y, in the frame the C was made for
+            if rec.frame != self.frame:
+                raise ValueError(f"{rec.name}: frame {rec.frame}, the C tilt filter was made for {self.frame}")
+            theta = 2.0 * np.arctan2(q[:, 2], q[:, 0])
+            return FilterResult(q, rec.frame, {"angle": theta})
         return FilterResult(to_frame(q, "ENU", rec.frame), rec.frame)
 
 
@@ -124,9 +141,11 @@ def verify_c_filter(obj: Any, params: Mapping[str, Any], precision: str = "doubl
         raise FileNotFoundError("no C compiler found (set CC or install cc, gcc or clang)")
     flt, init = _deployed(obj, params)
     rate, _ = obj.sample_rate()
-    files = render_c_filter(flt, rate_hz=rate or 100.0, g=G_SI, init=init, precision=precision, prefix="TVC")
+    frame = _frame(obj, flt)
+    files = render_c_filter(flt, rate_hz=rate or 100.0, g=G_SI, init=init, precision=precision, prefix="TVC",
+                            frame=frame)
     with tempfile.TemporaryDirectory() as tmp:
-        model = _CModel(CFilter(compile_shared(files, tmp, tuple(opt)), "TVC", precision), flt)
+        model = _CModel(CFilter(compile_shared(files, tmp, tuple(opt)), "TVC", precision), flt, frame)
         t = time.perf_counter()
         py = obj.score(params, which, keep_outputs=True, filter_override=flt)
         t_py = time.perf_counter() - t

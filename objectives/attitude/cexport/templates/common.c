@@ -84,6 +84,8 @@ static void start_accmag(const real *acc, const real *mag, real q[4])
     for (i = 0; i < 3; i++) {
 #if WORK_FRAME == 1 /* NED */
         R[0][i] = north[i]; R[1][i] = east[i]; R[2][i] = -up[i];
+#elif WORK_FRAME == 0 /* ENU */
+        R[0][i] = east[i]; R[1][i] = north[i]; R[2][i] = up[i];
 #else /* NWU */
         R[0][i] = north[i]; R[1][i] = -east[i]; R[2][i] = up[i];
 #endif
@@ -124,15 +126,10 @@ static void start_broad(const real *a, const real *m, real q[4])
     qn[1] = copysign_(rad[1], R[2][1] - R[1][2]);
     qn[2] = copysign_(rad[2], R[0][2] - R[2][0]);
     qn[3] = copysign_(rad[3], R[1][0] - R[0][1]);
-#if WORK_FRAME == 1
     {
         static const real r[4] = NWU_TO_WORK;
         qmul(r, qn, q);
     }
-#else
-    for (i = 0; i < 4; i++)
-        q[i] = qn[i];
-#endif
 }
 
 /* the start quaternion of the first sample by params->init (0 accmag, 1 broad, 2 params->q0) */
