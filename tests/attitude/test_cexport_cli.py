@@ -93,6 +93,17 @@ def test_verify_c_prints_equal_metrics(bench_run):
     assert py_f == py and abs(c_f - py) < 0.01
 
 
+@needs_cc
+def test_verify_c_on_a_tilt_kf_run(tmp_path):
+    """The thesis's tilt KF (mse_1d, thesis eq. 3.18) on the tilt bench: the C scores what the model scores."""
+    cfg = {"name": "kf1d", "objective": {"kind": "filter", "filter": "kf1d", "metric": "mse_1d", "fixed":
+                                         {"p0_theta": 1.0e-3}, "data": [
+        {"synthetic": {"generator": "tilt1d", "duration_s": 6.0, "rate_hz": 400.0, "seed": 2}}]}}
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
+    py, c, text = _verify(_run(tmp_path, tmp_path / "c.yaml"))
+    assert abs(py - c) < 1e-9 * max(1.0, abs(py)), text
+
+
 def test_verify_c_without_a_compiler_is_one_error_line(bench_run, tmp_path):
     env = {**ENV, "PATH": str(tmp_path), "CC": ""}
     out = _tuner("verify-c", bench_run, env=env, check=False)
