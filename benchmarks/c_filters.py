@@ -1,8 +1,8 @@
 """Speed and size of the exported C filters (objectives/attitude/cexport) next to the numba kernels.
 
 For each filter configuration (defaults, and with the robust blocks as configs/broad_*.yaml use them) on the
-synthetic bench (60 s at 1 kHz) and on a BROAD trial: samples per second (the fastest of ``repeats`` interleaved
-rounds: on a shared machine the median mostly measures the other processes) of
+synthetic bench (60 s at 1 kHz) and on a BROAD trial: samples per second of CPU time (the fastest of ``repeats``
+interleaved rounds; on a shared machine wall-clock medians mostly measure the other processes) of
 
 * the numba model, ``Filter(**values).run(recording)`` (kernel and its thin wrapper, as an objective calls it);
 * the C, double and float, compiled with ``-O2`` (and double with ``-O2 -ffast-math``), over the whole
@@ -72,17 +72,18 @@ def _builds(flt, rate_hz: float, tmp: Path) -> dict[str, Any]:
 
 
 def _best_rates(fns: dict[str, Any], n: int, rounds: int) -> dict[str, float]:
-    """Samples/s of each of ``fns`` (each processes ``n`` samples) from its fastest of ``rounds`` calls, the
-    calls interleaved (one of each per round after a warm-up call), so that load from other processes on a
-    shared machine hits every variant alike and the best time is the one least disturbed."""
+    """Samples/s of each of ``fns`` (each processes ``n`` samples) from its fastest of ``rounds`` calls, timed in
+    CPU time of this thread (``time.thread_time``: the time another process holds the core is not counted), the
+    calls interleaved (one of each per round after a warm-up call), so that what load remains (shared caches)
+    hits every variant alike."""
     best = {k: float("inf") for k in fns}
     for fn in fns.values():
         fn()
     for _ in range(rounds):
         for k, fn in fns.items():
-            t = time.perf_counter()
+            t = time.thread_time()
             fn()
-            best[k] = min(best[k], time.perf_counter() - t)
+            best[k] = min(best[k], time.thread_time() - t)
     return {k: n / v for k, v in best.items()}
 
 
