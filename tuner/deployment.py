@@ -26,7 +26,8 @@ from typing import Any
 
 from tuner.objective import hook
 
-__all__ = ["Deployment", "SOURCES", "as_deployment", "attach_deployment", "deployment_for", "load_deployment"]
+__all__ = ["Deployment", "SOURCES", "DEFAULTS_MEANING", "as_deployment", "attach_deployment", "defaults_baseline",
+           "deployment_for", "load_best", "load_deployment"]
 
 #: where a value of :attr:`Deployment.values` comes from
 SOURCES = ("searched", "fixed", "default")
@@ -208,6 +209,11 @@ def load_deployment(run_dir: str | Path) -> Deployment:
     return deployment_for(objective, {**space.fixed, **best.params}, space.free_names, list(space.fixed))
 
 
+def load_best(run_dir: str | Path) -> dict[str, Any]:
+    """Every value of the run's deployed filter or controller (``load_deployment(run_dir).values``)."""
+    return dict(load_deployment(run_dir).values)
+
+
 def attach_deployment(best: Any, objective: Any, space: Any) -> Any:
     """``best`` (a :class:`tuner.rundir.Best`) with its deployment under ``objective`` and ``space``.
 
@@ -222,3 +228,18 @@ def attach_deployment(best: Any, objective: Any, space: Any) -> Any:
     except (ValueError, TypeError) as exc:
         doc = {"error": f"{type(exc).__name__}: {exc}"}
     return dataclasses.replace(best, deployment=doc)
+
+
+#: what every "defaults" baseline means (cv.md, validation, reports say it in these words)
+DEFAULTS_MEANING = ("defaults: the config's fixed values (objective.fixed and parameters' fixed values alike) "
+                    "with the searched parameters at the objective's defaults")
+
+
+def defaults_baseline(objective: Any, space: Any) -> dict[str, Any] | None:
+    """The one "defaults" baseline (:data:`DEFAULTS_MEANING`): the objective's ``default_params`` (its
+    defaults with ``objective.fixed`` applied) overridden by the space's fixed values, so a value fixed
+    under ``parameters:`` counts as one fixed under ``objective.fixed``. None without the hook."""
+    fn = hook(objective, "default_params")
+    if fn is None:
+        return None
+    return {**dict(fn()), **dict(space.fixed)}

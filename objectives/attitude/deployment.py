@@ -72,6 +72,8 @@ def filter_deployment(obj: Any, params: Mapping[str, Any]) -> dict[str, Any]:
     if obj.prior:
         scoring["prior"] = dict(obj.prior)
     notes = []
+    if sources.get("init") == "default" and values.get("init") != "accmag":  # objective.q0 chose the start
+        sources["init"] = "fixed"
     if start:
         sources["init"] = "fixed"
         notes.append(LIVE_START_NOTE.format(start=start["init"]))

@@ -372,11 +372,7 @@ class FilterObjective:
 
     def recordings(self, which: str = "train") -> list[Recording]:
         if which not in self._cache:
-            specs = self.train_specs if which == "train" else self.test_specs
-            try:
-                self._cache[which] = self._load(specs)
-            except RecordingError:
-                raise
+            self._cache[which] = self._load(self.train_specs if which == "train" else self.test_specs)
         return self._cache[which]
 
     # --- scoring ------------------------------------------------------------------------------
