@@ -126,8 +126,9 @@ def test_objects_use_only_sqrt_exp_asin_atan2_and_no_writable_globals(case, prec
     for name, text in files.items():
         (tmp_path / name).write_text(text)
     obj = tmp_path / "nm.o"
-    res = subprocess.run([find_compiler(), *STRICT_FLAGS, "-O2", "-c", str(tmp_path / "nm.c"), "-o", str(obj)],
-                         capture_output=True, text=True)
+    # float: no arithmetic silently promoted to double (an MCU without a double FPU would emulate it)
+    res = subprocess.run([find_compiler(), *STRICT_FLAGS, "-Wdouble-promotion", "-Wconversion", "-O2", "-c",
+                          str(tmp_path / "nm.c"), "-o", str(obj)], capture_output=True, text=True)
     assert res.returncode == 0 and not res.stderr, res.stderr
     syms = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout.split("\n")
     undefined = {s.split()[-1] for s in syms if s.strip().startswith("U ")}
