@@ -94,6 +94,18 @@ def test_verify_c_prints_equal_metrics(bench_run):
 
 
 @needs_cc
+def test_verify_c_on_other_data(bench_run, tmp_path):
+    """--data: recordings the run never saw (another seed and rate of the bench, the EKF's per-sample values
+    as tuned): the model and its C still score alike, each recording named in the output."""
+    data = {"data": [{"synthetic": {"generator": "bench6dof", "duration_s": 6.0, "rate_hz": 200.0, "seed": s}}
+                     for s in (7, 8)]}
+    (tmp_path / "d.yaml").write_text(yaml.safe_dump(data))
+    py, c, text = _verify(bench_run, "--data", tmp_path / "d.yaml", "--fast-math")
+    assert abs(py - c) < 1e-9 * max(1.0, abs(py)) and text.count(" max angle ") == 2, text
+    assert "-ffast-math" in text
+
+
+@needs_cc
 def test_verify_c_on_a_tilt_kf_run(tmp_path):
     """The thesis's tilt KF (mse_1d, thesis eq. 3.18) on the tilt bench: the C scores what the model scores."""
     cfg = {"name": "kf1d", "objective": {"kind": "filter", "filter": "kf1d", "metric": "mse_1d", "fixed":
