@@ -59,12 +59,12 @@ def _filter(label: str):
     return get_filter(name)(**values)
 
 
-def _builds(flt, rate_hz: float, tmp: Path) -> dict[str, Any]:
+def _builds(flt, rate_hz: float, tmp: Path, variants=_VARIANTS) -> dict[str, Any]:
     from objectives.attitude.cexport import render_c_filter
     from objectives.attitude.cexport.build import CFilter, compile_shared
 
     out = {}
-    for precision, opt in _VARIANTS:
+    for precision, opt in variants:
         key = f"C {precision} {' '.join(opt)}"
         files = render_c_filter(flt, rate_hz=rate_hz, precision=precision, prefix="BX")
         out[key] = CFilter(compile_shared(files, tmp / f"{flt.name}-{len(out)}-{id(flt)}", opt), "BX", precision)
@@ -87,7 +87,7 @@ def _best_rates(fns: dict[str, Any], n: int, rounds: int) -> dict[str, float]:
     return {k: n / v for k, v in best.items()}
 
 
-def measure(rec, repeats: int, tmp: Path) -> dict[str, Any]:
+def measure(rec, repeats: int, tmp: Path, variants=_VARIANTS) -> dict[str, Any]:
     """Samples/s of every configuration's numba model and C builds on ``rec`` (best of ``repeats`` rounds)."""
     n = rec.n
     out: dict[str, Any] = {"samples": n, "rows": {}}
@@ -95,7 +95,7 @@ def measure(rec, repeats: int, tmp: Path) -> dict[str, Any]:
     for label in CONFIGS:
         flt = _filter(label)
         fns = {"numba": lambda flt=flt: flt.run(rec)}
-        for key, c in _builds(flt, 1.0 / rec.dt, tmp).items():
+        for key, c in _builds(flt, 1.0 / rec.dt, tmp, variants).items():
             g, a, m = (np.ascontiguousarray(x, dtype=c.dtype) for x in (gyr, acc, mag))
             fns[key] = lambda c=c, g=g, a=a, m=m: c.run(g, a, m, rec.dt)
         out["rows"][label] = _best_rates(fns, n, repeats)
@@ -113,7 +113,7 @@ def measure(rec, repeats: int, tmp: Path) -> dict[str, Any]:
     return out
 
 
-def sizes(tmp: Path) -> dict[str, Any]:
+def sizes(tmp: Path, precisions=("double", "float")) -> dict[str, Any]:
     """Object code (``.text`` + ``.rodata``, -O2) and struct sizes in bytes per configuration and precision."""
     from objectives.attitude.cexport import render_c_filter
     from objectives.attitude.cexport.build import STRICT_FLAGS, find_compiler
@@ -121,7 +121,7 @@ def sizes(tmp: Path) -> dict[str, Any]:
     cc = find_compiler()
     out: dict[str, Any] = {}
     for label in CONFIGS:
-        for precision in ("double", "float"):
+        for precision in precisions:
             d = tmp / f"size-{label.replace(' ', '_')}-{precision}"
             d.mkdir(parents=True, exist_ok=True)
             for name, text in render_c_filter(_filter(label), rate_hz=100.0, precision=precision,
@@ -154,15 +154,16 @@ def run(smoke: bool = False, **_: Any) -> dict[str, Any]:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         dur = 5.0 if smoke else 60.0
+        variants = _VARIANTS[:1] if smoke else _VARIANTS  # smoke: C double -O2 only, no BROAD trial
         data[f"bench6dof {dur:g} s at 1 kHz"] = measure(
-            synthetic.synthetic("bench6dof", duration_s=dur, rate_hz=1000, seed=11), repeats, tmp)
+            synthetic.synthetic("bench6dof", duration_s=dur, rate_hz=1000, seed=11), repeats, tmp, variants)
         bdir = default_broad_dir()
-        if bdir.exists() and "07_undisturbed_fast_rotation_B" in broad_trials(bdir):
+        if not smoke and bdir.exists() and "07_undisturbed_fast_rotation_B" in broad_trials(bdir):
             data["BROAD 07_undisturbed_fast_rotation_B"] = measure(
                 load_broad(bdir / "07_undisturbed_fast_rotation_B.mat"), repeats, tmp)
-        size = sizes(tmp)
+        size = sizes(tmp, ("double",) if smoke else ("double", "float"))
     lines, targets = [], []
-    cols = ["numba"] + [f"C {p} {' '.join(o)}" for p, o in _VARIANTS]
+    cols = ["numba"] + [f"C {p} {' '.join(o)}" for p, o in variants]
     for title, d in data.items():
         lines.append(f"\n**{title}** ({d['samples']} samples), samples/s (one core; C over the whole recording "
                      "in one call):\n")
@@ -172,7 +173,7 @@ def run(smoke: bool = False, **_: Any) -> dict[str, Any]:
             lines.append(f"\nimufusion.Ahrs (x-io Fusion C, one Python call per sample): {fmt(d['imufusion'])} "
                          "samples/s on the first 20000 samples.\n")
         for label, r in d["rows"].items():
-            for c in cols[1:3]:
+            for c in cols[1:3]:  # double and float at -O2
                 targets.append({"target": f"{label}: {c} >= numba per sample ({title})",
                                 "value": r[c] / r["numba"], "pass": r[c] >= r["numba"]})
     lines.append("\nSize in bytes (object code `.text` + `.rodata` at -O2; the filter struct holds the whole "
