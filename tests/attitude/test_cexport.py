@@ -117,11 +117,11 @@ def test_float_close_to_double(case, bench, tmp_path):
 
 
 @pytest.mark.parametrize("precision", ["double", "float"])
-@pytest.mark.parametrize("case", sorted(CONFIGS) + ["kf1d"])
+@pytest.mark.parametrize("case", sorted(CONFIGS) + ["kf1d", "akf1d"])
 def test_objects_use_only_sqrt_exp_asin_atan2_and_no_writable_globals(case, precision, tmp_path):
-    from objectives.attitude.filters.kf1d import KF1D
+    from objectives.attitude.filters.kf1d import AKF1D, KF1D
 
-    flt = KF1D() if case == "kf1d" else CONFIGS[case]()
+    flt = {"kf1d": KF1D, "akf1d": AKF1D}[case]() if case.endswith("kf1d") else CONFIGS[case]()
     files = render_c_filter(flt, rate_hz=200.0, precision=precision, prefix="NM")
     for name, text in files.items():
         (tmp_path / name).write_text(text)
@@ -154,15 +154,23 @@ def test_frames_and_quaternion_output(bench, tmp_path):
 
 
 @pytest.mark.parametrize("frame", ["NED", "ENU"])
-def test_kf1d_as_the_model(frame, tmp_path):
-    """The thesis's tilt KF (eqs. 3.9-3.13) on the tilt bench (thesis 3.1.2), with a nonzero P0."""
+@pytest.mark.parametrize("name", ["kf1d", "akf1d"])
+def test_tilt_kf_as_the_model(name, frame, tmp_path):
+    """The thesis's tilt KF (eqs. 3.9-3.13, nonzero P0) and its fuzzy-adaptive form (R_k = K_k rho, eq. 3.24,
+    from the packet measures of eqs. 3.19-3.22 and the static tables of Table 3.2) on the tilt bench (thesis
+    3.1.2): the bench's vibration and external acceleration move K over 1-18 (checked)."""
     from objectives.attitude.cexport.build import CFilter, compile_shared
     from objectives.attitude.data.tilt1d import tilt1d
-    from objectives.attitude.filters.kf1d import KF1D
+    from objectives.attitude.filters.kf1d import AKF1D, KF1D
 
-    rec = tilt1d(20.0, 800.0, 3, frame=frame)
-    flt = KF1D(rho=0.35, q00=6.4e-8, q11=3.1e-12, p0_theta=1e-3, p0_bias=1e-6)
+    rec = tilt1d(30.0, 800.0, 3, frame=frame)
+    if name == "kf1d":
+        flt = KF1D(rho=0.35, q00=6.4e-8, q11=3.1e-12, p0_theta=1e-3, p0_bias=1e-6)
+    else:
+        flt = AKF1D(rho=0.32, q00=5.9e-7, q11=6.4e-12, K3=12.0)
     res = flt.run_detailed(rec)
+    if name == "akf1d":
+        assert res.diagnostics["K"].max() > 5.0 * res.diagnostics["K"].min()
     for precision in ("double", "float"):
         files = render_c_filter(flt, rate_hz=800.0, precision=precision, prefix="KF", frame=frame)
         c = CFilter(compile_shared(files, tmp_path / precision), "KF", precision)
@@ -174,10 +182,10 @@ def test_kf1d_as_the_model(frame, tmp_path):
 
 
 def test_render_refuses_what_it_cannot_port():
-    from objectives.attitude.filters.kf1d import AKF1D
+    from objectives.attitude.filters.ekf import FAEKF
 
-    with pytest.raises(ValueError, match="no C port of filter 'akf1d'"):
-        render_c_filter(AKF1D(), rate_hz=100.0)
+    with pytest.raises(ValueError, match="no C port of filter 'faekf'"):
+        render_c_filter(FAEKF(), rate_hz=100.0)
     with pytest.raises(ValueError, match="precision must be"):
         render_c_filter(Mahony(), rate_hz=100.0, precision="half")
     with pytest.raises(ValueError, match="C identifier"):

@@ -107,9 +107,10 @@ def test_verify_c_on_other_data(bench_run, tmp_path):
 
 @needs_cc
 def test_verify_c_on_a_tilt_kf_run(tmp_path):
-    """The thesis's tilt KF (mse_1d, thesis eq. 3.18) on the tilt bench: the C scores what the model scores."""
-    cfg = {"name": "kf1d", "objective": {"kind": "filter", "filter": "kf1d", "metric": "mse_1d", "fixed":
-                                         {"p0_theta": 1.0e-3}, "data": [
+    """The thesis's fuzzy-adaptive tilt KF (mse_1d, thesis eq. 3.18) on the tilt bench: the C scores what the
+    model scores."""
+    cfg = {"name": "akf1d", "objective": {"kind": "filter", "filter": "akf1d", "metric": "mse_1d", "fixed":
+                                          {"p0_theta": 1.0e-3}, "data": [
         {"synthetic": {"generator": "tilt1d", "duration_s": 6.0, "rate_hz": 400.0, "seed": 2}}]}}
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
     py, c, text = _verify(_run(tmp_path, tmp_path / "c.yaml"))
@@ -125,8 +126,8 @@ def test_verify_c_without_a_compiler_is_one_error_line(bench_run, tmp_path):
 
 
 def test_export_refuses_a_filter_without_a_c_port(tmp_path):
-    cfg = {"name": "akf1d", "objective": {"kind": "filter", "filter": "akf1d", "metric": "mse_1d", "data": [
-        {"synthetic": {"generator": "tilt1d", "duration_s": 4.0, "rate_hz": 100.0, "seed": 1}}]}}
+    cfg = {"name": "qukf", "objective": {"kind": "filter", "filter": "qukf", "data": [
+        {"synthetic": {"generator": "bench6dof", "duration_s": 4.0, "rate_hz": 100.0, "seed": 1}}]}}
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
     run_dir = _run(tmp_path, tmp_path / "c.yaml")
     out = _tuner("export", run_dir, "--format", "c-filter", "--out", tmp_path / "x", check=False)

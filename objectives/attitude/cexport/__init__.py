@@ -1,7 +1,7 @@
 """C99 source of the attitude filters firmware runs, with a tuned configuration baked in.
 
-``render_c_filter(flt, ...)`` turns a validated filter (Madgwick, Mahony, the EKF, the LCF, NCF and CCF of
-:mod:`objectives.attitude.filters`; robust blocks included) into a header and a source file. The C is a
+``render_c_filter(flt, ...)`` turns a validated filter (Madgwick, Mahony, the EKF, the LCF, NCF and CCF, the
+thesis's tilt KF and AKF of :mod:`objectives.attitude.filters`; robust blocks included) into a header and a source file. The C is a
 line-by-line port of the numba kernels (same operations in the same order, the same start orientation, the
 robust blocks in the kernels' order), so that it computes what the tuning scored;
 ``tests/attitude/test_cexport*.py`` compile it and compare it with the kernels sample by sample.
@@ -35,7 +35,8 @@ __all__ = ["render_c_filter", "C_FILTERS", "CField", "c_identifier"]
 
 #: filters with a C port: name -> the template of its update
 C_FILTERS = {"madgwick": "madgwick.c", "mahony": "mahony.c", "ekf": "ekf.c", "lcf": "cf.c", "ncf": "cf.c",
-             "ccf": "cf.c", "kf1d": "kf1d.c"}
+             "ccf": "cf.c", "kf1d": "kf1d.c", "akf1d": "kf1d.c"}
+_TILT = ("kf1d", "akf1d")
 _ALPHA_MODES = {"per_sample": 0, "tau": 1, "static": 2}
 _INIT = {"accmag": 0, "broad": 1, "given": 2}
 _FLOAT_LIT = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+|\.\d+(?:[eE][-+]?\d+)?)(?![\w.])")
@@ -123,7 +124,7 @@ def _fields(name: str, v: dict, dt: float, g: float, init: str, q0, up_sign: flo
         return head + body + start + _robust_fields(v, True)
     if name in ("lcf", "ncf", "ccf"):
         return head + _cf_fields(name, v, g) + start
-    if name == "kf1d":
+    if name in _TILT:
         return head + [CField("real", "rho", float(v["rho"]), "accelerometer-angle variance per sample (eq. 3.17)"),
                        CField("real", "q00", float(v["q00"]), "angle process noise per sample (eq. 3.17)"),
                        CField("real", "q11", float(v["q11"]), "bias random walk per sample (eq. 3.17)"),
@@ -158,6 +159,30 @@ def _cf_fields(name: str, v: dict, g: float) -> list[CField]:
             CField("real", "mag_dip_th_deg", float(v.get("mag_dip_th_deg", 10.0)), "field dip threshold, deg"),
             CField("real", "mag_max_rejection_s", float(v.get("mag_max_rejection_s", 60.0)), "longest rejection, s"),
             CField("real", "mag_weight", float(v.get("mag_weight", 1.0)), "factor on the yaw correction")]
+
+
+def _akf_defines(flt: Any, rate_hz: float) -> list[str]:
+    """The AKF1D's packet and fuzzy constants (static tables: its sets, 9 rules and singletons), else AKF 0."""
+    if flt.name != "akf1d":
+        return ["#define AKF 0"]
+    v = flt.values
+    fis = flt.fis()
+    f = np.fft.rfftfreq(int(v["fft_length"]), 1.0 / rate_hz)
+    n_bins = int(np.searchsorted(f, float(v["f_thr"]) * (1 + 1e-12), side="right"))
+
+    def arr(a, ctype="real"):
+        a = np.asarray(a)
+        if a.ndim == 1:
+            return "{" + ", ".join(_literal(x, ctype) for x in a.tolist()) + "}"
+        return "{" + ", ".join(arr(x, ctype) for x in a) + "}"
+
+    return ["#define AKF 1", f"#define AKF_WINDOW {int(v['window'])}", f"#define AKF_NFFT {int(v['fft_length'])}",
+            f"#define AKF_NBINS {n_bins} /* bins up to f_thr = {v['f_thr']!r} Hz at {rate_hz:g} Hz */",
+            f"#define AKF_DF {_literal(f[1] - f[0], 'real')}",
+            f"#define AKF_OMEGA_THR {_literal(v['omega_thr'], 'real')}",
+            f"#define AKF_NRULES {fis.rules.shape[0]}", f"#define AKF_MF_INIT {arr(fis.mf_params)}",
+            f"#define AKF_KIND_INIT {arr(fis.mf_kind, 'int')}", f"#define AKF_RULES_INIT {arr(fis.rules, 'int')}",
+            f"#define AKF_CONS_INIT {arr(fis.consequents)}"]
 
 
 def _literal(x: Any, ctype: str) -> str:
@@ -224,10 +249,10 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
     fields = _fields(name, flt.values, 1.0 / rate_hz, g, init, q0, -1.0 if frame.upper() == "NED" else 1.0)
     work = flt.working_frame
     # the 1-D tilt filter's quaternion is a rotation about y in the frame it is defined in (``frame``)
-    rot = np.array([1.0, 0.0, 0.0, 0.0]) if name == "kf1d" else frame_rotation(work, frame.upper())
+    rot = np.array([1.0, 0.0, 0.0, 0.0]) if name in _TILT else frame_rotation(work, frame.upper())
 
     params = "\n".join(f"    {'PFX_real' if f.ctype == 'real' else 'int'} {f.name}; /* {f.doc} */" for f in fields)
-    if name == "kf1d":
+    if name in _TILT:
         state = ("PFX_real th;       /* tilt angle about y, rad */\n"
                  "PFX_real b;        /* gyro bias, rad/s */\n"
                  "PFX_real p00;      /* covariance */\n"
@@ -237,6 +262,13 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
                  "PFX_real dt_s;\n"
                  "int started;\n"
                  "PFX_params p;\n")
+        if name == "akf1d":
+            state += (f"PFX_real buf[{int(flt.values['window'])}]; /* the gyro about y of the current packet */\n"
+                      "PFX_real ext_sum;  /* its sum of external acceleration, g */\n"
+                      "int nbuf;          /* samples in it */\n"
+                      "PFX_real kscale;   /* the held fuzzy scale K of R (eq. 3.24) */\n"
+                      "PFX_real vib_hz;   /* the last packet's vibration frequency, Hz */\n"
+                      "PFX_real ext_g;    /* and external acceleration, g */\n")
     elif name in ("lcf", "ncf", "ccf"):
         state = ("PFX_real x[3];        /* roll, pitch, yaw (ZYX, NED), rad: the state */\n"
                  "PFX_real integ[3];    /* the PI integrals, rad/s */\n"
@@ -270,9 +302,9 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define WORK_FRAME {({'ENU': 0, 'NED': 1}).get(work, 2)} /* {work} */",
            f"#define NWU_TO_WORK {_quat_literal(frame_rotation('NWU', work))}",
            f"#define WORK_TO_OUT {_quat_literal(rot)}",
-           f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}", ""]
+           f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}", *_akf_defines(flt, rate_hz), ""]
     extra = ["bias_prologue.c"] if name in ("madgwick", "mahony") else ["trig.c"]
-    parts = ["common.c", *(["robust.c"] if name != "kf1d" else []), *extra, C_FILTERS[name], "run.c"]
+    parts = ["common.c", *(["robust.c"] if name not in _TILT else []), *extra, C_FILTERS[name], "run.c"]
     body = "\n".join(_template(p) for p in parts)
     if name == "madgwick":
         body = body.replace("BIAS_OUT", "int i;\n    for (i = 0; i < 3; i++)\n"

@@ -38,7 +38,7 @@ def _deployed(obj: Any, params: Mapping[str, Any]):
 
 def _frame(obj: Any, flt: Any) -> str:
     """The output frame: ENU, but for the 1-D tilt filter the frame its training recordings define the tilt in."""
-    if flt.name != "kf1d":
+    if flt.name not in ("kf1d", "akf1d"):
         return "ENU"
     frames = {r.frame for r in obj.recordings("train")}
     if len(frames) != 1:
@@ -113,7 +113,7 @@ class _CModel:
         t = time.perf_counter()
         q = self.c.run(rec.gyr, acc, rec.mag if use_mag else None, rec.dt)
         self.seconds += time.perf_counter() - t
-        if self.name == "kf1d":  # the tilt about y, in the frame the C was made for
+        if self.name in ("kf1d", "akf1d"):  # the tilt about y, in the frame the C was made for
             if rec.frame != self.frame:
                 raise ValueError(f"{rec.name}: frame {rec.frame}, the C tilt filter was made for {self.frame}")
             theta = 2.0 * np.arctan2(q[:, 2], q[:, 0])
