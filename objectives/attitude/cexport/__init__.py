@@ -1,9 +1,9 @@
 """C99 source of the attitude filters firmware runs, with a tuned configuration baked in.
 
 ``render_c_filter(flt, ...)`` turns a validated filter (Madgwick, Mahony, the EKF, the LCF, NCF and CCF, the
-thesis's tilt KF and AKF of :mod:`objectives.attitude.filters`; robust blocks included) into a header and a source file. The C is a
-line-by-line port of the numba kernels (same operations in the same order, the same start orientation, the
-robust blocks in the kernels' order), so that it computes what the tuning scored;
+thesis's tilt KF and AKF of :mod:`objectives.attitude.filters`; robust blocks included) into a header and a
+source file. The C is a line-by-line port of the numba kernels (same operations in the same order, the same
+start orientation, the robust blocks in the kernels' order), so that it computes what the tuning scored;
 ``tests/attitude/test_cexport*.py`` compile it and compare it with the kernels sample by sample.
 
 Each filter is one struct and a streaming API without heap or global state::
