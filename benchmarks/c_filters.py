@@ -49,13 +49,15 @@ CONFIGS = {
     "ccf robust": ("ccf", {"alpha_mode": "tau", "tau_s": 0.2, "Kp": 2.0, "Ki": 0.05, "acc_gate": 0.3,
                            "mag_rejection": True, "mag_weight": 0.5}),
 }
+#: the thesis's tilt filters, timed on the tilt bench (thesis 3.1.2) at its 800 Hz
+TILT_CONFIGS = {"kf1d": ("kf1d", {}), "akf1d": ("akf1d", {})}
 _VARIANTS = (("double", ("-O2",)), ("float", ("-O2",)), ("double", ("-O2", "-ffast-math")))
 
 
 def _filter(label: str):
     from objectives.attitude.filters import get_filter
 
-    name, values = CONFIGS[label]
+    name, values = {**CONFIGS, **TILT_CONFIGS}[label]
     return get_filter(name)(**values)
 
 
@@ -87,20 +89,20 @@ def _best_rates(fns: dict[str, Any], n: int, rounds: int) -> dict[str, float]:
     return {k: n / v for k, v in best.items()}
 
 
-def measure(rec, repeats: int, tmp: Path, variants=_VARIANTS) -> dict[str, Any]:
+def measure(rec, repeats: int, tmp: Path, variants=_VARIANTS, configs=None) -> dict[str, Any]:
     """Samples/s of every configuration's numba model and C builds on ``rec`` (best of ``repeats`` rounds)."""
     n = rec.n
     out: dict[str, Any] = {"samples": n, "rows": {}}
-    gyr, acc, mag = (np.ascontiguousarray(a) for a in (rec.gyr, rec.acc, rec.mag))
-    for label in CONFIGS:
+    gyr, acc, mag = (None if a is None else np.ascontiguousarray(a) for a in (rec.gyr, rec.acc, rec.mag))
+    for label in configs or CONFIGS:
         flt = _filter(label)
         fns = {"numba": lambda flt=flt: flt.run(rec)}
         for key, c in _builds(flt, 1.0 / rec.dt, tmp, variants).items():
-            g, a, m = (np.ascontiguousarray(x, dtype=c.dtype) for x in (gyr, acc, mag))
+            g, a, m = (None if x is None else np.ascontiguousarray(x, dtype=c.dtype) for x in (gyr, acc, mag))
             fns[key] = lambda c=c, g=g, a=a, m=m: c.run(g, a, m, rec.dt)
         out["rows"][label] = _best_rates(fns, n, repeats)
     imuf = peer("imufusion")
-    if imuf is not None:
+    if imuf is not None and mag is not None and configs is None:
         m_n = min(n, 20000)
         gd, ag, mg = np.degrees(gyr[:m_n]), acc[:m_n] / 9.81, mag[:m_n]
 
@@ -120,7 +122,7 @@ def sizes(tmp: Path, precisions=("double", "float")) -> dict[str, Any]:
 
     cc = find_compiler()
     out: dict[str, Any] = {}
-    for label in CONFIGS:
+    for label in {**CONFIGS, **TILT_CONFIGS}:
         for precision in precisions:
             d = tmp / f"size-{label.replace(' ', '_')}-{precision}"
             d.mkdir(parents=True, exist_ok=True)
@@ -157,6 +159,9 @@ def run(smoke: bool = False, **_: Any) -> dict[str, Any]:
         variants = _VARIANTS[:1] if smoke else _VARIANTS  # smoke: C double -O2 only, no BROAD trial
         data[f"bench6dof {dur:g} s at 1 kHz"] = measure(
             synthetic.synthetic("bench6dof", duration_s=dur, rate_hz=1000, seed=11), repeats, tmp, variants)
+        data[f"tilt1d {dur:g} s at 800 Hz"] = measure(
+            synthetic.synthetic("tilt1d", duration_s=dur, rate_hz=800, seed=11), repeats, tmp, variants,
+            list(TILT_CONFIGS))
         bdir = default_broad_dir()
         if not smoke and bdir.exists() and "07_undisturbed_fast_rotation_B" in broad_trials(bdir):
             data["BROAD 07_undisturbed_fast_rotation_B"] = measure(
