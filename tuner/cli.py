@@ -26,6 +26,7 @@ EPILOG = """examples:
   tuner verify-c RUN_DIR                           that C compiled and scored next to the Python model
   tuner evaluate RUN_DIR --data other.yaml --json  score the best parameters on other data
   tuner sweep configs/thesis_tilt_sweep.yaml       many runs and one report
+  tuner dashboard runs                             runs/index.html: every run and sweep, sortable, compared
   tuner list                                       optimizers, objectives, filters, controllers, metrics, data
   tuner describe ekf                               parameters, bounds, units and equations of one name
   tuner init madgwick                              write madgwick.yaml, a commented starter job
@@ -120,8 +121,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, help="concurrent jobs (default: from the sweep file, else 1)")
     p.add_argument("-q", "--quiet", action="store_true")
 
-    p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory")
+    p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory, or the "
+                                      "dashboard (index.html) of a folder of runs")
     p.add_argument("path")
+    p = sub.add_parser("dashboard", help="write DIR/index.html: every run and sweep under DIR, sortable, filterable, "
+                                         "compared side by side")
+    p.add_argument("path", nargs="?", default="runs", help="folder of runs (default: runs)")
 
     p = sub.add_parser("init", help="write a commented starter job for a filter or controller")
     p.add_argument("name", help="a filter or controller `tuner list` prints, e.g. madgwick, pid")
@@ -442,8 +447,22 @@ def _cmd_report(a) -> int:
         from tuner.report import write_run_report
 
         print(write_run_report(path))  # RunError naming the file if one is corrupt
+    elif path.is_dir():
+        return _cmd_dashboard(a)
     else:
-        raise UsageError(f"{path}: not a run or sweep directory")
+        raise UsageError(f"{path}: not a run or sweep directory, nor a folder of runs")
+    return 0
+
+
+def _cmd_dashboard(a) -> int:
+    from tuner.dashboard import collect_runs, write_dashboard
+
+    path = Path(a.path)
+    if not path.is_dir():
+        raise UsageError(f"{path}: not a folder (expected a folder of run directories, e.g. runs)")
+    if not collect_runs(path):
+        raise UsageError(f"{path}: no run or sweep directory in it (nor up to 4 levels down)")
+    print(write_dashboard(path))
     return 0
 
 
@@ -477,7 +496,7 @@ def _cmd_demo(a) -> int:
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
             "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "evaluate": _cmd_evaluate,
             "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report, "init": _cmd_init, "demo": _cmd_demo,
-            "verify-c": _cmd_verify_c}
+            "dashboard": _cmd_dashboard, "verify-c": _cmd_verify_c}
 
 
 def main(argv: list[str] | None = None) -> int:
