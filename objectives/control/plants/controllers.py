@@ -98,12 +98,13 @@ class LoopController(Declared):
 
 def _pid_tables(cp: np.ndarray, h: float, prefix: str = "") -> dict[str, dict[str, Any]]:
     """A PID block's gains and difference-equation coefficients, for ``tuner export``."""
-    k, b, c, ki, ad, bd = cp[:6]
     return {
-        f"{prefix}gains": {"table": np.array([[k, b, c, ki, ad, bd]]),
-                           "doc": f"[K, b, c, ki, ad, bd] at h = {h} s: P = K (b r - y); I += ki (r - y); "
-                                  "D = ad D + bd ((c r - y) - (c r - y)_prev); u = P + I + D",
-                           "unit": "u per unit of y (K, ki, bd); 1 (b, c, ad)"},
+        f"{prefix}gains": {"table": np.asarray(cp[:10], dtype=float)[None, :],
+                           "doc": f"[K, b, c, ki, ad, bd, aw, kt, u_min, u_max] at h = {h} s: v = K (b r - y) + I + D; "
+                                  "D = ad D + bd ((c r - y) - (c r - y)_prev); u = clip(v, u_min, u_max); "
+                                  "I += ki (r - y) + (aw == 1: kt (u - v); aw == 2: no update while saturated "
+                                  "towards the error)",
+                           "unit": "u per unit of y (K, ki, bd); 1 (b, c, ad, aw, kt); u (limits)"},
         f"{prefix}C_num": {"table": np.atleast_2d(_pid_poly(cp)[0]),
                            "doc": "feedback part C(z) = U/E numerator, powers of z descending",
                            "unit": "u per unit of y"},
