@@ -29,10 +29,8 @@ rather than a diverging loop.
 from __future__ import annotations
 
 import collections
-import importlib
 import math
 import pathlib
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -47,15 +45,9 @@ NL_KEYS = {"python", "x0", "params", "n_inputs", "outputs", "output", "inner_out
 
 def import_relative(spec: str, base_dir: pathlib.Path | None) -> Any:
     """``"module:attr"`` imported with ``base_dir`` (the config's folder) searched first."""
-    module, _, attr = spec.partition(":")
-    if base_dir is not None:
-        d = str(pathlib.Path(base_dir).resolve())
-        if d not in sys.path:
-            sys.path.insert(0, d)
-    obj = importlib.import_module(module)
-    for part in attr.split("."):
-        obj = getattr(obj, part)
-    return obj
+    from tuner.registry import resolve_callable
+
+    return resolve_callable(spec, base_dir)
 
 
 def _rk4_amp(z: complex) -> float:
