@@ -216,3 +216,49 @@ def test_step_metrics_on_a_known_second_order_response():
                 scenario={"duration_s": 6.0, "reference": [{"t": 0.5, "value": 2.0}]},
                 requirements={"max_overshoot_pct": 20.0})({})
     assert fail.status == "failed" and "overshoot" in fail.error and "37.2" in fail.error
+
+
+def test_closed_loop_poles_match_python_control():
+    """PID with delay and feedthrough-free plant: poles of feedback(C P z^-d) from python-control; an
+    unstable gain gives Ms = inf."""
+    from objectives.control.plants.analysis import closed_loop_poles
+
+    h, K, Ti, Td, N = 0.05, 1.5, 2.0, 0.3, 10.0
+    o = _obj({"tf": {"num": [1.0], "den": [1.0, 3.0, 3.0, 1.0]}, "delay_s": 0.2}, "pid2dof", period_s=h,
+             fixed={"K": K, "Ti_s": Ti, "Td_s": Td, "N": N})
+    mine = closed_loop_poles(o._ctrl.kind, o.coeffs({}), o._plant)
+    ad, bd, ki = Td / (Td + N * h), K * Td * N / (Td + N * h), K * h / Ti
+    z = control.tf([1, 0], [1], h)
+    C = K + ki / (z - 1) + bd * (z - 1) / (z - ad)
+    P = control.sample_system(control.tf([1.0], [1.0, 3.0, 3.0, 1.0]), h) * control.tf([1], [1, 0], h) ** 4
+    ref = control.poles(control.feedback(C * P, 1))
+    big = lambda p: np.sort(np.abs(p))[::-1][:6]  # noqa: E731 - the dominant ones (the rest sit at 0)
+    assert np.allclose(big(mine), big(ref), atol=1e-6)
+    assert o({}).metrics["cl_pole_max"] < 1
+    bad = _obj({"tf": {"num": [1.0], "den": [1.0, 3.0, 3.0, 1.0]}, "delay_s": 0.2}, "pid2dof", period_s=h,
+               fixed={"K": 20.0, "Ti_s": Ti}, requirements={"max_ms": 1.4})({})
+    assert bad.status == "failed" and "Ms inf" in bad.error and bad.metrics["cl_pole_max"] > 1
+
+
+def test_closed_loop_poles_of_state_feedback_and_cascade():
+    from objectives.control.plants.analysis import closed_loop_poles
+    from objectives.control.plants.controllers import LQRStateFeedback
+
+    A, B = [[0.0, 1.0], [-2.0, -0.5]], [[0.0], [1.0]]
+    o = _obj({"ss": {"A": A, "B": B, "C": [[1.0, 0.0]]}}, "lqr_sf", fixed={"q1": 10.0, "q2": 0.5, "r1": 0.1})
+    k, _ = LQRStateFeedback.gains(o.coeffs({}))
+    p = o._plant
+    cl = closed_loop_poles(3, o.coeffs({}), p)
+    assert np.allclose(np.sort_complex(cl[np.abs(cl) > 1e-12]),  # the feedthrough's state adds a pole at 0
+                       np.sort_complex(np.linalg.eigvals(p.Ad - p.Bd @ k)), atol=1e-9)
+    # cascade: the linear closed loop's decay rate equals the simulated one
+    ss = {"A": [[0, 1], [0, -5.0]], "B": [[0], [5.0]], "C": [[1, 0], [0, 1]], "D": [[0], [0]]}
+    oc = _obj({"ss": ss, "output": 0, "inner_output": 1}, "pid_cascade", period_s=0.005,
+              fixed={"K_o": 4.0, "Ti_o_s": math.inf, "K_i": 0.5, "Ti_i_s": 0.2, "N": 10.0, "c": 1.0, "b": 0.5},
+              scenario={"duration_s": 30.0, "reference": [{"t": 0.0, "value": 1.0}]})
+    rho = np.max(np.abs(closed_loop_poles(2, oc.coeffs({}), oc._plant)))
+    y = oc.simulate({})["y"][:, 0]
+    e = np.abs(y - y[-1])  # b = 0.5 without outer integral action: y settles off the reference
+    env = lambda k: np.max(e[k - 150:k + 150])  # noqa: E731 - the envelope of a possibly oscillating decay
+    k1, k2 = 1500, 3000
+    assert math.log(env(k2) / env(k1)) / (k2 - k1) == pytest.approx(math.log(rho), rel=0.05)

@@ -15,7 +15,8 @@ YAML (``objective:``; keys of :mod:`.lti`, :mod:`.nonlinear` and :mod:`.scenario
 
 Calling it with controller parameters returns :class:`tuner.objective.Evaluation`: the cost and the
 metrics (every cost term, the step metrics, ``peak_u``, and for LTI plants ``ms``, ``gm_db``,
-``pm_deg``); a diverging loop, a design without solution or a violated requirement is a failed
+``pm_deg`` and ``cl_pole_max``, the largest |pole| of the linear closed loop: above 1 the loop is
+unstable and Ms is inf); a diverging loop, a design without solution or a violated requirement is a failed
 evaluation with the reason. The noise is drawn once from ``sensor.seed``: every candidate sees the same.
 """
 
@@ -156,11 +157,18 @@ class LoopObjective:
         return simulate_loop(self._plant, self._ctrl.kind, cp, self._sig, self._real)
 
     def loop_margins(self, params: Mapping[str, Any] | None) -> dict[str, float]:
-        """``ms``, ``gm_db``, ``pm_deg`` (LTI plants; :mod:`.analysis`)."""
-        from objectives.control.plants.analysis import loop_response, margins
+        """``ms``, ``gm_db``, ``pm_deg`` and ``cl_pole_max`` (largest |closed-loop pole| of the linear
+        loop) for LTI plants (:mod:`.analysis`); an unstable linear loop has ``ms = inf`` and margins
+        ``-inf``, since its frequency response says nothing of its robustness."""
+        from objectives.control.plants.analysis import closed_loop_poles, loop_response, margins
 
-        L = loop_response(self._ctrl, self.coeffs(params), self._plant, self._omega, self._pr)
-        return margins(L, self._omega)
+        cp = self.coeffs(params)
+        pole = float(np.max(np.abs(closed_loop_poles(self._ctrl.kind, cp, self._plant))))
+        if not pole < 1.0:
+            return {"ms": math.inf, "gm_db": -math.inf, "pm_deg": -math.inf, "cl_pole_max": pole,
+                    "wc_rad_s": math.nan, "w180_rad_s": math.nan}
+        L = loop_response(self._ctrl, cp, self._plant, self._omega, self._pr)
+        return {**margins(L, self._omega), "cl_pole_max": pole}
 
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
         try:
@@ -184,7 +192,7 @@ class LoopObjective:
         m["peak_u"] = float(np.max(np.abs(u))) if u.size else 0.0
         if self.lti:
             mg = self.loop_margins(params)
-            m.update({k: mg[k] for k in ("ms", "gm_db", "pm_deg")})
+            m.update({k: mg[k] for k in ("ms", "gm_db", "pm_deg", "cl_pole_max")})
         bad = _check(self._req, m)
         if bad:
             return Evaluation.failed(f"requirement violated: {bad}", m)
