@@ -1,5 +1,8 @@
 """Closed-loop objective: simulate the WMP with a controller on a reference profile, score eq. 2.39.
 
+``plant: wmp`` (the default) is the thesis's pendulum, below; a mapping as ``plant`` (``tf``, ``zpk``,
+``ss``, ``python``) is any plant, handed to :mod:`objectives.control.plants.objective`.
+
 YAML section (``objective:``)::
 
     kind: closed_loop
@@ -180,7 +183,8 @@ class ClosedLoopObjective:
         if section.get("kind", "closed_loop") != "closed_loop":
             raise ValueError(f"objective.kind must be 'closed_loop', got {section.get('kind')!r}")
         if section.get("plant", "wmp") != "wmp":
-            raise ValueError(f"objective.plant: 'wmp' or a mapping (tf, zpk, ss, python), got {section.get('plant')!r}")
+            raise ValueError(
+                f"objective.plant: 'wmp' or a mapping (tf, zpk, ss, python), got {section.get('plant')!r}")
         profile = section.get("profile", "thesis")
         if isinstance(profile, str) and profile.endswith((".yaml", ".yml")):
             import yaml
@@ -240,11 +244,11 @@ class ClosedLoopObjective:
     def catalog(cls) -> dict[str, list[str]]:
         """Names ``objective.controller``, the cost and the profiles (``tuner list``)."""
         from objectives.control.controllers import CONTROLLERS
+        from objectives.control.plants.controllers import LOOP_CONTROLLERS
         from objectives.control.profiles import PROFILES
 
-        from objectives.control.plants.controllers import LOOP_CONTROLLERS
-
-        return {"controllers": sorted({*CONTROLLERS, *LOOP_CONTROLLERS}), "metrics": ["mae_weighted_cost"], "data": sorted(PROFILES)}
+        return {"controllers": sorted({*CONTROLLERS, *LOOP_CONTROLLERS}), "metrics": ["mae_weighted_cost"],
+                "data": sorted(PROFILES)}
 
     @classmethod
     def explain(cls, name: str) -> dict[str, Any] | None:

@@ -25,7 +25,6 @@ def test_every_listed_name_is_described():
 def test_parameters_equal_the_declaration(section):
     from objectives.attitude.filters import get_filter
     from objectives.control.controllers import get_controller
-
     from objectives.control.plants.controllers import LOOP_CONTROLLERS
 
     def get_any_controller(name):  # the pendulum's controllers and those of any plant share the section

@@ -21,7 +21,7 @@ import numpy as np
 
 __all__ = ["frequency_grid", "loop_response", "margins", "N_FREQ"]
 
-N_FREQ = 1500
+N_FREQ = 800
 
 
 def frequency_grid(period_s: float, n: int = N_FREQ) -> np.ndarray:

@@ -32,6 +32,7 @@ import numpy as np
 
 from objectives.control.plants import build_plant
 from objectives.control.plants.controllers import LOOP_CONTROLLERS, get_loop_controller
+from objectives.control.plants.scenario import check_requirements as _check
 from objectives.control.plants.scenario import (
     cost_from_spec,
     loop_cost,
@@ -40,7 +41,6 @@ from objectives.control.plants.scenario import (
     scenario_from_spec,
     step_metrics,
 )
-from objectives.control.plants.scenario import check_requirements as _check
 from objectives.control.plants.simulate import simulate_loop
 from tuner.objective import Evaluation
 from tuner.space import Real, Space

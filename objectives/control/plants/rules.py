@@ -15,7 +15,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,7 +56,8 @@ def amigo_pid(m: FOTD) -> tuple[float, float, float]:
     return K, Ti, Td
 
 
-def half_rule(k: float, taus: list[float], theta: float, rhp_zeros: list[float] = ()) -> tuple[float, float, float, float]:
+def half_rule(k: float, taus: list[float], theta: float,
+              rhp_zeros: list[float] = ()) -> tuple[float, float, float, float]:
     """Skogestad's half rule to SOPDT: ``(k, tau1, tau2, theta)`` from lag time constants ``taus``, a delay
     and inverse-response (RHP zero) time constants (each added to the delay)."""
     ts = sorted((float(x) for x in taus), reverse=True) + [0.0, 0.0, 0.0]
@@ -67,7 +67,8 @@ def half_rule(k: float, taus: list[float], theta: float, rhp_zeros: list[float] 
     return k, tau1, tau2, theta
 
 
-def simc_pid(k: float, tau1: float, tau2: float, theta: float, tau_c: float | None = None) -> tuple[float, float, float]:
+def simc_pid(k: float, tau1: float, tau2: float, theta: float,
+             tau_c: float | None = None) -> tuple[float, float, float]:
     """SIMC series-form ``(Kc, tauI, tauD)``; ``tau_c`` defaults to ``theta`` (needs theta > 0)."""
     tc = theta if tau_c is None else tau_c
     kc = tau1 / (k * (tc + theta))
