@@ -1,4 +1,5 @@
-"""Plants of the generic closed loop: LTI models (:mod:`.lti`) and Python dynamics (:mod:`.nonlinear`).
+"""Plants of the generic closed loop: LTI models (:mod:`.lti`), Python dynamics (:mod:`.nonlinear`) and
+FMUs (:mod:`.fmu`, optional: fmpy).
 
 ``objective: {kind: closed_loop, plant: {...}}`` with a mapping as plant selects
 :class:`objectives.control.plants.objective.LoopObjective` (``plant: wmp`` stays the thesis's pendulum).
@@ -12,7 +13,7 @@ from typing import Any
 
 __all__ = ["build_plant", "PLANT_TYPES"]
 
-PLANT_TYPES = ("tf", "zpk", "ss", "python")
+PLANT_TYPES = ("tf", "zpk", "ss", "python", "fmu")
 
 
 def build_plant(spec: Any, period_s: float, base_dir: pathlib.Path | None, key: str = "objective.plant") -> Any:
@@ -22,6 +23,10 @@ def build_plant(spec: Any, period_s: float, base_dir: pathlib.Path | None, key: 
     kinds = [k for k in PLANT_TYPES if k in spec]
     if len(kinds) != 1:
         raise ValueError(f"{key}: give exactly one of {list(PLANT_TYPES)}, got keys {sorted(spec)}")
+    if kinds[0] == "fmu":
+        from objectives.control.plants.fmu import fmu_from_spec
+
+        return fmu_from_spec(spec, period_s, base_dir, key)
     if kinds[0] == "python":
         from objectives.control.plants.nonlinear import nonlinear_from_spec
 

@@ -35,7 +35,9 @@ def simulate_loop(plant: Any, kind: int, cp: np.ndarray, sig: np.ndarray, real: 
     else:
         m = plant.n_inputs
         y, u, x = np.zeros((n_steps, plant.n_outputs)), np.zeros((n_steps, m)), np.zeros((n_steps, n))
-        loop, rk4 = (_loop_nl, _rk4) if plant.compiled else (_loop_nl.py_func, _rk4.py_func)
+        loop, rk4 = (_loop_nl, _rk4) if plant.compiled else (_loop_nl.py_func, getattr(plant, "advance", _rk4.py_func))
+        if hasattr(plant, "reset"):  # an FMU: back to its initial state for every simulation
+            plant.reset()
         status, done = loop(plant.fn, rk4, plant.params, plant.x0, sig, cp, opt, plant.period_s, plant.n_sub,
                             plant.outputs, m, y, u, x)
     return {"t": np.arange(n_steps) * plant.period_s, "y": y, "u": u, "x": x, "status": int(status),
