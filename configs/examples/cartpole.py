@@ -12,7 +12,7 @@ import numpy as np
 
 
 def dynamics(x, u, t, params):
-    p, dp, th, dth = x[0], x[1], x[2], x[3]
+    dp, th, dth = x[1], x[2], x[3]  # x[0], the position, does not enter the dynamics
     s, c = math.sin(th), math.cos(th)
     m, big_m, l, g = params.m, params.M, params.l, params.g
     den = big_m + m * s * s
