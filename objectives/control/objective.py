@@ -248,7 +248,7 @@ class ClosedLoopObjective:
         from objectives.control.profiles import PROFILES
 
         return {"controllers": sorted({*CONTROLLERS, *LOOP_CONTROLLERS}), "metrics": ["mae_weighted_cost"],
-                "data": sorted(PROFILES)}
+                "data": sorted(PROFILES), "plants": ["plant"]}
 
     @classmethod
     def explain(cls, name: str) -> dict[str, Any] | None:

@@ -97,6 +97,9 @@ def test_describe_loop_controllers(capsys):
     assert "q1" in capsys.readouterr().out
     assert main(["describe", "pid"]) == 0  # the pendulum's PID keeps its name
     assert "kp1" in capsys.readouterr().out
+    assert main(["describe", "plant"]) == 0
+    out = capsys.readouterr().out
+    assert all(k in out for k in ("tf", "zpk", "ss", "python", "fmu", "delay_s"))
 
 
 def test_kind_python_imports_from_the_config_folder(tmp_path, capsys):

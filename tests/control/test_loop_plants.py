@@ -262,3 +262,21 @@ def test_closed_loop_poles_of_state_feedback_and_cascade():
     env = lambda k: np.max(e[k - 150:k + 150])  # noqa: E731 - the envelope of a possibly oscillating decay
     k1, k2 = 1500, 3000
     assert math.log(env(k2) / env(k1)) / (k2 - k1) == pytest.approx(math.log(rho), rel=0.05)
+
+
+def test_cost_terms_of_a_decaying_error_are_the_integrals():
+    """e = exp(-t): IAE = 1, ISE = 1/2, ITAE = 1, ITSE = 1/4; mae_product is prod mean|s|^w."""
+    from objectives.control.plants.scenario import loop_cost
+
+    h = 1e-4
+    t = np.arange(0, 30, h)
+    e = np.exp(-t)
+    u = 2.0 * np.ones_like(t)
+    y = np.column_stack([1 - e, e])
+    f, terms = loop_cost({"iae": 2.0, "ise": 1.0}, t, e, u, y, y, h)
+    assert terms["iae"] == pytest.approx(1.0, rel=1e-3) and terms["ise"] == pytest.approx(0.5, rel=1e-3)
+    assert terms["itae"] == pytest.approx(1.0, rel=1e-3) and terms["itse"] == pytest.approx(0.25, rel=1e-3)
+    assert terms["effort"] == pytest.approx(4.0 * 30, rel=1e-3) and terms["tv"] == 0.0
+    assert f == pytest.approx(2.0 * terms["iae"] + terms["ise"])
+    g, _ = loop_cost({"mae_product": {"e": 1.4, "u": 0.4, "y1": 1.0}}, t, e, u, y, y, h)
+    assert g == pytest.approx(np.mean(e) ** 1.4 * 2.0**0.4 * np.mean(e))

@@ -232,6 +232,23 @@ class LoopObjective:
     # --- engine catalog (tuner list / describe) -------------------------------------------------
     @staticmethod
     def explain(name: str) -> dict[str, Any] | None:
+        if name == "plant":
+            keys = [("wmp", "the thesis's wheeled mobile pendulum (plant: wmp; controllers pid, lqr, lqg, flc, ...)"),
+                    ("tf", "{num, den}: transfer function, highest power first (objective.plant.tf)"),
+                    ("zpk", "{z, p, k}: zeros, poles, gain"),
+                    ("ss", "{A, B, C, D}: state space (MIMO for lqr_sf); x0 optional"),
+                    ("dt", "the model is discrete with this period (s); else continuous, discretised at period_s"),
+                    ("method", "zoh | tustin: discretisation of a continuous model"),
+                    ("delay_s", "input delay (s), a whole number of controller periods"),
+                    ("python", "'module:dynamics' with dynamics(x, u, t, params) -> dx; x0, params, n_inputs, "
+                               "outputs, n_sub (RK4 steps per period), linearize_at"),
+                    ("fmu", "path.fmu (FMI 2.0 co-simulation, extra fmu); inputs, outputs, parameters"),
+                    ("output", "index of the controlled output"),
+                    ("inner_output", "index of the inner loop's output (pid_cascade)")]
+            return {"section": "plants", "name": "plant", "summary": "plant of a closed-loop job (objective.plant)",
+                    "usage": "objective: {kind: closed_loop, plant: {tf: {num: [1], den: [1, 1]}}, "
+                             "controller: pid2dof, period_s: 0.01, scenario: {duration_s: 5}}",
+                    "params": [{"name": k, "doc": d} for k, d in keys]}
         if name in LOOP_CONTROLLERS:
             return {"section": "controllers", **LOOP_CONTROLLERS[name].describe(),
                     "usage": f"objective: {{kind: closed_loop, plant: {{tf: ...}}, controller: {name}}}"}

@@ -31,9 +31,14 @@ def _fig():
 
 
 def _save(fig, path: pathlib.Path) -> pathlib.Path:
-    from objectives.control.objective import save_figure
+    """Lay out, write as PNG at 110 dpi (creating the folder), close."""
+    import matplotlib.pyplot as plt
 
-    return save_figure(fig, path)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def plot_responses(obj: Any, runs: dict[str, dict[str, Any]], path: pathlib.Path) -> pathlib.Path:
