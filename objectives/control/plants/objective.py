@@ -213,6 +213,24 @@ class LoopObjective:
             rows.append({"requirement": key, "what": what, "limit": lim, "value": v, "met": met})
         return rows
 
+    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The complete tuned controller (every declared value) and its period; the plant, scenario,
+        actuator, sensor, cost and requirements only serve scoring."""
+        from tuner.rundir import plain
+
+        values = self._decl.validate({**self.fixed, **params})
+        sources = {k: ("searched" if k in params else "fixed" if k in self.fixed else "default") for k in values}
+        units = {p.name: p.unit for p in self._decl if p.unit}
+        docs = {p.name: p.doc for p in self._decl if p.doc}
+        choices = {p.name: list(p.choices) for p in self._decl if p.choices}
+        scoring = {"plant": self.plant, "scenario": self.scenario, "actuator": self.actuator, "sensor": self.sensor,
+                   "cost": self.cost, "requirements": self.requirements}
+        notes = [f"the controller runs every period_s = {float(self.period_s):g} s; its discrete coefficients are "
+                 "in the export's tables"]
+        return plain({"kind": "closed_loop", "name": self.controller, "values": values, "sources": sources,
+                      "units": units, "docs": docs, "choices": choices, "scoring": scoring,
+                      "sample_rate_hz": 1.0 / float(self.period_s), "notes": notes})
+
     def export_tables(self, params: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
         """The discrete controller for ``tuner export``: gains and difference-equation coefficients."""
         return self._ctrl.tables(self.coeffs(params), self._plant) or None
