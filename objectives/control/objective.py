@@ -247,7 +247,8 @@ class ClosedLoopObjective:
         from objectives.control.plants.controllers import LOOP_CONTROLLERS
         from objectives.control.profiles import PROFILES
 
-        return {"controllers": sorted({*CONTROLLERS, *LOOP_CONTROLLERS}), "metrics": ["mae_weighted_cost"],
+        loop = {n for n in LOOP_CONTROLLERS if n != "open_loop"}  # open_loop has nothing to tune
+        return {"controllers": sorted({*CONTROLLERS, *loop}), "metrics": ["mae_weighted_cost"],
                 "data": sorted(PROFILES), "plants": ["plant"]}
 
     @classmethod

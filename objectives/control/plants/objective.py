@@ -45,10 +45,24 @@ from objectives.control.plants.simulate import simulate_loop
 from tuner.objective import Evaluation
 from tuner.space import Real, Space
 
-__all__ = ["LoopObjective", "LOOP_KEYS"]
+__all__ = ["LoopObjective", "LOOP_KEYS", "DeployedController"]
 
 LOOP_KEYS = {"kind", "plant", "controller", "fixed", "period_s", "scenario", "actuator", "sensor", "cost",
              "requirements"}
+
+
+@dataclass(frozen=True)
+class DeployedController:
+    """A tuned loop controller: ``name``, every declared value, the period (s) and the coefficient array
+    its discrete step runs (:mod:`.kernels`: PID blocks, or K and Nbar)."""
+
+    name: str
+    values: dict[str, Any]
+    period_s: float
+    coefficients: np.ndarray
+
+    def param_array(self) -> np.ndarray:
+        return self.coefficients
 
 
 @dataclass
@@ -230,6 +244,11 @@ class LoopObjective:
         return plain({"kind": "closed_loop", "name": self.controller, "values": values, "sources": sources,
                       "units": units, "docs": docs, "choices": choices, "scoring": scoring,
                       "sample_rate_hz": 1.0 / float(self.period_s), "notes": notes})
+
+    def build(self, params: Mapping[str, Any]) -> DeployedController:
+        """The deployed controller of ``params``: every value and the kernel coefficients at the period."""
+        values = self._decl.validate({**self.fixed, **params})
+        return DeployedController(self.controller, values, float(self.period_s), self._ctrl.coeffs(values, self._plant))
 
     def export_tables(self, params: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
         """The discrete controller for ``tuner export``: gains and difference-equation coefficients."""
