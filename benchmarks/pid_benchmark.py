@@ -174,7 +174,9 @@ def run(smoke: bool = False, n_jobs: int = 1, **_: Any) -> dict[str, Any]:
           f"serial, Ms <= {MS_MAX} as a hard requirement; goal: tuned IAE <= the best rule with Ms <= {MS_MAX}, "
           "tuned Ms <= 1.4, under 10 s per tuning (the whole serial `tuner.run`: preflight, history, report; "
           "CPU time of the one core it uses, since the wall time on the shared machine depends on the other "
-          f"load: load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the end). "
+          f"load: load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores at the end; "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}: on a loaded machine "
+          "multi-threaded BLAS makes the small LQR/eigenvalue solves many times slower). "
           "'unstable': the rule's closed loop is unstable (Ms = inf).", "",
           md_table(["plant", "method", "K", "Ti (s)", "Td (s)", "load IAE", "Ms", "overshoot %",
                     "tuning wall / CPU s", "goal"], rows)]

@@ -100,12 +100,14 @@ class NonlinearPlant:
         return a, b
 
     def design_model(self) -> tuple[np.ndarray, np.ndarray]:
-        """The ZOH discretisation at the period of the linearisation at ``linearize_at``."""
+        """The ZOH discretisation at the period of the linearisation at ``linearize_at`` (computed once)."""
         import control
 
-        a, b = self.jacobians(self.x_op, self.u_op)
-        d = control.sample_system(control.ss(a, b, np.eye(a.shape[0]), np.zeros(b.shape)), self.period_s)
-        return np.asarray(d.A, dtype=float), np.asarray(d.B, dtype=float)
+        if getattr(self, "_design", None) is None:
+            a, b = self.jacobians(self.x_op, self.u_op)
+            d = control.sample_system(control.ss(a, b, np.eye(a.shape[0]), np.zeros(b.shape)), self.period_s)
+            self._design = (np.asarray(d.A, dtype=float), np.asarray(d.B, dtype=float))
+        return self._design
 
     def tracked_row(self) -> np.ndarray:
         row = np.zeros(self.n_states)
