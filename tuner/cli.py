@@ -236,6 +236,8 @@ def _show_scores(path: Path, fit: float | None, evaluation: dict, params: dict) 
             print(title)
         for k, v in items:
             print(f"  {k:24s} {fmt(v)}")
+    for note in t.get("notes", []):  # e.g. the scoring-only truth start the deployment replaced
+        print(f"note:       {note}")
 
 
 def _cmd_compare(a) -> int:
@@ -319,7 +321,9 @@ def _cmd_export(a) -> int:
     run_dir = Path(a.run_dir)
     if not (run_dir / "best.yaml").exists():
         raise UsageError(f"{run_dir}: no best.yaml (not a run directory, or nothing evaluated yet)")
-    if a.prefix is not None and (a.format != "c" or not a.prefix.isidentifier() or not a.prefix.isascii()):
+    if a.prefix is not None and a.format != "c":
+        raise UsageError(f"--prefix {a.prefix!r}: names C identifiers, only for --format c (got --format {a.format})")
+    if a.prefix is not None and (not a.prefix.isidentifier() or not a.prefix.isascii()):
         raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c")
     text = export(run_dir, a.format, prefix=a.prefix)
     if a.output:

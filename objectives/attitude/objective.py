@@ -164,9 +164,13 @@ class FilterObjective:
         if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
             raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
         if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth", "broad")):
-            q = np.asarray(self.q0, float)
-            if q.shape != (4,):
-                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 numbers, got {self.q0!r}")
+            try:  # a misspelt name ('up') is not a number either: one message for both
+                q = None if isinstance(self.q0, str) else np.asarray(self.q0, float)
+            except (TypeError, ValueError):
+                q = None
+            if q is None or q.shape != (4,) or not np.all(np.isfinite(q)) or not np.any(q):
+                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 finite numbers (w, x, y, z), "
+                                 f"not all 0, got {self.q0!r}")
         if self.warmup_s < 0:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._cache: dict[str, Any] = {}

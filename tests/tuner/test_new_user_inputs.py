@@ -1,0 +1,103 @@
+"""Bad inputs around the deployment, validation and CSV features, as a new user writes them: each is one
+``error:`` line with exit 2 before any tuning (no run directory), and the notes of a deployment show."""
+
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+from tests.tuner.test_preflight import COLUMNS, filter_job, no_run_dir, write_csv
+
+
+def tuner(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=300)
+
+
+def one_error_line(out, *expected):
+    assert out.returncode == 2, (out.returncode, out.stderr)
+    assert "Traceback" not in out.stderr, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), out.stderr
+    for e in expected:
+        assert e in lines[0], (e, lines[0])
+    return lines[0]
+
+
+@pytest.mark.parametrize("over, expected", [
+    # one value in two places: which one the run used was a guess (the searched one won, silently)
+    ({"objective": {"fixed": {"use_mag": False, "beta": 0.1}}, "parameters": {"beta": {"low": 0.01, "high": 1.0}}},
+     ["objective.fixed.beta", "0.1 is fixed here but parameters.beta searches it", "write it in one place"]),
+    ({"objective": {"fixed": {"use_mag": False, "zeta": 0.1}},
+      "parameters": {"beta": {"low": 0.01, "high": 1.0}, "zeta": {"fixed": 0.2}}},
+     ["objective.fixed.zeta", "0.1 contradicts parameters.zeta: {fixed: 0.2}"]),
+    # a misspelt start: was "could not convert string to float: 'up'"
+    ({"objective": {"q0": "up"}}, ["objective.q0", "expected accmag, truth, broad or 4 finite numbers", "'up'"]),
+    ({"objective": {"q0": [0, 0, 0, 0]}}, ["objective.q0", "not all 0"]),
+])
+def test_contradictions_and_bad_starts_are_errors_before_tuning(tmp_path, over, expected):
+    write_csv(tmp_path / "rec.csv")
+    one_error_line(tuner("run", str(filter_job(tmp_path, **over))), f"{tmp_path / 'job.yaml'}: ", *expected)
+    assert no_run_dir(tmp_path)
+
+
+def test_the_same_value_in_both_places_is_accepted(tmp_path):
+    write_csv(tmp_path / "rec.csv")
+    job = filter_job(tmp_path, objective={"fixed": {"use_mag": False, "zeta": 0.0}},
+                     parameters={"beta": {"low": 0.01, "high": 1.0}, "zeta": {"fixed": 0.0}},
+                     optimizer={"method": "random", "population": 2, "generations": 1})
+    out = tuner("run", str(job))
+    assert out.returncode == 0, out.stderr
+
+
+def test_validation_folds_beyond_the_recordings_is_an_error_before_tuning(tmp_path):
+    """Was: the whole tuning ran, then `warning: cross-validation not run` (k=5 with 2 recordings)."""
+    for name in ("a", "b"):
+        write_csv(tmp_path / f"{name}.csv")
+    data = [{"csv": {"path": f"{n}.csv", "columns": COLUMNS}} for n in ("a", "b")]
+    job = filter_job(tmp_path, objective={"data": data}, validation={"cv": "kfold", "folds": 5})
+    one_error_line(tuner("run", str(job)), "validation.folds", "k=5", "cross-validation after the run needs it")
+    assert no_run_dir(tmp_path)
+
+
+def test_yaml_syntax_errors_are_one_line(tmp_path):
+    """A broken column map file or job file: one line (PyYAML's message spans several)."""
+    write_csv(tmp_path / "rec.csv")
+    (tmp_path / "cols.yaml").write_text("columns: [a, b\n")
+    job = filter_job(tmp_path, objective={"data": [{"csv": {"path": "rec.csv", "columns": "cols.yaml"}}]})
+    one_error_line(tuner("run", str(job)), "cols.yaml: not valid YAML", "line 2")
+    bad = tmp_path / "broken.yaml"
+    bad.write_text("name: x\nobjective: {kind: [\n")
+    one_error_line(tuner("run", str(bad)), "broken.yaml: not valid YAML", "line 3")
+
+
+def test_time_going_back_names_plain_seconds(tmp_path):
+    rec = write_csv(tmp_path / "rec.csv")
+    lines = rec.read_text().splitlines()
+    lines[2], lines[3] = lines[3], lines[2]
+    rec.write_text("\n".join(lines) + "\n")
+    line = one_error_line(tuner("run", str(filter_job(tmp_path))), "'time' must increase strictly",
+                          "sample 2 at 0.01 s follows 0.02 s")
+    assert "np.float64" not in line
+
+
+def test_show_names_a_truth_start_replaced_in_the_deployment_and_prefix_only_for_c(tmp_path):
+    write_csv(tmp_path / "rec.csv")
+    job = filter_job(tmp_path, objective={"fixed": {"use_mag": False, "init": "truth"}},
+                     parameters={"beta": {"low": 0.01, "high": 1.0}},
+                     optimizer={"method": "random", "population": 2, "generations": 1})
+    out = tuner("run", str(job), "--run-dir", str(tmp_path / "run"))
+    assert out.returncode == 0, out.stderr
+    dep = yaml.safe_load((tmp_path / "run" / "best.yaml").read_text())["deployment"]
+    assert dep["values"]["init"] == "accmag" and dep["scoring"]["init"] == "truth"
+    show = tuner("show", str(tmp_path / "run"))
+    assert show.returncode == 0, show.stderr
+    notes = [ln for ln in show.stdout.splitlines() if ln.startswith("note:")]
+    assert len(notes) == 1 and "ground truth" in notes[0] and "init: accmag" in notes[0], show.stdout
+    # was: "--prefix 'MH': a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c" for a valid identifier
+    one_error_line(tuner("export", str(tmp_path / "run"), "--format", "yaml", "--prefix", "MH"),
+                   "--prefix 'MH'", "only for --format c", "got --format yaml")
+    one_error_line(tuner("export", str(tmp_path / "run"), "--format", "c", "--prefix", "1MH"),
+                   "--prefix '1MH'", "a C identifier")
+    assert tuner("export", str(tmp_path / "run"), "--format", "c", "--prefix", "MH").returncode == 0
