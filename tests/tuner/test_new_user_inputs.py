@@ -101,3 +101,14 @@ def test_show_names_a_truth_start_replaced_in_the_deployment_and_prefix_only_for
     one_error_line(tuner("export", str(tmp_path / "run"), "--format", "c", "--prefix", "1MH"),
                    "--prefix '1MH'", "a C identifier")
     assert tuner("export", str(tmp_path / "run"), "--format", "c", "--prefix", "MH").returncode == 0
+
+
+@pytest.mark.parametrize("params, expected", [
+    ("beta: abc\n", ["params:", "beta must be a number", "'abc'"]),  # was a 37-line traceback, exit 1
+    ("betta: 0.1\n", ["params.betta: not a parameter of this objective", "allowed:", "beta"]),  # was "missing ['beta']"
+])
+def test_evaluate_with_bad_params_is_one_error_line(tmp_path, params, expected):
+    write_csv(tmp_path / "rec.csv")
+    (tmp_path / "p.yaml").write_text(params)
+    job = filter_job(tmp_path, parameters={"beta": {"low": 0.01, "high": 1.0}})
+    one_error_line(tuner("evaluate", str(job), "--params", str(tmp_path / "p.yaml")), "p.yaml: ", *expected)
