@@ -350,6 +350,8 @@ def _cmd_evaluate(a) -> int:
         dep = out.get("deployment") or {}
         if dep:  # every value of the scored filter/controller (searched, fixed, defaults)
             print(f"deployed {dep['kind']} {dep['name']}: " + ", ".join(f"{k}={v!r}" for k, v in dep["values"].items()))
+            for note in dep.get("notes") or []:  # the scores above used the run's scoring settings (a truth start)
+                print(f"note: the scores above use the run's scoring settings; {note}")
     return 0
 
 

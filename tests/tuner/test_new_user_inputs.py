@@ -95,6 +95,12 @@ def test_show_names_a_truth_start_replaced_in_the_deployment_and_prefix_only_for
     assert show.returncode == 0, show.stderr
     notes = [ln for ln in show.stdout.splitlines() if ln.startswith("note:")]
     assert len(notes) == 1 and "ground truth" in notes[0] and "init: accmag" in notes[0], show.stdout
+    # tuner evaluate RUN scores with the run's scoring settings (the truth start) and says so under the
+    # deployed values it prints (was: scores of the truth start above "deployed ... init='accmag'")
+    ev = tuner("evaluate", str(tmp_path / "run"))
+    assert ev.returncode == 0, ev.stderr
+    assert ev.stdout.strip().splitlines()[-1].startswith("note: the scores above use the run's scoring settings; "
+                                                         "the run was scored with the start orientation taken")
     # was: "--prefix 'MH': a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c" for a valid identifier
     one_error_line(tuner("export", str(tmp_path / "run"), "--format", "yaml", "--prefix", "MH"),
                    "--prefix 'MH'", "only for --format c", "got --format yaml")
