@@ -118,3 +118,20 @@ def test_evaluate_with_bad_params_is_one_error_line(tmp_path, params, expected):
     (tmp_path / "p.yaml").write_text(params)
     job = filter_job(tmp_path, parameters={"beta": {"low": 0.01, "high": 1.0}})
     one_error_line(tuner("evaluate", str(job), "--params", str(tmp_path / "p.yaml")), "p.yaml: ", *expected)
+
+
+def test_from_run_refuses_a_deployment_value_the_filter_does_not_know(tmp_path):
+    """A hand-edited best.yaml (``mag_rejections: true``): was silently dropped, so the filter built was not
+    the one the file records."""
+    from objectives.attitude.filters.base import AttitudeFilter
+
+    write_csv(tmp_path / "rec.csv")
+    job = filter_job(tmp_path, parameters={"beta": {"low": 0.01, "high": 1.0}},
+                     optimizer={"method": "random", "population": 2, "generations": 1})
+    assert tuner("run", str(job), "--run-dir", str(tmp_path / "run")).returncode == 0
+    assert AttitudeFilter.from_run(tmp_path / "run").values["use_mag"] is False
+    best = yaml.safe_load((tmp_path / "run" / "best.yaml").read_text())
+    best["deployment"]["values"]["mag_rejections"] = True
+    (tmp_path / "run" / "best.yaml").write_text(yaml.safe_dump(best, sort_keys=False))
+    with pytest.raises(ValueError, match="deployment.values.mag_rejections: not a parameter of madgwick; allowed: "):
+        AttitudeFilter.from_run(tmp_path / "run")
