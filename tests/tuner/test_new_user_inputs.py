@@ -135,3 +135,16 @@ def test_from_run_refuses_a_deployment_value_the_filter_does_not_know(tmp_path):
     (tmp_path / "run" / "best.yaml").write_text(yaml.safe_dump(best, sort_keys=False))
     with pytest.raises(ValueError, match="deployment.values.mag_rejections: not a parameter of madgwick; allowed: "):
         AttitudeFilter.from_run(tmp_path / "run")
+
+
+@pytest.mark.parametrize("spec, expected", [
+    # was: "'time' is not uniformly sampled ... (tolerance -1 dt)", blaming the recording
+    ({"path": "rec.csv", "columns": COLUMNS, "jitter_tol": -1}, ["jitter_tol must be a number > 0", "got -1"]),
+    # was: "csv.path: file not found: <the job's folder>"
+    ({"columns": COLUMNS}, ["objective.data[0].csv.path: missing (required)"]),
+    ({"path": ".", "columns": COLUMNS}, ["objective.data[0].csv.path: not a file"]),
+])
+def test_csv_spec_errors_name_what_is_wrong(tmp_path, spec, expected):
+    write_csv(tmp_path / "rec.csv")
+    one_error_line(tuner("run", str(filter_job(tmp_path, objective={"data": [{"csv": spec}]}))), *expected)
+    assert no_run_dir(tmp_path)
