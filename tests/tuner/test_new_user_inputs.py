@@ -148,3 +148,16 @@ def test_csv_spec_errors_name_what_is_wrong(tmp_path, spec, expected):
     write_csv(tmp_path / "rec.csv")
     one_error_line(tuner("run", str(filter_job(tmp_path, objective={"data": [{"csv": spec}]}))), *expected)
     assert no_run_dir(tmp_path)
+
+
+def test_a_deployment_value_outside_its_choices_is_refused():
+    """A hand-edited ``init: truth`` (scoring only, not a choice of the deployed filter): the C header left it
+    out without a word; now every reader of the deployment (export, from_run, load_best) refuses it."""
+    from tuner.deployment import Deployment
+
+    doc = {"kind": "filter", "name": "mahony", "values": {"Kp": 0.5, "init": "accmag"},
+           "choices": {"init": ["accmag", "broad"]}}
+    assert Deployment.from_doc(doc).values["init"] == "accmag"
+    doc["values"]["init"] = "truth"
+    with pytest.raises(ValueError, match=r"values.init: 'truth' is not one of its choices \['accmag', 'broad'\]"):
+        Deployment.from_doc(doc)
