@@ -345,6 +345,9 @@ def _cmd_sweep(a) -> int:
     from tuner.sweep import collect, run_sweep, summary_text
 
     res = run_sweep(a.sweep, sweep_dir=a.dir, jobs=a.jobs, quiet=a.quiet)
+    if res.get("interrupted"):
+        print(f"sweep interrupted; run the same command again to continue: {res['dir']}", file=sys.stderr)
+        return 1
     print(summary_text(collect(res["dir"]), res["dir"]))
     print(f"sweep directory: {res['dir']}")
     print(f"report: {res['report']}")
@@ -382,6 +385,9 @@ def main(argv: list[str] | None = None) -> int:
     if not a.command:
         ap.print_help()
         return 2
+    from tuner import signals
+
+    old_handlers = signals.install()  # SIGTERM and SIGHUP stop every command as Ctrl-C does
     try:
         try:
             code = COMMANDS[a.command](a)
@@ -397,12 +403,14 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {where}: {exc.strerror or exc} (results written before this point are kept; "
                   "`tuner resume` continues a run)", file=sys.stderr)
             return 2
-        except KeyboardInterrupt:  # pragma: no cover - runs handle their own interrupts
+        except KeyboardInterrupt:  # runs handle their own; `tuner cv CONFIG` or a report stops here
             print("interrupted", file=sys.stderr)
             return 1
     except BrokenPipeError:  # stdout closed early (`tuner list | head -1`): stop quietly
         _silence_stdout()
         return 0
+    finally:
+        signals.restore(old_handlers)
 
 
 def _silence_stdout() -> None:

@@ -18,7 +18,6 @@ import math
 import os
 import platform
 import secrets
-import signal
 import socket
 import subprocess
 import sys
@@ -30,11 +29,12 @@ from typing import Any
 
 import numpy as np
 
+from tuner import signals as stop_signals
 from tuner.config import ConfigError, RunConfig, config_from_dict
-from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
+from tuner.evaluate import EvalRecord, Evaluator, sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
-from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
+from tuner.replay import Replay as _Replay
 from tuner.rundir import (
     Best,
     Checkpoint,
@@ -163,8 +163,8 @@ def _preload_report() -> None:
         pass
 
 
-class _Interrupted(Exception):
-    pass
+class _Interrupted(BaseException):
+    """A stop signal whose KeyboardInterrupt was swallowed on the way (never a recorded failure)."""
 
 
 class _LiveMap:
@@ -186,48 +186,6 @@ class _LiveMap:
     def close(self) -> None:
         if self.evaluator is not None:
             self.evaluator.close()
-
-
-class _Replay:
-    """Hands back the recorded results of the first rows of ``history.csv``, then evaluates live.
-
-    Each replayed candidate is checked against its row: a row whose parameters differ from what
-    the re-created optimiser asks means the history was edited (or the code changed), and is refused.
-    """
-
-    def __init__(self, rows: list[dict[str, str]], names: list[str], metric_names: list[str], live: _LiveMap,
-                 where: Path):
-        self.rows, self.names, self.metric_names, self.live, self.where = rows, names, metric_names, live, where
-        self.pos = 0
-
-    @property
-    def replaying(self) -> bool:
-        return self.pos < len(self.rows)
-
-    def __call__(self, fn: Callable, items: list[tuple[dict[str, Any], int]]) -> list[EvalRecord]:
-        if not self.replaying:
-            return self.live(fn, items)
-        chunk = self.rows[self.pos:self.pos + len(items)]
-        if len(chunk) != len(items):
-            raise RunError(f"{self.where}: rows {self.pos}-{len(self.rows) - 1} are not a complete generation "
-                           f"({len(items)} evaluations)")
-        out = []
-        for (params, _), row in zip(items, chunk):
-            for k in self.names:
-                if _cell(params[k]) != row.get(k):
-                    raise RunError(f"{self.where}: row eval={row.get('eval')}: {k} is {row.get(k)!r} but the "
-                                   f"optimiser re-created from the seed asks {_cell(params[k])!r}; the history "
-                                   "was edited or the code changed, so it cannot be resumed")
-            if row.get("status") not in ("ok", "failed"):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: status {row.get('status')!r}")
-            try:
-                fit, secs = float(row["fitness"]), float(row["seconds"])
-            except (TypeError, ValueError):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: fitness/seconds not numbers") from None
-            metrics = {k: parse_cell(row[k]) for k in self.metric_names if row.get(k) not in (None, "")}
-            out.append(EvalRecord(Evaluation(fit, metrics, row["status"], row.get("error") or ""), secs))
-        self.pos += len(items)
-        return out
 
 
 class Run:
@@ -256,6 +214,14 @@ class Run:
 
     # --- main loop ----------------------------------------------------------------------------
     def execute(self, replay_rows: list[dict[str, str]] | None = None) -> RunResult:
+        """Run (or replay, then continue) to the end; SIGTERM and SIGHUP act as Ctrl-C meanwhile."""
+        old_handlers = stop_signals.install()
+        try:
+            return self._execute(replay_rows)
+        finally:
+            stop_signals.restore(old_handlers)
+
+    def _execute(self, replay_rows: list[dict[str, str]] | None) -> RunResult:
         stages = self.cfg.optimizer.refine.stages
         history = self.rd.history(self.base_space.names)
         live = _LiveMap(self.cfg, self.n_jobs)
@@ -266,7 +232,7 @@ class Run:
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
         t_session, wall0 = time.perf_counter(), self.meta.timing.wall_s
         state = {"gens": 0, "t0": time.perf_counter()}
-        sigints = watch_sigint()
+        sigints = sigint_count()
 
         def on_generation(g: Generation) -> None:
             state["gens"] += 1
@@ -296,14 +262,6 @@ class Run:
             if sigint_count() != sigints:  # a Ctrl-C whose KeyboardInterrupt was swallowed on the way
                 raise _Interrupted()
 
-        def on_term(signum, frame):  # SIGTERM behaves like Ctrl-C
-            raise _Interrupted()
-
-        old_handler = None
-        try:
-            old_handler = signal.signal(signal.SIGTERM, on_term)
-        except ValueError:  # not in the main thread
-            pass
         stage, space, n_evals, n_failed, best, interrupted = 0, self.base_space, 0, 0, None, False
         optimizer = self._new_optimizer(0, space, None)
         if self.progress and hasattr(optimizer, "describe"):  # e.g. the method `auto` picked
@@ -327,11 +285,17 @@ class Run:
             interrupted = True
         finally:
             live.close()
-            if old_handler is not None:
-                try:
-                    signal.signal(signal.SIGTERM, old_handler)
-                except ValueError:  # pragma: no cover
-                    pass
+        try:
+            return self._conclude(optimizer, replay, history, interrupted, n_evals, n_failed, state, wall0, t_session)
+        except KeyboardInterrupt:  # a stop signal during the selection, the report step or the CV after a run
+            self._write_meta(status="interrupted", interrupted=_now())
+            if self.progress:
+                self.progress(f"interrupted; resume with: tuner resume {self.dir}")
+            return self._result("interrupted", n_evals, state["gens"], "interrupted")
+
+    def _conclude(self, optimizer, replay, history, interrupted: bool, n_evals: int, n_failed: int,
+                  state: dict[str, Any], wall0: float, t_session: float) -> RunResult:
+        """After the optimiser stopped: the interrupted record, or selection, report step, CV and report."""
         if replay.replaying and not interrupted:
             raise RunError(f"{history.path}: {len(replay.rows)} rows recorded, but the run ends after "
                            f"{n_evals}; the history does not belong to this config")

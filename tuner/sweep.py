@@ -192,13 +192,18 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
     if n_par > 1:
         from joblib import Parallel, delayed
 
-        results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
+        try:  # a stop signal here makes joblib kill its workers (their runs resume as after a kill -9)
+            results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
+        except KeyboardInterrupt:
+            return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:
         from tuner.report import throttled
 
         results = []
         for j, d in todo:  # the report is rewritten between jobs (throttled): a live view of the sweep
             results.append(_run_job(j, d, False, quiet))
+            if results[-1]["status"] == "interrupted":  # Ctrl-C, SIGTERM or SIGHUP: stop the sweep here
+                return {"dir": out, "report": None, "ok": False, "results": results, "interrupted": True}
             if len(results) < len(todo):
                 throttled(f"sweep:{out.resolve()}", lambda: write_sweep_report(out, live=True))
     report = write_sweep_report(out)
