@@ -324,8 +324,11 @@ def _cmd_cv(a) -> int:
 
     progress = None if a.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     if Path(a.config).is_dir():  # a finished run: its best is the tuning result, the tables go into it
+        from tuner.registry import say_imports
+        from tuner.rundir import RunDir
         from tuner.validation import cv_run_dir
 
+        say_imports(RunDir(a.config).config().get("objective") or {}, Path(a.config) / "config.yaml")
         v = cv_run_dir(a.config, k=a.k, progress=progress, budget_fraction=a.budget_fraction)
         print(f"CV mean {v['cv_score']:.4g} (defaults {v['defaults_cv_score']:.4g}), tuning score "
               f"{v['tuning_score']:.4g}, gap {v['gap']:+.3g}{' (large)' if v['gap_large'] else ''}\n{a.config}")

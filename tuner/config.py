@@ -26,6 +26,7 @@ from typing import Any
 
 import yaml
 
+from tuner import safe_yaml
 from tuner.objective import hook
 from tuner.space import Space, SpaceError
 
@@ -182,7 +183,7 @@ def _get(d: Mapping, key: str, types: Any, file: Any, path: str, default: Any = 
 def parse_value(text: str) -> Any:
     """A ``--set`` value: YAML scalar/flow syntax (``3``, ``1e-3``, ``true``, ``[1, 2]``, ``{a: 1}``)."""
     try:
-        return yaml.safe_load(text)
+        return safe_yaml.load(text)
     except yaml.YAMLError:
         return text
 
@@ -221,9 +222,9 @@ def read_yaml(path: str | Path, what: str = "") -> Any:
     if "\x00" in text:
         raise ConfigError(path, "", f"{label}is a binary file; expected a YAML file")
     try:
-        return yaml.safe_load(text)
+        return safe_yaml.load(text)
     except yaml.YAMLError as exc:
-        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+        raise ConfigError(path, "", f"{label}not valid YAML: {safe_yaml.one_line(exc)}") from None
 
 
 def load_config(path: str | Path, overrides: list[str] | None = None, seed: int | None = None,

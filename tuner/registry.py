@@ -46,6 +46,16 @@ def resolve_callable(spec: str) -> Any:
     return obj
 
 
+def say_imports(objective: Mapping[str, Any], source: Any) -> None:
+    """Tell on stderr that a ``kind: python`` objective is about to be imported and run (by ``run``,
+    ``resume``, ``evaluate`` and ``cv``; the read-only commands never build it)."""
+    if isinstance(objective, Mapping) and objective.get("kind") == "python":
+        import sys
+
+        print(f"note: {source}: objective.kind python imports and runs {objective.get('callable')!r}: "
+              "trust it as you would the code itself", file=sys.stderr, flush=True)
+
+
 @dataclass(frozen=True)
 class PythonObjective:
     """A user callable ``module:function`` as an objective; ``options`` are passed as keywords.

@@ -422,8 +422,9 @@ def _build(cfg: RunConfig):
     a failing default evaluation are :class:`ConfigError` before anything is written)."""
     from tuner.evaluate import TimedObjective
     from tuner.preflight import preflight
-    from tuner.registry import build_objective
+    from tuner.registry import build_objective, say_imports
 
+    say_imports(cfg.objective, cfg.source)
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
     except FileNotFoundError as exc:

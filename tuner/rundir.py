@@ -44,7 +44,9 @@ from typing import Any
 import numpy as np
 import yaml
 
+from tuner import safe_yaml
 from tuner.loop import BestPoint
+from tuner.safe_io import check_not_link, named, open_nofollow, read_text, refuse_links
 
 __all__ = ["RunError", "RunDir", "Meta", "Timing", "Best", "Checkpoint", "History", "atomic_write",
            "config_hash", "first_difference", "fmt_cell", "parse_cell", "FAULT_ENV"]
@@ -80,11 +82,19 @@ def atomic_write(path: Path, data: bytes | str) -> None:
     _n_writes += 1
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    mode = "wb" if isinstance(data, bytes) else "w"
-    with open(tmp, mode) as fh:
-        fh.write(data)
-        fh.flush()
-        os.fsync(fh.fileno())
+    check_not_link(path.parent)
+    if os.path.lexists(tmp):
+        os.unlink(tmp)  # a leftover of a killed process with this pid (a link is removed, not followed)
+    try:
+        with named(path):  # a full disk names the file, not `?`
+            with os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
+                fh.write(data if isinstance(data, bytes) else data.encode())
+                fh.flush()
+                os.fsync(fh.fileno())
+    except OSError:
+        if os.path.lexists(tmp):
+            os.unlink(tmp)  # nothing half-written stays behind; the old file is untouched
+        raise
     _fault("before")
     os.replace(tmp, path)
     try:
@@ -102,7 +112,7 @@ def _append(path: Path, text: str) -> None:
     """Append and fsync (a kill can leave a torn last line, which the checkpoint's row count excludes)."""
     global _n_writes
     _n_writes += 1
-    with open(path, "a", newline="") as fh:
+    with named(path), os.fdopen(open_nofollow(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT), "a", newline="") as fh:
         if os.environ.get(FAULT_ENV):
             fh.write(text[: len(text) // 2])
             fh.flush()
@@ -328,8 +338,10 @@ class History:
         self.param_names = list(param_names)
         self.metric_names: list[str] = []
         if self.path.exists():
-            with open(self.path, newline="") as fh:
-                header = next(csv.reader(fh), None)
+            try:
+                header = next(csv.reader(io.StringIO(read_text(self.path), newline="")), None)
+            except (UnicodeDecodeError, csv.Error) as exc:
+                raise RunError(f"{self.path}: unreadable ({exc})") from None
             fixed = FIXED_COLUMNS + self.param_names + RESULT_COLUMNS
             if header is None or header[:len(fixed)] != fixed:
                 raise RunError(f"{self.path}: header {header} does not start with the expected columns {fixed}")
@@ -350,8 +362,10 @@ class History:
         atomic_write(self.path, buf.getvalue())
 
     def read_rows(self) -> list[dict[str, str]]:
-        with open(self.path, newline="") as fh:
-            return list(csv.DictReader(fh))
+        try:
+            return list(csv.DictReader(io.StringIO(read_text(self.path), newline="")))
+        except (UnicodeDecodeError, csv.Error) as exc:
+            raise RunError(f"{self.path}: unreadable ({exc})") from None
 
     def truncate(self, n_rows: int) -> list[dict[str, str]]:
         """Keep the first ``n_rows`` evaluations (what the checkpoint covers) and return them."""
@@ -381,6 +395,7 @@ class RunDir:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
+        refuse_links(self.path)  # a handed-over directory is data: no entry of it is followed (tuner.safe_io)
 
     def __repr__(self) -> str:
         return f"RunDir({str(self.path)!r})"
@@ -396,7 +411,7 @@ class RunDir:
         if not p.is_file():
             raise RunError(f"{p}: missing ({what})")
         try:
-            return p.read_text()
+            return read_text(p)
         except (OSError, UnicodeDecodeError) as exc:
             raise RunError(f"{p}: unreadable: {exc}") from None
 
@@ -408,9 +423,9 @@ class RunDir:
 
     def _yaml(self, name: str, what: str) -> Any:
         try:
-            return yaml.safe_load(self._text(name, what))
+            return safe_yaml.load(self._text(name, what))
         except yaml.YAMLError as exc:
-            msg = str(exc).replace("\n", " ")
+            msg = safe_yaml.one_line(exc)
             raise RunError(f"{self.path / name}: not valid YAML: {msg}") from None
 
     def is_run(self) -> bool:
@@ -430,7 +445,7 @@ class RunDir:
     def config_snapshot(self) -> dict[str, Any] | None:
         p = self.path / ".config.json"
         try:
-            return json.loads(p.read_text()) if p.is_file() else None
+            return json.loads(read_text(p)) if p.is_file() else None
         except (OSError, ValueError):
             return None
 
@@ -459,8 +474,7 @@ class RunDir:
         if not p.is_file():
             return []
         try:
-            with open(p, newline="") as fh:
-                return list(csv.DictReader(fh))
+            return list(csv.DictReader(io.StringIO(read_text(p), newline="")))
         except (OSError, UnicodeDecodeError, csv.Error) as exc:
             raise RunError(f"{p}: unreadable ({exc})") from None
 
@@ -522,7 +536,7 @@ class RunDir:
         import fcntl
 
         self.path.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        fd = open_nofollow(self.path / ".lock", os.O_RDWR | os.O_CREAT)  # never truncate a link's target
         try:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
