@@ -182,7 +182,10 @@ def _cmd_show(a) -> int:
     from dataclasses import asdict
 
     from tuner.bounds import run_warnings
+    from tuner.replay import verify_history
+    from tuner.rundir import RunDir
 
+    note = verify_history(RunDir(path))  # RunError naming an edited row
     s = run_summary(path)  # RunError naming the file if meta.json/best.yaml is corrupt
     warnings = run_warnings(path)
     if a.json:
@@ -201,6 +204,8 @@ def _cmd_show(a) -> int:
         print(s["evaluation"]["summary_table"])
     for w in warnings:
         print(f"warning: {w.message}")
+    if note:
+        print(f"note: {note}")
     return 0
 
 
@@ -364,8 +369,14 @@ def _cmd_report(a) -> int:
 
         print(write_sweep_report(path))
     elif (path / "meta.json").exists() or (path / "config.yaml").exists():
+        from tuner.replay import verify_history
         from tuner.report import write_run_report
+        from tuner.rundir import RunDir
 
+        if (path / "meta.json").exists():
+            note = verify_history(RunDir(path))  # RunError naming an edited row
+            if note:
+                print(f"note: {note}", file=sys.stderr)
         print(write_run_report(path))  # RunError naming the file if one is corrupt
     else:
         raise UsageError(f"{path}: not a run or sweep directory")

@@ -13,9 +13,27 @@ from typing import Any
 
 from tuner.evaluate import EvalRecord
 from tuner.objective import Evaluation
-from tuner.rundir import RunError, fmt_cell, parse_cell
+from tuner.rundir import CHAIN, RunDir, RunError, check_chain, fmt_cell, parse_cell, read_chain
 
-__all__ = ["Replay"]
+__all__ = ["Replay", "verify_history"]
+
+
+def verify_history(rd: RunDir) -> str:
+    """Check ``history.csv`` against ``history.chain`` (:class:`RunError` naming the first edited row).
+
+    Rows beyond the checkpoint without a digest (a kill between the two appends) are left out. Returns a
+    note for a history of an older tuner, which has no chain (still readable), else ''.
+    """
+    rows = rd.history_rows()
+    if not rows:
+        return ""
+    if not rd.file(CHAIN).exists():
+        return "history.csv has no history.chain (written by an older tuner): edits to it cannot be detected"
+    digests = read_chain(rd.file(CHAIN))
+    ck = rd.checkpoint() if rd.file("checkpoint.json").exists() else None
+    n = max(min(len(rows), len(digests)), ck.n_evals if ck else 0)
+    check_chain(rd.file("history.csv"), rows[:n], digests, rd.meta().config_hash)
+    return ""
 
 
 def _cell(v: Any) -> str:

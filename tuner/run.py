@@ -223,7 +223,7 @@ class Run:
 
     def _execute(self, replay_rows: list[dict[str, str]] | None) -> RunResult:
         stages = self.cfg.optimizer.refine.stages
-        history = self.rd.history(self.base_space.names)
+        history = self.rd.history(self.base_space.names, self.meta.config_hash)
         live = _LiveMap(self.cfg, self.n_jobs)
         replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
                          history.path)
@@ -557,7 +557,7 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
                 rd.file(name).unlink(missing_ok=True)
             rows: list[dict[str, str]] = []
         else:
-            rows = rd.history(space.names).truncate(ck.n_evals)
+            rows = rd.history(space.names, meta.config_hash).truncate(ck.n_evals)
         r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
         if printer:
             printer(f"resuming {rd.path} after {len(rows)} evaluations")

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from tuner import safe_yaml
+from tuner import digest, safe_yaml
 from tuner.loop import BestPoint
 from tuner.safe_io import check_not_link, named, open_nofollow, read_text, refuse_links
 
@@ -331,12 +331,20 @@ class Checkpoint:
 
 # --- history -----------------------------------------------------------------------------------
 class History:
-    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear."""
+    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear.
 
-    def __init__(self, path: Path, param_names: list[str]):
+    Beside it, ``history.chain`` holds one ``eval,digest`` line per row: the row's digest chained to the row
+    before and, for the first row, to ``config_hash`` (:mod:`tuner.digest`). It is a file of its own so that
+    ``history.csv`` stays the same for the same config and seed whatever the backend (its ``seconds`` aside).
+    A history of an older tuner without it stays readable and is continued without digests.
+    """
+
+    def __init__(self, path: Path, param_names: list[str], config_hash: str = ""):
         self.path = Path(path)
+        self.chain_path = self.path.with_name(CHAIN)
         self.param_names = list(param_names)
         self.metric_names: list[str] = []
+        self.config_hash, self._last = config_hash, config_hash
         if self.path.exists():
             try:
                 header = next(csv.reader(io.StringIO(read_text(self.path), newline="")), None)
@@ -346,8 +354,12 @@ class History:
             if header is None or header[:len(fixed)] != fixed:
                 raise RunError(f"{self.path}: header {header} does not start with the expected columns {fixed}")
             self.metric_names = header[len(fixed):]
+            self.chained = self.chain_path.exists()
+            self._last = None  # read when first needed
         else:
+            self.chained = True
             self._rewrite([])
+            atomic_write(self.chain_path, "")
 
     @property
     def columns(self) -> list[str]:
@@ -368,10 +380,16 @@ class History:
             raise RunError(f"{self.path}: unreadable ({exc})") from None
 
     def truncate(self, n_rows: int) -> list[dict[str, str]]:
-        """Keep the first ``n_rows`` evaluations (what the checkpoint covers) and return them."""
+        """Keep the first ``n_rows`` evaluations (what the checkpoint covers), checked, and return them."""
         rows = self.read_rows()
         if len(rows) < n_rows:
             raise RunError(f"{self.path}: {len(rows)} rows, but checkpoint.json says {n_rows} were written")
+        if self.chained:
+            digests = read_chain(self.chain_path)
+            check_chain(self.path, rows[:n_rows], digests, self.config_hash)
+            if len(digests) != n_rows:
+                atomic_write(self.chain_path, "".join(f"{e},{d}\n" for e, d in digests[:n_rows]))
+            self._last = digests[n_rows - 1][1] if n_rows else self.config_hash
         if len(rows) != n_rows:
             self._rewrite(rows[:n_rows])
         return rows[:n_rows]
@@ -382,11 +400,38 @@ class History:
             old = self.read_rows()
             self.metric_names += new
             self._rewrite(old)
-        buf = io.StringIO()
+        if self.chained and self._last is None:
+            digests = read_chain(self.chain_path)
+            self._last = digests[-1][1] if digests else self.config_hash
+        buf, lines = io.StringIO(), []
         w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
         for r in rows:
             w.writerow(r)
+            if self.chained:
+                self._last = digest.row_digest(str(self._last), r)
+                lines.append(f"{r.get('eval')},{self._last}\n")
         _append(self.path, buf.getvalue())
+        if lines:
+            _append(self.chain_path, "".join(lines))
+
+
+CHAIN = "history.chain"
+
+
+def read_chain(path: Path) -> list[tuple[str, str]]:
+    """The ``(eval, digest)`` lines of ``history.chain`` (a torn last line is left out)."""
+    try:
+        return digest.parse_chain(read_text(path))
+    except UnicodeDecodeError as exc:
+        raise RunError(f"{path}: unreadable ({exc})") from None
+
+
+def check_chain(path: Path, rows: list[dict[str, str]], digests: list[tuple[str, str]], config_hash: str) -> None:
+    """:class:`RunError` naming the first of ``rows`` that does not match ``history.chain``."""
+    bad = digest.first_mismatch(rows, digests, config_hash)
+    if bad is not None:
+        raise RunError(f"{path}: row eval={bad[0]}: {bad[1]}: the history was edited (or rows removed or "
+                       "reordered), so it is not used")
 
 
 # --- the directory -----------------------------------------------------------------------------
@@ -465,8 +510,8 @@ class RunDir:
             return None
         return Checkpoint.from_doc(self._json("checkpoint.json", "checkpoint"), self.path / "checkpoint.json")
 
-    def history(self, param_names: list[str]) -> History:
-        return History(self.path / "history.csv", param_names)
+    def history(self, param_names: list[str], config_hash: str = "") -> History:
+        return History(self.path / "history.csv", param_names, config_hash)
 
     def history_rows(self) -> list[dict[str, str]]:
         """The rows of ``history.csv`` as strings (empty when nothing was evaluated yet)."""
