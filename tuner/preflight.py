@@ -20,6 +20,7 @@
 from __future__ import annotations
 
 import difflib
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -121,6 +122,53 @@ def _dask_check(cfg: RunConfig, objective: Any) -> None:
                                                    f"workers): {why}")
 
 
+def _child_eval(objective: Any, point: dict[str, Any], send: Any) -> None:
+    from tuner.evaluate import evaluate_one
+
+    code = 0
+    try:
+        send.send(evaluate_one(objective, point))
+    except BaseException:  # pragma: no cover - evaluate_one records everything but a stop signal
+        code = 1
+    finally:
+        os._exit(code)
+
+
+def _evaluate_in_child(cfg: RunConfig, objective: Any, point: dict[str, Any]) -> Any:
+    """The default point evaluated in a forked child, so that an objective that calls ``os._exit`` or
+    crashes the interpreter there is one :class:`ConfigError` naming the exit status or signal."""
+    import multiprocessing as mp
+    import signal as _signal
+
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child_eval, args=(objective, point, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        try:
+            rec = recv.recv()
+        except EOFError:
+            rec = None
+        child.join()
+    finally:
+        if child.is_alive():
+            child.kill()
+            child.join()
+        recv.close()
+    if rec is not None:
+        return rec
+    code = child.exitcode
+    how = f"exited with status {code}"
+    if code is not None and code < 0:
+        try:
+            how = f"killed by signal {_signal.Signals(-code).name}"
+        except ValueError:
+            how = f"killed by signal {-code}"
+    raise ConfigError(cfg.source, "objective", f"evaluating the default parameters crashed the process ({how}); "
+                                               "an objective must return or raise, not end the process")
+
+
 def preflight(cfg: RunConfig, objective: Any, space: Space,
               warn: Callable[[str], None] | None = None, evaluate: bool = True) -> list[str]:
     """Run the checks of the module docstring; raise :class:`ConfigError`, return the warnings.
@@ -144,7 +192,8 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
         _dask_check(cfg, objective)
     if evaluate:
         point = reference_point(objective, space)
-        rec = evaluate_one(objective, point)
+        in_child = cfg.objective.get("kind") == "python" or cfg.parallel.backend in ("loky", "dask")
+        rec = _evaluate_in_child(cfg, objective, point) if in_child else evaluate_one(objective, point)
         if rec.raised:
             raise ConfigError(cfg.source, "objective", f"evaluating the default parameters failed: "
                                                        f"{rec.evaluation.error}")
