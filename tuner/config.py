@@ -55,6 +55,11 @@ class ConfigError(ValueError):
         super().__init__(f"{self.file}: {key}: {message}" if key else f"{self.file}: {message}")
 
 
+#: the largest population or number of generations accepted (more would exhaust memory before the first
+#: generation, or take longer than any run: a typo such as 1e12)
+MAX_COUNT = 1_000_000
+
+
 @dataclass(frozen=True)
 class RefineConfig:
     """Multi-stage refinement: after each stage the bounds shrink around the best point."""
@@ -372,6 +377,8 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     for k, v in (("population", population), ("generations", generations)):
         if v is not None and v < 1:
             raise ConfigError(f, f"optimizer.{k}", f"must be >= 1, got {v}")
+        if v is not None and v > MAX_COUNT:  # before anything is allocated for it
+            raise ConfigError(f, f"optimizer.{k}", f"must be <= {MAX_COUNT:,}, got {v:,}")
     refine_raw = _get(opt, "refine", dict, f, "optimizer.", default={})
     bad = sorted(set(refine_raw) - {"stages", "shrink"})
     if bad:

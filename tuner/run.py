@@ -148,6 +148,14 @@ def _cell(v: Any) -> str:
     return "" if v is None else str(fmt_cell(v))
 
 
+def _clip(text: str, limit: int = 4000) -> str:
+    """An error text as stored in ``history.csv``: at most ``limit`` characters, its length noted when cut
+    (a 128 kB message would exceed the CSV reader's field limit and make the history unreadable)."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]} [... {len(text):,} characters, cut to {limit:,}]"
+
+
 def _metrics(m: dict[str, Any]) -> dict[str, Any]:
     """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
     return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
@@ -333,7 +341,7 @@ class Run:
         r, ev = g.records[i], g.records[i].evaluation
         row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
         row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
-        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=ev.error.replace("\n", " "),
+        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=_clip(ev.error.replace("\n", " ")),
                    seconds=f"{r.seconds:.6f}")
         row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
         return row

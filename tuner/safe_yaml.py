@@ -59,6 +59,9 @@ def _expanded_size(node: Any, memo: dict[int, int]) -> int:
         elif isinstance(node, yaml.MappingNode):
             memo[key] = 1 + sum(_expanded_size(k, memo) + _expanded_size(v, memo) for k, v in node.value)
         else:
+            if "\x00" in str(node.value):
+                raise YAMLLimit(f"a NUL byte in a value at line {node.start_mark.line + 1}; refused (not a valid "
+                                "name, path or text)")
             memo[key] = 1
         memo[key] = min(memo[key], MAX_NODES + 1)
     return memo[key]

@@ -203,3 +203,37 @@ def test_a_full_disk_names_the_file(tmp_path):
                          capture_output=True, text=True, timeout=300, preexec_fn=small_files)
     one_error(out, "error: " + str(tmp_path / "r"), "File too large")
     assert "error: ?" not in out.stderr
+
+
+@pytest.mark.parametrize("key, value, what", [
+    ("optimizer.population", "1000000000000", "optimizer.population: must be <= 1,000,000"),
+    ("optimizer.generations", "1000000000000", "optimizer.generations: must be <= 1,000,000"),
+    ("objective.dim", "1000000000", "objective.dim"),
+    ("output", '"runs\\0x"', "NUL byte"),
+])
+def test_sizes_and_nul_bytes_are_refused_before_anything_is_allocated(tmp_path, key, value, what):
+    job = tmp_path / "job.yaml"
+    text = yaml.safe_dump(_raw(tmp_path))
+    job.write_text(text)
+    if key == "output":
+        lines = [ln for ln in text.splitlines() if not ln.startswith("output:")]
+        job.write_text("\n".join([*lines, f"output: {value}"]) + "\n")
+        one_error(tuner("run", job), what)
+    else:
+        one_error(tuner("run", job, "--set", f"{key}={value}"), what)
+    assert not (tmp_path / "runs").exists()
+
+
+def test_a_huge_error_message_is_stored_cut_and_the_history_stays_readable(tmp_path):
+    (tmp_path / "loud_u.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
+                                        "    raise ValueError('y' * 200_000)\n")
+    job = tmp_path / "job.yaml"
+    job.write_text(yaml.safe_dump(_raw(tmp_path, objective={"kind": "python", "callable": "loud_u:f"},
+                                       parameters={"x": {"low": 0.0, "high": 1.0}})))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    out = tuner("run", job, "--run-dir", tmp_path / "r", "-q", env=env)
+    assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr  # every evaluation failed
+    assert "200,027 characters, cut to 4,000" in (tmp_path / "r" / "history.csv").read_text()  # length noted
+    for cmd in (["show", tmp_path / "r"], ["report", tmp_path / "r"]):
+        r = tuner(*cmd, env=env)
+        assert r.returncode in (0, 2) and "Traceback" not in r.stderr, r.stderr
