@@ -243,8 +243,10 @@ def load_config(path: str | Path, overrides: list[str] | None = None, seed: int 
     if seed is not None:
         raw["seed"] = int(seed)
     if n_jobs is not None:
-        raw.setdefault("parallel", {})
-        raw["parallel"] = {**(raw["parallel"] or {}), "n_jobs": int(n_jobs)}
+        par = raw.get("parallel") or {}
+        if not isinstance(par, dict):
+            raise ConfigError(path, "parallel", f"expected a mapping, got {type(par).__name__} {par!r}")
+        raw["parallel"] = {**par, "n_jobs": int(n_jobs)}
     return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
 
 

@@ -194,7 +194,11 @@ class Registry:
             raise RegistryError(f"objective.kind: expected a name, got {kind!r}; allowed: {sorted(self.kinds())}")
         factory = self.get(kind)
         body = {k: v for k, v in section.items() if k not in ENGINE_KEYS}
-        return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+        try:
+            return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+        except (TypeError, OverflowError) as exc:  # a value of the wrong type or size in the section
+            raise ValueError(f"objective: a value of the wrong type or size ({exc}); `tuner describe "
+                             f"{kind}` lists the keys") from None
 
 
 #: the process-wide registry (the engine's own ``python`` kind plus every installed entry point)
