@@ -146,6 +146,22 @@ def _c_ident(name: str) -> str:
     return s if s and not s[0].isdigit() else f"P_{s}"
 
 
+def _c_idents(names: list[str]) -> dict[str, str]:
+    """Distinct C identifiers for ``names``: names that map to the same one (``k`` and ``K``, ``a-b`` and
+    ``a_b``) get ``_2``, ``_3``... in their order, never two constants of one name."""
+    out: dict[str, str] = {}
+    used: set[str] = set()
+    for name in names:
+        base = ident = _c_ident(name)
+        n = 1
+        while ident in used:
+            n += 1
+            ident = f"{base}_{n}"
+        used.add(ident)
+        out[name] = ident
+    return out
+
+
 def _c_number(v: Any) -> str:
     if isinstance(v, bool):
         return "1" if v else "0"
@@ -208,11 +224,13 @@ def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | No
         f" * Exported {_comment(doc.get('exported'))}; commit {_comment(doc.get('git_commit') or 'unknown')}.",
         " * Units (per parameter, as the objective defines them):",
     ]
+    idents = _c_idents([*doc["params"], *(tables or {})])
     for name in doc["params"]:
-        lines.append(f" *   {prefix}_{_c_ident(name)}: {_comment(units.get(name) or 'unit not declared')}")
+        renamed = f" (parameter {_comment(name)})" if idents[name] != _c_ident(name) else ""
+        lines.append(f" *   {prefix}_{idents[name]}{renamed}: {_comment(units.get(name) or 'unit not declared')}")
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <math.h> /* INFINITY, NAN */", ""]
     for name, v in doc["params"].items():
-        ident = f"{prefix}_{_c_ident(name)}"
+        ident = f"{prefix}_{idents[name]}"
         if isinstance(v, bool) or isinstance(v, int):
             lines.append(f"static const int {ident} = {_c_number(v)};")
         elif isinstance(v, float):
@@ -224,7 +242,7 @@ def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | No
         else:
             lines.append(f"/* {_comment(name)}: {_comment(repr(v))} has no C form */")
     for name, t in (tables or {}).items():
-        ident = f"{prefix}_{_c_ident(name)}"
+        ident = f"{prefix}_{idents[name]}"
         arr = np.asarray(t["table"], float)
         if arr.ndim == 1:
             arr = arr[None, :]

@@ -122,6 +122,25 @@ def _dask_check(cfg: RunConfig, objective: Any) -> None:
                                                    f"workers): {why}")
 
 
+def check_cv_folds(cfg: RunConfig, objective: Any) -> None:
+    """With ``validation.cv``, the objective must give at least two folds (``cv_folds`` hook) for the
+    configured ``folds`` (``kfold``) or its own grouping (``logo``); else a :class:`ConfigError` before tuning."""
+    v = cfg.validation
+    if v.cv is None:
+        return
+    fn = hook(objective, "cv_folds")
+    if fn is None:
+        raise ConfigError(cfg.source, "validation.cv", f"{type(objective).__name__} has no held-out folds (no "
+                                                       "cv_folds hook): it cannot be cross-validated; remove it")
+    try:
+        n = len(list(fn(v.folds if v.cv == "kfold" else None)))
+    except ValueError as exc:
+        raise ConfigError(cfg.source, "validation", str(exc)) from None
+    if n < 2:
+        raise ConfigError(cfg.source, "validation", f"the objective gives {n} fold(s) here; cross-validation "
+                                                    "needs at least 2")
+
+
 def _child_eval(objective: Any, point: dict[str, Any], send: Any) -> None:
     from tuner.evaluate import evaluate_one
 

@@ -429,7 +429,7 @@ def _build(cfg: RunConfig):
     """Objective and space of ``cfg``, checked by :func:`tuner.preflight.preflight` (bad data, names,
     a failing default evaluation are :class:`ConfigError` before anything is written)."""
     from tuner.evaluate import TimedObjective
-    from tuner.preflight import preflight
+    from tuner.preflight import check_cv_folds, preflight
     from tuner.registry import build_objective, say_imports
 
     say_imports(cfg.objective, cfg.source)
@@ -443,6 +443,7 @@ def _build(cfg: RunConfig):
         if key.startswith("objective") and rest:
             raise ConfigError(cfg.source, key, rest) from None
         raise ConfigError(cfg.source, "objective", msg) from None
+    check_cv_folds(cfg, objective)  # an impossible `validation.cv` is refused now, not after the tuning
     if cfg.validation.select is not None:  # tune without the held-out fold of the final selection
         from tuner.validation import tuning_objective
 

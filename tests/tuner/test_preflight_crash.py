@@ -29,3 +29,14 @@ def test_a_crash_at_the_defaults_is_one_error_line(tmp_path, body, how):
     errors = [ln for ln in out.stderr.splitlines() if ln.startswith("error:")]
     assert len(errors) == 1 and how in errors[0] and "default parameters" in errors[0], out.stderr
     assert not (tmp_path / "runs").exists()
+
+
+def test_an_impossible_validation_section_is_refused_before_tuning(tmp_path):
+    job = tmp_path / "job.yaml"
+    job.write_text(yaml.safe_dump({
+        "name": "nocv", "objective": {"kind": "function", "function": "sphere", "dim": 2},
+        "optimizer": {"method": "random", "population": 4, "generations": 2}, "parallel": {"backend": "serial"},
+        "validation": {"cv": "kfold", "folds": 3}, "output": str(tmp_path / "runs")}))
+    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(job)], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and out.stderr.startswith(f"error: {job}: validation.cv: "), out.stderr
+    assert "cannot be cross-validated" in out.stderr and not (tmp_path / "runs").exists()
