@@ -21,6 +21,7 @@ from typing import Any
 
 __all__ = ["row_digest", "parse_chain", "first_mismatch"]
 
+CHAIN = "history.chain"
 _SKIP = frozenset({"seconds"})
 
 

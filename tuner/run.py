@@ -31,6 +31,7 @@ import numpy as np
 
 from tuner import signals as stop_signals
 from tuner.config import ConfigError, RunConfig, config_from_dict
+from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import EvalRecord, Evaluator, sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.optimizers import get_optimizer
@@ -49,6 +50,7 @@ from tuner.rundir import (
     plain,
 )
 from tuner.space import Space
+from tuner.validation import validate_run
 
 __all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "RunError"]
 
@@ -102,14 +104,11 @@ def read_meta(run_dir: Path) -> dict[str, Any]:
     return RunDir(run_dir).meta().to_dict()
 
 
-def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """The best parameters of a run (from ``best.yaml``) as a plain dict."""
-    return dict(RunDir(run_dir).best().params)
-
-
 def _git_commit() -> str:
+    root = Path(__file__).resolve().parents[1]
+    if not (root / ".git").exists():  # an installed package: a repository around site-packages is not ours
+        return ""
     try:
-        root = Path(__file__).resolve().parents[1]
         out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
                              timeout=5)
         return out.stdout.strip() if out.returncode == 0 else ""
@@ -200,10 +199,11 @@ class Run:
     """Drives one run directory. Use :func:`run` and :func:`resume`."""
 
     def __init__(self, cfg: RunConfig, rd: RunDir, objective: Any, space: Space,
-                 progress: Callable[[str], None] | None, meta: Meta, n_jobs: int):
+                 progress: Callable[[str], None] | None, meta: Meta, n_jobs: int,
+                 on_generation: Callable[[Generation], None] | None = None):
         self.cfg, self.rd, self.dir = cfg, rd, rd.path
         self.objective, self.base_space, self.progress = objective, space, progress
-        self.meta, self.n_jobs = meta, n_jobs
+        self.meta, self.n_jobs, self.on_generation = meta, n_jobs, on_generation or (lambda g: None)
         self.best: Best | None = None
 
     # --- optimiser of a stage -----------------------------------------------------------------
@@ -266,6 +266,7 @@ class Run:
                 self._live_report()
             now = time.perf_counter()
             self._progress(g, stages, now - state["t0"])
+            self.on_generation(g)  # after the generation is on disk (tuner.api's callback)
             state["t0"] = now
             if sigint_count() != sigints:  # a Ctrl-C whose KeyboardInterrupt was swallowed on the way
                 raise _Interrupted()
@@ -321,10 +322,9 @@ class Run:
 
             self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
         extra = self._finalize() if self.best is not None else {}
-        if self.best is not None and self.cfg.validation.active:  # CV into the run directory (tuner.validation)
-            from tuner.validation import validate_run
-
-            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress)
+        if self.best is not None:  # the defaults' scores, CV into the run directory (tuner.validation)
+            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
+                                     self.base_space)
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None:
@@ -362,7 +362,7 @@ class Run:
 
     def _finalize(self) -> dict[str, Any]:
         """The objective's report step; ``best.yaml`` rewritten from the history with its results."""
-        assert self.best is not None
+        self.best = attach_deployment(self.best, self.objective, self.base_space)  # the complete tuned system
         self.rd.write_best(self.best)  # derived from the history, whatever happened before
         extra: dict[str, Any] = {}
         finalize = getattr(self.objective, "finalize", None)
@@ -420,9 +420,7 @@ def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | Non
 
 
 def _printer(quiet: bool) -> Callable[[str], None] | None:
-    if quiet:
-        return None
-    return lambda msg: print(msg, file=sys.stderr, flush=True)
+    return None if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
 
 
 def _build(cfg: RunConfig):
@@ -493,11 +491,11 @@ _UNSTARTED = {"config.yaml", ".config.json", ".lock"}
 
 
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
-        progress: Callable[[str], None] | None = None) -> RunResult:
-    """Create a run directory for ``cfg`` and run it to the end (or until interrupted).
-
-    Everything that can be refused (objective, parameters, optimiser options) is built before the
-    directory is created, so a bad config leaves nothing behind.
+        progress: Callable[[str], None] | None = None,
+        on_generation: Callable[[Generation], None] | None = None) -> RunResult:
+    """Create a run directory for ``cfg`` and run it to the end (or until interrupted); ``on_generation(g)``
+    is called after each generation is written. Everything that can be refused (objective, parameters,
+    optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
     """
     objective, space = _build(cfg)
     n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
@@ -518,7 +516,7 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
             printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
         meta = _new_meta(cfg, rd.write_config(_resolved(cfg, space)), n_jobs, notes)
         rd.write_meta(meta)
-        r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation)
         if printer:
             printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
                     f"{cfg.parallel.backend} x {n_jobs})")

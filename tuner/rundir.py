@@ -277,16 +277,21 @@ class Meta:
 @dataclass(frozen=True)
 class Best(BestPoint):
     """``best.yaml``: the best successful evaluation of the history (a :class:`tuner.loop.BestPoint`),
-    the run it belongs to, and the objective's held-out scores after the run (``evaluation``)."""
+    the run it belongs to, the objective's held-out scores after the run (``evaluation``) and the
+    complete configuration of the tuned system (``deployment``: a :class:`tuner.deployment.Deployment`
+    as plain data; ``params`` stays the run's point as the history records it)."""
 
     run: str = ""
     evaluation: dict[str, Any] = field(default_factory=dict)
+    deployment: dict[str, Any] = field(default_factory=dict)
 
     def to_doc(self) -> dict[str, Any]:
         doc = {"params": self.params, "fitness": self.fitness, "metrics": self.metrics,
                "found": {"stage": self.stage, "generation": self.generation, "eval": self.eval}, "run": self.run}
         if self.evaluation:
             doc["evaluation"] = self.evaluation
+        if self.deployment:
+            doc["deployment"] = self.deployment
         return plain(doc)
 
     @classmethod
@@ -298,9 +303,12 @@ class Best(BestPoint):
         found = doc.get("found") or {}
         if not isinstance(found, dict):
             raise RunError(f"{where}: found: expected a mapping, got {found!r}")
+        deployment = doc.get("deployment") or {}
+        if not isinstance(deployment, dict):
+            raise RunError(f"{where}: deployment: expected a mapping, got {deployment!r}")
         return cls(dict(params), float(fitness), dict(doc.get("metrics") or {}), int(found.get("stage", 0)),
                    int(found.get("generation", -1)), int(found.get("eval", -1)), str(doc.get("run", "")),
-                   dict(doc.get("evaluation") or {}))
+                   dict(doc.get("evaluation") or {}), dict(deployment))
 
 
 @dataclass(frozen=True)
@@ -331,13 +339,9 @@ class Checkpoint:
 
 # --- history -----------------------------------------------------------------------------------
 class History:
-    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear.
-
-    Beside it, ``history.chain`` holds one ``eval,digest`` line per row: the row's digest chained to the row
-    before and, for the first row, to ``config_hash`` (:mod:`tuner.digest`). It is a file of its own so that
-    ``history.csv`` stays the same for the same config and seed whatever the backend (its ``seconds`` aside).
-    A history of an older tuner without it stays readable and is continued without digests.
-    """
+    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear. Beside it,
+    ``history.chain``: each row's digest chained to the row before and to ``config_hash`` (:mod:`tuner.digest`);
+    an older history without it stays readable and is continued without digests."""
 
     def __init__(self, path: Path, param_names: list[str], config_hash: str = ""):
         self.path = Path(path)
@@ -415,11 +419,10 @@ class History:
             _append(self.chain_path, "".join(lines))
 
 
-CHAIN = "history.chain"
+CHAIN = digest.CHAIN
 
 
 def read_chain(path: Path) -> list[tuple[str, str]]:
-    """The ``(eval, digest)`` lines of ``history.chain`` (a torn last line is left out)."""
     try:
         return digest.parse_chain(read_text(path))
     except UnicodeDecodeError as exc:
@@ -427,9 +430,8 @@ def read_chain(path: Path) -> list[tuple[str, str]]:
 
 
 def check_chain(path: Path, rows: list[dict[str, str]], digests: list[tuple[str, str]], config_hash: str) -> None:
-    """:class:`RunError` naming the first of ``rows`` that does not match ``history.chain``."""
-    bad = digest.first_mismatch(rows, digests, config_hash)
-    if bad is not None:
+    """:class:`RunError` naming the first of ``rows`` that does not match ``history.chain`` (:mod:`tuner.digest`)."""
+    if (bad := digest.first_mismatch(rows, digests, config_hash)) is not None:
         raise RunError(f"{path}: row eval={bad[0]}: {bad[1]}: the history was edited (or rows removed or "
                        "reordered), so it is not used")
 

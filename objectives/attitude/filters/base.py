@@ -183,13 +183,29 @@ class AttitudeFilter(Declared):
 
     @classmethod
     def from_run(cls, run_dir: str | Path, **overrides: Any) -> AttitudeFilter:
-        """The filter with the best parameters of a finished run (``best.yaml``)."""
-        import yaml
+        """The deployed filter of a finished run: every value the run tuned, fixed or relied on as default
+        (:func:`tuner.deployment.load_deployment`), ``overrides`` applied.
 
-        best = yaml.safe_load((Path(run_dir) / "best.yaml").read_text())
-        params = dict(best.get("params", best))
-        params = {k: v for k, v in params.items() if k in cls.defaults}
-        return cls(**{**params, **overrides})
+        Called on :class:`AttitudeFilter` itself it builds the run's filter class; on a subclass, a run
+        of another filter is a ``ValueError``. Settings that only served scoring are not part of it: a run
+        scored from the ground-truth start gives a filter that starts from the first acc/mag sample, so
+        ``from_run(run).run(gyr, acc, mag, rate_hz=...)`` works on live data.
+        """
+        from tuner.deployment import load_deployment
+
+        dep = load_deployment(run_dir)
+        if dep.kind != "filter":
+            raise ValueError(f"{run_dir}: the run tuned a {dep.kind} objective ({dep.name!r}), not a filter")
+        target = cls
+        if cls is AttitudeFilter or not cls.name:
+            from objectives.attitude.filters import get_filter
+
+            target = get_filter(dep.name)
+        elif dep.name and dep.name != cls.name:
+            raise ValueError(f"{run_dir}: the run tuned filter {dep.name!r}; use {dep.name}'s class "
+                             f"(or AttitudeFilter.from_run), not {cls.__name__}")
+        params = {k: v for k, v in dep.values.items() if k in target.defaults}
+        return target(**{**params, **overrides})
 
     # --- running ----------------------------------------------------------------------------
     def run(self, data: Recording | Any, acc: Any = None, mag: Any = None, *, rate_hz: float | None = None,
@@ -219,7 +235,17 @@ class AttitudeFilter(Declared):
         from objectives.attitude.filters.stream import as_recording
 
         rec = as_recording(self.name, data, acc, mag, rate_hz, dt, frame)
-        return self.run_detailed(rec, q0, disturbances).quat
+        flt = self.imu_only() if not isinstance(data, Recording) and mag is None else self
+        return flt.run_detailed(rec, q0, disturbances).quat
+
+    def imu_only(self) -> AttitudeFilter:
+        """This filter without the magnetometer (``use_mag=False``): what ``run(gyr, acc, mag=None)`` and a
+        stream fed without ``mag`` use. ValueError for a filter that needs one (no ``use_mag`` option)."""
+        if not self.needs_mag or not self.values.get("use_mag", True):
+            return self
+        if "use_mag" not in self.values:
+            raise ValueError(f"{self.name}: needs a magnetometer (no IMU-only version): pass mag= as an (N, 3) array")
+        return type(self)(**{**self.values, "use_mag": False})
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None,
                frame: str = "ENU") -> Any:
