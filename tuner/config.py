@@ -19,6 +19,7 @@ Shape of a job (see README for every key)::
 from __future__ import annotations
 
 import copy
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +56,8 @@ class ConfigError(ValueError):
         super().__init__(f"{self.file}: {key}: {message}" if key else f"{self.file}: {message}")
 
 
+_ADDRESS = re.compile(r"(tcp|tls|ucx|ws|wss)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9][A-Za-z0-9.-]*):[0-9]{1,5}")
+
 #: the largest population or number of generations accepted (more would exhaust memory before the first
 #: generation, or take longer than any run: a typo such as 1e12)
 MAX_COUNT = 1_000_000
@@ -82,6 +85,7 @@ class ParallelConfig:
     backend: str = "loky"
     n_jobs: int = 2
     address: str | None = None
+    connect_timeout_s: float = 30.0  # how long to wait for the Dask scheduler at ``address``
 
 
 @dataclass(frozen=True)
@@ -402,9 +406,9 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     optimizer = OptimizerConfig(method, population, generations, options, RefineConfig(stages, shrink))
 
     par = dict(_get(raw, "parallel", dict, f, "", default={}))
-    bad = sorted(set(par) - {"backend", "n_jobs", "address"})
+    bad = sorted(set(par) - {"backend", "n_jobs", "address", "connect_timeout_s"})
     if bad:
-        raise ConfigError(f, f"parallel.{bad[0]}", "unknown key; allowed: backend, n_jobs, address")
+        raise ConfigError(f, f"parallel.{bad[0]}", "unknown key; allowed: backend, n_jobs, address, connect_timeout_s")
     backend = _get(par, "backend", str, f, "parallel.", default="loky")
     if backend not in ("serial", "loky", "dask", "threads"):
         raise ConfigError(f, "parallel.backend", f"unknown backend {backend!r}; allowed: serial, loky, dask, threads")
@@ -414,7 +418,15 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     address = _get(par, "address", str, f, "parallel.", default=None)
     if address and backend != "dask":
         raise ConfigError(f, "parallel.address", f"only used with backend: dask (backend is {backend!r})")
-    parallel = ParallelConfig(backend, n_jobs, address)
+    if address and not _ADDRESS.fullmatch(address) or address and not 0 < int(address.rsplit(":", 1)[1]) < 65536:
+        raise ConfigError(f, "parallel.address", "expected a scheduler address such as tcp://10.0.0.5:8786 (tcp, "
+                                                 f"tls, ucx, ws or wss; a host and a port 1-65535), got {address!r}")
+    timeout = _get(par, "connect_timeout_s", (int, float), f, "parallel.", default=30.0)
+    if "connect_timeout_s" in par and not address:
+        raise ConfigError(f, "parallel.connect_timeout_s", "only used with parallel.address (a Dask scheduler)")
+    if not 0 < timeout <= 3600:
+        raise ConfigError(f, "parallel.connect_timeout_s", f"expected seconds in (0, 3600], got {timeout!r}")
+    parallel = ParallelConfig(backend, n_jobs, address, float(timeout))
     output = str(_get(raw, "output", str, f, "", default="runs"))
     validation = parse_validation(raw.get("validation"), f)
 
@@ -426,7 +438,8 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
         "parameters": parameters,
         "optimizer": {"method": method, "population": population, "generations": generations, **options,
                       "refine": {"stages": stages, "shrink": shrink}},
-        "parallel": {"backend": backend, "n_jobs": n_jobs, "address": address},
+        "parallel": {"backend": backend, "n_jobs": n_jobs, "address": address,
+                     **({"connect_timeout_s": timeout} if "connect_timeout_s" in par else {})},
         "output": output,
     }
     if raw.get("validation") is not None:  # absent stays absent: the config hash of older jobs is unchanged

@@ -327,6 +327,7 @@ class Evaluator:
         self.backend = backend if (backend != "loky" or int(n_jobs) > 1) else "serial"
         self.n_jobs = int(n_jobs)
         self.address = address
+        self.connect_timeout_s = 30.0  # set by the run from parallel.connect_timeout_s
         self.chunks_per_worker = int(chunks_per_worker)
         self.token = uuid.uuid4().hex
         self._parallel = None
@@ -466,7 +467,7 @@ class Evaluator:
                     "parallel.backend: dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)"
                 ) from None
             if self.address:
-                self._client = Client(self.address, timeout="30s")
+                self._client = Client(self.address, timeout=f"{self.connect_timeout_s:g}s")
             else:
                 self._cluster = LocalCluster(n_workers=self.n_jobs, threads_per_worker=1, processes=True,
                                              host="127.0.0.1", dashboard_address=None)

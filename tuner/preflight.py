@@ -101,16 +101,40 @@ def _worker_preflight(objective: Any) -> str:
     return ""
 
 
+def _connect(cfg: RunConfig, client_cls: Any) -> Any:
+    """A Dask client of ``parallel.address`` within ``parallel.connect_timeout_s``, or a :class:`ConfigError`.
+
+    The connection is made in a helper thread with a hard deadline: a server that accepts but is not a
+    scheduler can leave the client's handshake waiting forever, or answer bytes it reads as a huge frame.
+    """
+    import threading
+
+    t = cfg.parallel.connect_timeout_s
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_cls(cfg.parallel.address, timeout=f"{t:g}s")
+        except BaseException as exc:  # noqa: BLE001 - reported as the error line below
+            box["error"] = exc
+
+    th = threading.Thread(target=connect, daemon=True, name="tuner-dask-connect")
+    th.start()
+    th.join(t + 5.0)
+    if "client" in box:
+        return box["client"]
+    why = (f"no Dask scheduler answered within {t:g} s (parallel.connect_timeout_s)" if th.is_alive() else
+           f"cannot reach the scheduler: {type(box['error']).__name__}: {str(box['error'])[:300]}")
+    raise ConfigError(cfg.source, "parallel.address", f"{cfg.parallel.address}: {why}")
+
+
 def _dask_check(cfg: RunConfig, objective: Any) -> None:
     try:
         from distributed import Client
     except ImportError:
         raise ConfigError(cfg.source, "parallel.backend",
                           "dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)") from None
-    try:
-        client = Client(cfg.parallel.address, timeout="30s")
-    except OSError as exc:
-        raise ConfigError(cfg.source, "parallel.address", f"cannot reach the scheduler: {exc}") from None
+    client = _connect(cfg, Client)
     try:
         results = client.run(_worker_preflight, objective)
     finally:

@@ -184,6 +184,7 @@ class _LiveMap:
         if self.evaluator is None:
             p = self.cfg.parallel
             self.evaluator = Evaluator(fn, p.backend, self.n_jobs, p.address)
+            self.evaluator.connect_timeout_s = p.connect_timeout_s
         return self.evaluator(items)
 
     def describe(self) -> str:
