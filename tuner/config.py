@@ -56,6 +56,7 @@ class ConfigError(ValueError):
         super().__init__(f"{self.file}: {key}: {message}" if key else f"{self.file}: {message}")
 
 
+_INPROC = re.compile(r"inproc://\S+")  # a scheduler in this process (a LocalCluster without processes)
 _ADDRESS = re.compile(r"(tcp|tls|ucx|ws|wss)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9][A-Za-z0-9.-]*):[0-9]{1,5}")
 
 #: the largest population or number of generations accepted (more would exhaust memory before the first
@@ -418,7 +419,8 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     address = _get(par, "address", str, f, "parallel.", default=None)
     if address and backend != "dask":
         raise ConfigError(f, "parallel.address", f"only used with backend: dask (backend is {backend!r})")
-    if address and not _ADDRESS.fullmatch(address) or address and not 0 < int(address.rsplit(":", 1)[1]) < 65536:
+    if address and not (_INPROC.fullmatch(address) or _ADDRESS.fullmatch(address)
+                        and 0 < int(address.rsplit(":", 1)[1]) < 65536):
         raise ConfigError(f, "parallel.address", "expected a scheduler address such as tcp://10.0.0.5:8786 (tcp, "
                                                  f"tls, ucx, ws or wss; a host and a port 1-65535), got {address!r}")
     timeout = _get(par, "connect_timeout_s", (int, float), f, "parallel.", default=30.0)
