@@ -181,7 +181,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
     ConfigError
         The objective has no ``cv_folds`` hook, or gives fewer than two folds.
     """
-    from tuner.registry import build_objective
+    from tuner.registry import build_objective, say_imports
     from tuner.run import _LiveMap, _n_jobs
 
     t0 = time.time()
@@ -190,6 +190,8 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         raise ConfigError(cfg.source, "validation.budget_fraction", f"expected a number in (0, 1], got "
                           f"{budget_fraction!r}")
     cfg = scaled_budget(cfg, budget_fraction)
+    if full_params is None:  # `tuner cv CONFIG` (a run's CV follows its run, which said it already)
+        say_imports(cfg.objective, cfg.source)
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
     except ValueError as exc:

@@ -23,6 +23,7 @@
 from __future__ import annotations
 
 import difflib
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -129,16 +130,40 @@ def _worker_preflight(objective: Any) -> str:
     return ""
 
 
+def _connect(cfg: RunConfig, client_cls: Any) -> Any:
+    """A Dask client of ``parallel.address`` within ``parallel.connect_timeout_s``, or a :class:`ConfigError`.
+
+    The connection is made in a helper thread with a hard deadline: a server that accepts but is not a
+    scheduler can leave the client's handshake waiting forever, or answer bytes it reads as a huge frame.
+    """
+    import threading
+
+    t = cfg.parallel.connect_timeout_s
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_cls(cfg.parallel.address, timeout=f"{t:g}s")
+        except BaseException as exc:  # noqa: BLE001 - reported as the error line below
+            box["error"] = exc
+
+    th = threading.Thread(target=connect, daemon=True, name="tuner-dask-connect")
+    th.start()
+    th.join(t + 5.0)
+    if "client" in box:
+        return box["client"]
+    why = (f"no Dask scheduler answered within {t:g} s (parallel.connect_timeout_s)" if th.is_alive() else
+           f"cannot reach the scheduler: {type(box['error']).__name__}: {str(box['error'])[:300]}")
+    raise ConfigError(cfg.source, "parallel.address", f"{cfg.parallel.address}: {why}")
+
+
 def _dask_check(cfg: RunConfig, objective: Any) -> None:
     try:
         from distributed import Client
     except ImportError:
         raise ConfigError(cfg.source, "parallel.backend",
                           "dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)") from None
-    try:
-        client = Client(cfg.parallel.address, timeout="30s")
-    except OSError as exc:
-        raise ConfigError(cfg.source, "parallel.address", f"cannot reach the scheduler: {exc}") from None
+    client = _connect(cfg, Client)
     try:
         results = client.run(_worker_preflight, objective)
     finally:
@@ -148,6 +173,72 @@ def _dask_check(cfg: RunConfig, objective: Any) -> None:
         worker, why = next(iter(sorted(bad.items())))
         raise ConfigError(cfg.source, "objective", f"fails on Dask worker {worker} ({len(bad)} of {len(results)} "
                                                    f"workers): {why}")
+
+
+def check_cv_folds(cfg: RunConfig, objective: Any) -> None:
+    """With ``validation.cv``, the objective must give at least two folds (``cv_folds`` hook) for the
+    configured ``folds`` (``kfold``) or its own grouping (``logo``); else a :class:`ConfigError` before tuning."""
+    v = cfg.validation
+    if v.cv is None:
+        return
+    fn = hook(objective, "cv_folds")
+    if fn is None:
+        raise ConfigError(cfg.source, "validation.cv", f"{type(objective).__name__} has no held-out folds (no "
+                                                       "cv_folds hook): it cannot be cross-validated; remove it")
+    try:
+        n = len(list(fn(v.folds if v.cv == "kfold" else None)))
+    except ValueError as exc:
+        raise ConfigError(cfg.source, "validation", str(exc)) from None
+    if n < 2:
+        raise ConfigError(cfg.source, "validation", f"the objective gives {n} fold(s) here; cross-validation "
+                                                    "needs at least 2")
+
+
+def _child_eval(objective: Any, point: dict[str, Any], send: Any) -> None:
+    from tuner.evaluate import evaluate_one
+
+    code = 0
+    try:
+        send.send(evaluate_one(objective, point))
+    except BaseException:  # pragma: no cover - evaluate_one records everything but a stop signal
+        code = 1
+    finally:
+        os._exit(code)
+
+
+def _evaluate_in_child(cfg: RunConfig, objective: Any, point: dict[str, Any]) -> Any:
+    """The default point evaluated in a forked child, so that an objective that calls ``os._exit`` or
+    crashes the interpreter there is one :class:`ConfigError` naming the exit status or signal."""
+    import multiprocessing as mp
+    import signal as _signal
+
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child_eval, args=(objective, point, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        try:
+            rec = recv.recv()
+        except EOFError:
+            rec = None
+        child.join()
+    finally:
+        if child.is_alive():
+            child.kill()
+            child.join()
+        recv.close()
+    if rec is not None:
+        return rec
+    code = child.exitcode
+    how = f"exited with status {code}"
+    if code is not None and code < 0:
+        try:
+            how = f"killed by signal {_signal.Signals(-code).name}"
+        except ValueError:
+            how = f"killed by signal {-code}"
+    raise ConfigError(cfg.source, "objective", f"evaluating the default parameters crashed the process ({how}); "
+                                               "an objective must return or raise, not end the process")
 
 
 def preflight(cfg: RunConfig, objective: Any, space: Space,
@@ -174,7 +265,8 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
         _dask_check(cfg, objective)
     if evaluate:
         point = reference_point(objective, space)
-        rec = evaluate_one(objective, point)
+        in_child = cfg.objective.get("kind") == "python" or cfg.parallel.backend in ("loky", "dask")
+        rec = _evaluate_in_child(cfg, objective, point) if in_child else evaluate_one(objective, point)
         if rec.raised:
             raise ConfigError(cfg.source, "objective", f"evaluating the default parameters failed: "
                                                        f"{rec.evaluation.error}")

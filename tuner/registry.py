@@ -55,6 +55,16 @@ def resolve_callable(spec: str, base_dir: str | Path | None = None) -> Any:
     return obj
 
 
+def say_imports(objective: Mapping[str, Any], source: Any) -> None:
+    """Tell on stderr that a ``kind: python`` objective is about to be imported and run (by ``run``,
+    ``resume``, ``evaluate`` and ``cv``; the read-only commands never build it)."""
+    if isinstance(objective, Mapping) and objective.get("kind") == "python":
+        import sys
+
+        print(f"note: {source}: objective.kind python imports and runs {objective.get('callable')!r}: "
+              "trust it as you would the code itself", file=sys.stderr, flush=True)
+
+
 @dataclass(frozen=True)
 class PythonObjective:
     """A user callable ``module:function`` as an objective; ``options`` are passed as keywords.
@@ -203,7 +213,11 @@ class Registry:
             raise RegistryError(f"objective.kind: expected a name, got {kind!r}; allowed: {sorted(self.kinds())}")
         factory = self.get(kind)
         body = {k: v for k, v in section.items() if k not in ENGINE_KEYS}
-        return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+        try:
+            return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+        except (TypeError, OverflowError) as exc:  # a value of the wrong type or size in the section
+            raise ValueError(f"objective: a value of the wrong type or size ({exc}); `tuner describe "
+                             f"{kind}` lists the keys") from None
 
 
 #: the process-wide registry (the engine's own ``python`` kind plus every installed entry point)

@@ -13,7 +13,7 @@ from typing import Any
 
 from tuner.config import ConfigError, config_from_dict, load_config, read_yaml
 from tuner.objective import hook
-from tuner.registry import build_objective
+from tuner.registry import build_objective, say_imports
 from tuner.rundir import RunDir
 
 __all__ = ["evaluate_target"]
@@ -37,6 +37,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
             best_params = dict(rd.best().params)
     else:
         cfg = load_config(target)
+    say_imports(cfg.objective, cfg.source)
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
     except ValueError as exc:

@@ -18,7 +18,6 @@ import math
 import os
 import platform
 import secrets
-import signal
 import socket
 import subprocess
 import sys
@@ -30,12 +29,13 @@ from typing import Any
 
 import numpy as np
 
+from tuner import signals as stop_signals
 from tuner.config import ConfigError, RunConfig, config_from_dict
 from tuner.deployment import attach_deployment, load_best
-from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
+from tuner.evaluate import EvalRecord, Evaluator, sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
-from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
+from tuner.replay import Replay as _Replay
 from tuner.rundir import (
     Best,
     Checkpoint,
@@ -147,6 +147,14 @@ def _cell(v: Any) -> str:
     return "" if v is None else str(fmt_cell(v))
 
 
+def _clip(text: str, limit: int = 4000) -> str:
+    """An error text as stored in ``history.csv``: at most ``limit`` characters, its length noted when cut
+    (a 128 kB message would exceed the CSV reader's field limit and make the history unreadable)."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]} [... {len(text):,} characters, cut to {limit:,}]"
+
+
 def _metrics(m: dict[str, Any]) -> dict[str, Any]:
     """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
     return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
@@ -162,8 +170,8 @@ def _preload_report() -> None:
         pass
 
 
-class _Interrupted(Exception):
-    pass
+class _Interrupted(BaseException):
+    """A stop signal whose KeyboardInterrupt was swallowed on the way (never a recorded failure)."""
 
 
 class _LiveMap:
@@ -176,6 +184,7 @@ class _LiveMap:
         if self.evaluator is None:
             p = self.cfg.parallel
             self.evaluator = Evaluator(fn, p.backend, self.n_jobs, p.address)
+            self.evaluator.connect_timeout_s = p.connect_timeout_s
         return self.evaluator(items)
 
     def describe(self) -> str:
@@ -185,48 +194,6 @@ class _LiveMap:
     def close(self) -> None:
         if self.evaluator is not None:
             self.evaluator.close()
-
-
-class _Replay:
-    """Hands back the recorded results of the first rows of ``history.csv``, then evaluates live.
-
-    Each replayed candidate is checked against its row: a row whose parameters differ from what
-    the re-created optimiser asks means the history was edited (or the code changed), and is refused.
-    """
-
-    def __init__(self, rows: list[dict[str, str]], names: list[str], metric_names: list[str], live: _LiveMap,
-                 where: Path):
-        self.rows, self.names, self.metric_names, self.live, self.where = rows, names, metric_names, live, where
-        self.pos = 0
-
-    @property
-    def replaying(self) -> bool:
-        return self.pos < len(self.rows)
-
-    def __call__(self, fn: Callable, items: list[tuple[dict[str, Any], int]]) -> list[EvalRecord]:
-        if not self.replaying:
-            return self.live(fn, items)
-        chunk = self.rows[self.pos:self.pos + len(items)]
-        if len(chunk) != len(items):
-            raise RunError(f"{self.where}: rows {self.pos}-{len(self.rows) - 1} are not a complete generation "
-                           f"({len(items)} evaluations)")
-        out = []
-        for (params, _), row in zip(items, chunk):
-            for k in self.names:
-                if _cell(params[k]) != row.get(k):
-                    raise RunError(f"{self.where}: row eval={row.get('eval')}: {k} is {row.get(k)!r} but the "
-                                   f"optimiser re-created from the seed asks {_cell(params[k])!r}; the history "
-                                   "was edited or the code changed, so it cannot be resumed")
-            if row.get("status") not in ("ok", "failed"):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: status {row.get('status')!r}")
-            try:
-                fit, secs = float(row["fitness"]), float(row["seconds"])
-            except (TypeError, ValueError):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: fitness/seconds not numbers") from None
-            metrics = {k: parse_cell(row[k]) for k in self.metric_names if row.get(k) not in (None, "")}
-            out.append(EvalRecord(Evaluation(fit, metrics, row["status"], row.get("error") or ""), secs))
-        self.pos += len(items)
-        return out
 
 
 class Run:
@@ -256,8 +223,16 @@ class Run:
 
     # --- main loop ----------------------------------------------------------------------------
     def execute(self, replay_rows: list[dict[str, str]] | None = None) -> RunResult:
+        """Run (or replay, then continue) to the end; SIGTERM and SIGHUP act as Ctrl-C meanwhile."""
+        old_handlers = stop_signals.install()
+        try:
+            return self._execute(replay_rows)
+        finally:
+            stop_signals.restore(old_handlers)
+
+    def _execute(self, replay_rows: list[dict[str, str]] | None) -> RunResult:
         stages = self.cfg.optimizer.refine.stages
-        history = self.rd.history(self.base_space.names)
+        history = self.rd.history(self.base_space.names, self.meta.config_hash)
         live = _LiveMap(self.cfg, self.n_jobs)
         replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
                          history.path)
@@ -266,7 +241,7 @@ class Run:
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
         t_session, wall0 = time.perf_counter(), self.meta.timing.wall_s
         state = {"gens": 0, "t0": time.perf_counter()}
-        sigints = watch_sigint()
+        sigints = sigint_count()
 
         def on_generation(g: Generation) -> None:
             state["gens"] += 1
@@ -297,14 +272,6 @@ class Run:
             if sigint_count() != sigints:  # a Ctrl-C whose KeyboardInterrupt was swallowed on the way
                 raise _Interrupted()
 
-        def on_term(signum, frame):  # SIGTERM behaves like Ctrl-C
-            raise _Interrupted()
-
-        old_handler = None
-        try:
-            old_handler = signal.signal(signal.SIGTERM, on_term)
-        except ValueError:  # not in the main thread
-            pass
         stage, space, n_evals, n_failed, best, interrupted = 0, self.base_space, 0, 0, None, False
         optimizer = self._new_optimizer(0, space, None)
         if self.progress and hasattr(optimizer, "describe"):  # e.g. the method `auto` picked
@@ -328,11 +295,17 @@ class Run:
             interrupted = True
         finally:
             live.close()
-            if old_handler is not None:
-                try:
-                    signal.signal(signal.SIGTERM, old_handler)
-                except ValueError:  # pragma: no cover
-                    pass
+        try:
+            return self._conclude(optimizer, replay, history, interrupted, n_evals, n_failed, state, wall0, t_session)
+        except KeyboardInterrupt:  # a stop signal during the selection, the report step or the CV after a run
+            self._write_meta(status="interrupted", interrupted=_now())
+            if self.progress:
+                self.progress(f"interrupted; resume with: tuner resume {self.dir}")
+            return self._result("interrupted", n_evals, state["gens"], "interrupted")
+
+    def _conclude(self, optimizer, replay, history, interrupted: bool, n_evals: int, n_failed: int,
+                  state: dict[str, Any], wall0: float, t_session: float) -> RunResult:
+        """After the optimiser stopped: the interrupted record, or selection, report step, CV and report."""
         if replay.replaying and not interrupted:
             raise RunError(f"{history.path}: {len(replay.rows)} rows recorded, but the run ends after "
                            f"{n_evals}; the history does not belong to this config")
@@ -369,7 +342,7 @@ class Run:
         r, ev = g.records[i], g.records[i].evaluation
         row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
         row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
-        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=ev.error.replace("\n", " "),
+        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=_clip(ev.error.replace("\n", " ")),
                    seconds=f"{r.seconds:.6f}")
         row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
         return row
@@ -455,9 +428,10 @@ def _build(cfg: RunConfig):
     """Objective and space of ``cfg``, checked by :func:`tuner.preflight.preflight` (bad data, names,
     a failing default evaluation are :class:`ConfigError` before anything is written)."""
     from tuner.evaluate import TimedObjective
-    from tuner.preflight import preflight
-    from tuner.registry import build_objective
+    from tuner.preflight import check_cv_folds, preflight
+    from tuner.registry import build_objective, say_imports
 
+    say_imports(cfg.objective, cfg.source)
     try:
         objective = build_objective(dict(cfg.objective), cfg.base_dir)
     except FileNotFoundError as exc:
@@ -468,6 +442,7 @@ def _build(cfg: RunConfig):
         if key.startswith("objective") and rest:
             raise ConfigError(cfg.source, key, rest) from None
         raise ConfigError(cfg.source, "objective", msg) from None
+    check_cv_folds(cfg, objective)  # an impossible `validation.cv` is refused now, not after the tuning
     if cfg.validation.select is not None:  # tune without the held-out fold of the final selection
         from tuner.validation import tuning_objective
 
@@ -590,7 +565,7 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
                 rd.file(name).unlink(missing_ok=True)
             rows: list[dict[str, str]] = []
         else:
-            rows = rd.history(space.names).truncate(ck.n_evals)
+            rows = rd.history(space.names, meta.config_hash).truncate(ck.n_evals)
         r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
         if printer:
             printer(f"resuming {rd.path} after {len(rows)} evaluations")

@@ -218,3 +218,18 @@ def test_sample_rate_from_the_config_or_from_the_loaded_recordings():
     out = _sample_rate(mixed)
     assert out["sample_rate_hz"] is None and "250 Hz, 800 Hz" in out["sample_rate_note"]
     assert _sample_rate(None)["sample_rate_hz"] is None
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+def test_c_names_differing_only_in_case_get_distinct_constants(tmp_path):
+    doc = {**DOC, "params": {"k": 1.5, "K": 2.5, "a-b": 3.5, "a_b": 4.5}}
+    text = to_c(doc, prefix="P")
+    assert "P_K = 1.5" in text and "P_K_2 = 2.5" in text and "P_A_B_2 = 4.5" in text
+    assert "P_K_2 (parameter K)" in text
+    (tmp_path / "p.h").write_text(text)
+    (tmp_path / "m.c").write_text('#include "p.h"\nint main(void) { return (P_K + P_K_2 + P_A_B + P_A_B_2) == 12.0 '
+                                  "? 0 : 1; }\n")
+    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-o", "m", "m.c"], cwd=tmp_path, capture_output=True,
+                        text=True, timeout=120)
+    assert cc.returncode == 0, cc.stderr
+    assert subprocess.run([str(tmp_path / "m")], timeout=30).returncode == 0

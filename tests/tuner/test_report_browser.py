@@ -225,8 +225,12 @@ def sweep_dir(tmp_path_factory, evil_run):
     doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
                      "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
     (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
+    import os  # the objective lives in this test module: its package on the path, as a user's would be
+    from pathlib import Path
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir", str(tmp / "sw"),
-                          "-q"], capture_output=True, text=True, timeout=600)
+                          "-q"], capture_output=True, text=True, timeout=600, env=env)
     assert out.returncode == 0, out.stderr
     return tmp / "sw"
 
