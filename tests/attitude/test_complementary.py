@@ -3,9 +3,6 @@ wrap, frames, degenerate input."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -21,11 +18,8 @@ from objectives.attitude.filters.complementary import (
 )
 from objectives.attitude.metrics import broad_errors
 from objectives.attitude.quaternion import to_frame
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from complementary_reference import complementary_ref, measured_angles, wrap  # noqa: E402
-
-from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings  # noqa: E402
+from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings
+from tests.reference.complementary_reference import complementary_ref, measured_angles, wrap
 
 DT = 0.01
 

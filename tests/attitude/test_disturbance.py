@@ -1,15 +1,11 @@
 """objectives.attitude.disturbance against closed forms and the literal eqs. 3.19-3.22."""
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from objectives.attitude import disturbance as dis
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from tilt1d_reference import packet_mean_ref, vibration_ref  # noqa: E402
+from tests.reference.tilt1d_reference import packet_mean_ref, vibration_ref
 
 DT = 1e-3
 

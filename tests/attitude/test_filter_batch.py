@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from objectives.attitude.batch import batchable
-from objectives.attitude.data.broad import default_broad_dir
 from objectives.attitude.objective import FilterObjective
 from tuner.config import config_from_dict
 from tuner.evaluate import Evaluator
@@ -128,10 +127,9 @@ def test_history_of_a_filter_run_is_identical_serial_and_threads(tmp_path):
     assert len(ref) == 12 and got == ref
 
 
-@pytest.mark.skipif(not default_broad_dir().exists(), reason="BROAD data not found")
-def test_history_on_broad_is_identical_serial_and_threads(tmp_path):
+def test_history_on_broad_is_identical_serial_and_threads(tmp_path, broad_dir):
     objective = {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
-                 "data": [{"broad": {"dir": str(default_broad_dir()), "trial": "07_undisturbed_fast_rotation_B",
+                 "data": [{"broad": {"dir": str(broad_dir), "trial": "07_undisturbed_fast_rotation_B",
                                      "stop_s": 35.0}}]}
     ref = _run(tmp_path, objective, "serial", "serial", {"beta": {"low": 0.001, "high": 1.0, "scale": "log"}})
     got = _run(tmp_path, objective, "threads", "threads", {"beta": {"low": 0.001, "high": 1.0, "scale": "log"}})

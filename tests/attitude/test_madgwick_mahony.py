@@ -3,9 +3,6 @@ frames, degenerate input and parameter validation."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -15,9 +12,7 @@ from objectives.attitude.filters.madgwick import Madgwick, madgwick_batch
 from objectives.attitude.filters.mahony import Mahony, mahony_batch
 from objectives.attitude.metrics import broad_error_angles, broad_errors
 from objectives.attitude.quaternion import Q_ENU_FROM_NWU, qmul_batch, to_frame
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from madgwick_mahony_reference import madgwick_ref, mahony_ref  # noqa: E402
+from tests.reference.madgwick_mahony_reference import madgwick_ref, mahony_ref
 
 DT = 0.01
 

@@ -2,8 +2,6 @@
 
 import inspect
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,9 +15,7 @@ from objectives.attitude.filters import get_filter
 from objectives.attitude.filters.ukf import QRAUKF, QUKF, run_ukf
 from objectives.attitude.metrics import broad_errors
 from objectives.attitude.quaternion import to_frame
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-import ukf_reference as ref  # noqa: E402
+from tests.reference import ukf_reference as ref
 
 PARAMS = {k: v for k, v in QUKF.defaults.items() if k != "init"}  # the start option is the wrapper's
 
@@ -245,16 +241,13 @@ BROAD_TRIALS = ["07_undisturbed_fast_rotation_B", "24_disturbed_tapping_A"]
 
 @pytest.mark.parametrize("trial", BROAD_TRIALS)
 @pytest.mark.parametrize("robust", [False, True])
-def test_kernel_matches_reference_on_broad(trial, robust):
+def test_kernel_matches_reference_on_broad(trial, robust, broad_dir):
     """Real data (286 Hz, fast rotations up to ~0.03 rad per sample, tapping): the kernel's series, shared
     tilt quaternion, early-stopping mean and sorted Hampel window agree with the plain reference."""
-    from objectives.attitude.data.broad import default_broad_dir, load_broad
+    from objectives.attitude.data.broad import load_broad
     from objectives.attitude.filters.base import quat_from_acc_mag
 
-    path = default_broad_dir() / f"{trial}.mat"
-    if not path.exists():
-        pytest.skip(f"BROAD trial {trial} not found in {path.parent}")
-    rec = load_broad(path)
+    rec = load_broad(broad_dir / f"{trial}.mat")
     a, b = 16000, 16400  # in motion
     gyr, acc, mag = rec.gyr[a:b], rec.acc[a:b], rec.mag[a:b]
     q0 = quat_from_acc_mag(acc[0], mag[0], "ENU")

@@ -6,8 +6,6 @@ each fallback and a long disturbed recording end to end.
 """
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,9 +14,7 @@ from objectives.attitude.filters import _ukf_mean as um
 from objectives.attitude.filters import _ukf_scalar as sc
 from objectives.attitude.filters.ukf import run_ukf
 from tests.attitude.test_ukf import PARAMS, _disturbed, run_against_reference
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-import ukf_reference as ref  # noqa: E402
+from tests.reference import ukf_reference as ref
 
 
 def _cloud(rng, center, m, spread):

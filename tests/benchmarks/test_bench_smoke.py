@@ -6,16 +6,12 @@ import json
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package; `make bench` runs it from the root
-    sys.path.insert(0, str(REPO))
-
-from benchmarks.optimizers import METHODS, Budget, Exhausted, available, evals_to_band, run_method  # noqa: E402
+from benchmarks.optimizers import METHODS, Budget, Exhausted, available, evals_to_band, run_method
+from tests.conftest import REPO
 
 NAMES = ["filters", "closed_loop", "parallel", "optimizers"]
 

@@ -1,7 +1,6 @@
 """Fuzzy WMP controllers (thesis 2.2.2, 2.3.1, eq. 2.32): kernel vs a literal reference, closed-loop
 stability with Table 2.7's initial values, LUT vs direct inference, a short PSO run, the C header."""
 
-import importlib.util
 import math
 import pathlib
 import shutil
@@ -14,13 +13,7 @@ from objectives.control.controllers import get_controller
 from objectives.control.controllers.fuzzy import THESIS_OPTIMISED, LUTFuzzy, ProtectiveFuzzy
 from objectives.control.controllers.fuzzy_steps import _protective_step, lut_nearest
 from objectives.control.objective import ClosedLoopObjective
-
-_spec = importlib.util.spec_from_file_location(
-    "fuzzy_controller_reference",
-    pathlib.Path(__file__).parents[1] / "reference" / "fuzzy_controller_reference.py",
-)
-ref = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ref)
+from tests.reference import fuzzy_controller_reference as ref
 
 CONFIG = pathlib.Path(__file__).parents[2] / "configs" / "wmp_fuzzy_protective.yaml"
 TUNED = {k: v for k, v in THESIS_OPTIMISED.items() if k != "p13"}
