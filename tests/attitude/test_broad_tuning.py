@@ -15,6 +15,7 @@ TEST = ["03_undisturbed_slow_rotation_C", "12_undisturbed_slow_translation_C", "
 
 
 @pytest.mark.broad
+@pytest.mark.slow
 def test_tuned_madgwick_beats_published_tagp_on_held_out_trials(tmp_path):
     published = json.loads((BROAD / "published_results.json").read_text())["algorithms"]["madgwick"]["trials"]
     raw = {"name": "broad-madgwick", "seed": 3,

@@ -154,7 +154,7 @@ def test_registry_and_validation():
     assert CCF().values["alpha"] == 0.7
     with pytest.raises(ValueError, match="alpha"):
         LCF(alpha=1.5)
-    with pytest.raises(ValueError, match="Kp"):
+    with pytest.raises(ValueError, match=r"ncf: Kp must be in \[0, inf\) 1/s, got -1.0"):
         NCF(Kp=-1.0)
     with pytest.raises(ValueError, match="euler0"):
         complementary_batch(np.zeros((3, 3)), np.ones((3, 3)), None, DT, np.zeros(2))

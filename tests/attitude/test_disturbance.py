@@ -90,7 +90,7 @@ def test_magnetic_measure_reference_norm():
 def test_validation():
     with pytest.raises(ValueError, match="fft_length"):
         dis.vibration_frequency(np.zeros(1000), DT, 400, 256)
-    with pytest.raises(ValueError, match="dt"):
+    with pytest.raises(ValueError, match=r"dt must be finite and > 0, got 0.0"):
         dis.vibration_frequency(np.zeros(1000), 0.0)
     with pytest.raises(ValueError, match="axis"):
         dis.vibration_frequency(np.zeros((1000, 3)), DT, axis=3)

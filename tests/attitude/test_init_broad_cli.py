@@ -46,6 +46,7 @@ def test_init_is_a_declared_option_of_every_filter():
 
 
 @pytest.mark.broad
+@pytest.mark.slow
 def test_cli_reproduces_published_mahony_rmse_per_trial(tmp_path):
     published = json.loads((BROAD / "published_results.json").read_text())["algorithms"]["mahony"]["trials"]
     trials = sorted(t for t in published if (BROAD / f"{t}.mat").exists())

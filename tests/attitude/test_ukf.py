@@ -70,6 +70,7 @@ def run_against_reference(rec, q0, kw, tol=1e-10):
 
 
 @pytest.mark.parametrize("robust", [False, True])
+@pytest.mark.slow
 def test_kernel_matches_plain_numpy_reference(robust):
     rec = _disturbed(n=300, dt=0.025, seed=3)
     q0 = to_frame(rec.quat[0], "ENU", "ENU")
@@ -229,7 +230,7 @@ def test_bad_values_name_the_key(cls, values, match):
 
 
 def test_validation_errors():
-    with pytest.raises(ValueError, match="q0"):
+    with pytest.raises(ValueError, match=r"q0 must be a finite unit \(4,\) quaternion, got array\(\[1\., 1\."):
         run_ukf(np.zeros((5, 3)), np.ones((5, 3)), np.ones((5, 3)), 0.01, [1, 1, 0, 0], **PARAMS)
     rec = simulate_imu(_trajectory(50, 0.01), 0.01, frame="ENU").without_mag()
     with pytest.raises(ValueError, match="magnetometer"):
@@ -241,6 +242,7 @@ BROAD_TRIALS = ["07_undisturbed_fast_rotation_B", "24_disturbed_tapping_A"]
 
 @pytest.mark.parametrize("trial", BROAD_TRIALS)
 @pytest.mark.parametrize("robust", [False, True])
+@pytest.mark.slow
 def test_kernel_matches_reference_on_broad(trial, robust, broad_dir):
     """Real data (286 Hz, fast rotations up to ~0.03 rad per sample, tapping): the kernel's series, shared
     tilt quaternion, early-stopping mean and sorted Hampel window agree with the plain reference."""

@@ -83,6 +83,7 @@ def test_cholesky_with_reciprocal_diagonal():
 
 
 @pytest.mark.parametrize("robust", [False, True])
+@pytest.mark.slow
 def test_long_disturbed_run_matches_literal_reference(robust):
     """1000 samples at 40 Hz with eight magnetic and eight acceleration disturbances: the kernel and the
     plain-NumPy reference (eq. 28 evaluated literally, np.median for eq. 36) agree to 1e-10 rad throughout."""
@@ -93,6 +94,7 @@ def test_long_disturbed_run_matches_literal_reference(robust):
         assert out["lam"].min() < 0.5  # the Hampel gain acted on the disturbances
 
 
+@pytest.mark.slow
 def test_fast_rotation_uses_the_exact_maps_and_matches_reference():
     """0.6 rad per sample (beyond the 0.5 rad series range of eq. 2) and a wide initial covariance (sigma points
     beyond the 0.2 rad series range of eq. 1): the fallbacks keep the kernel on the reference."""

@@ -52,6 +52,7 @@ def test_every_method_gets_exactly_the_budget(method):
     assert r["trace"][-1] == min(float(np.sum((c - 0.3) ** 2)) for c in calls)
 
 
+@pytest.mark.slow
 def test_smoke_run_writes_well_formed_results(tmp_path):
     p = subprocess.run([sys.executable, "-m", "benchmarks.run", "--smoke", "--out", str(tmp_path)], cwd=REPO,
                        capture_output=True, text=True, timeout=600)

@@ -39,6 +39,7 @@ def test_fifteen_tuned_parameters_with_table_2_7_initial_values():
 
 
 @pytest.mark.parametrize("values", [None, TUNED])
+@pytest.mark.slow
 def test_protective_step_matches_literal_reference(values):
     ctrl = ProtectiveFuzzy()
     v = ctrl.resolve(values)
@@ -73,6 +74,7 @@ def test_protective_mechanism_lowers_the_action_as_the_current_grows():
 
 
 @pytest.mark.parametrize("name", ["flc", "protective_fuzzy", "lut"])
+@pytest.mark.slow
 def test_initial_parameters_stabilise_the_plant(objectives, name, record_property):
     obj = objectives[name]
     ev = obj(obj.defaults)
@@ -156,6 +158,7 @@ def short_run(tmp_path_factory):
     return run(cfg, tmp_path_factory.mktemp("fz") / "run", quiet=True)
 
 
+@pytest.mark.slow
 def test_short_pso_run_improves_the_initial_cost(short_run):
     import yaml
 

@@ -64,6 +64,7 @@ def _check_scores(run_dir, tmp, rebuild):
 
 
 @pytest.mark.parametrize("name", FILTERS)
+@pytest.mark.slow
 def test_filter_export_round_trip(name, tmp_path):
     from objectives.attitude.data.synthetic import synthetic
     from objectives.attitude.filters import get_filter
@@ -82,6 +83,7 @@ def test_filter_export_round_trip(name, tmp_path):
 
 
 @pytest.mark.parametrize("name", CONTROLLERS)
+@pytest.mark.slow
 def test_controller_export_round_trip(name, tmp_path):
     from objectives.control.controllers import get_controller
 

@@ -14,6 +14,8 @@ from tests.tuner.test_render import _assert_inert
 from tuner.config import config_from_dict
 from tuner.run import run
 
+pytestmark = pytest.mark.slow  # every test here tunes, sweeps or drives a browser
+
 EVIL_METRIC = "<script>alert('m')</script>"
 EVIL_REC = "[x](javascript:alert('r'))"
 EVIL_TEXT = "<img src=x onerror=alert('d')> [y](javascript:alert('d')) <script>alert('d')</script>"
