@@ -40,6 +40,8 @@ import numpy as np
 from tuner.config import ConfigError, RunConfig, ValidationConfig
 from tuner.loop import minimize
 from tuner.objective import hook
+from tuner.selection import plain_score, tune_and_select
+from tuner.setup import LiveMap, build_objective, new_optimizer, worker_count
 
 __all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score"]
 
@@ -85,16 +87,6 @@ class CVOutcome:
         return out
 
 
-def plain_score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
-    """Plain score (fitness, failure, number of recordings) of ``params`` on ``objective``'s data."""
-    score = hook(objective, "score")
-    if score is None:
-        ev = objective(params)
-        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), 1
-    s = score(params, "train")
-    return float(s.fitness), s.failed, max(len(s.recordings), 1)
-
-
 def scaled_budget(cfg: RunConfig, fraction: float) -> RunConfig:
     """``cfg`` with its generations (and ``max_evals``) times ``fraction`` (at least 1; 1.0: unchanged)."""
     import dataclasses
@@ -111,8 +103,6 @@ def scaled_budget(cfg: RunConfig, fraction: float) -> RunConfig:
 
 def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int,
           callback: Callable | None = None) -> tuple[dict[str, Any], float]:
-    from tuner.run import new_optimizer
-
     space = cfg.space(objective)
     if space.dim == 0:
         raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
@@ -126,8 +116,6 @@ def _procedure(cfg: RunConfig, objective: Any, evaluate: Callable) -> tuple[dict
     """Tune ``objective`` as a run would: plainly, or with the final selection of ``validation.select``."""
     if cfg.validation.select is None:
         return (*_tune(cfg, objective, evaluate, stage=0), {})
-    from tuner.validation import tune_and_select
-
     return tune_and_select(cfg, objective, lambda obj, cb: _tune(cfg, obj, evaluate, 0, cb))
 
 
@@ -155,19 +143,13 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
     ConfigError
         The objective has no ``cv_folds`` hook, or gives fewer than two folds.
     """
-    from tuner.registry import build_objective
-    from tuner.run import _LiveMap, _n_jobs
-
     t0 = time.time()
     say = progress or (lambda msg: None)
     if not 0 < budget_fraction <= 1:
         raise ConfigError(cfg.source, "validation.budget_fraction", f"expected a number in (0, 1], got "
                           f"{budget_fraction!r}")
     cfg = scaled_budget(cfg, budget_fraction)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except ValueError as exc:
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
+    objective = build_objective(cfg)
     folds_fn = hook(objective, "cv_folds")
     if folds_fn is None:
         raise ConfigError(cfg.source, "objective", f"{type(objective).__name__} has no cv_folds hook: "
@@ -178,12 +160,12 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         raise ConfigError(cfg.source, "objective", str(exc)) from None
     if len(folds) < 2:
         raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
-    n_jobs, notes = _n_jobs(cfg, cfg.optimizer.population or 2)
+    n_jobs, notes = worker_count(cfg, cfg.space(objective))
     out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
     defaults_fn = hook(objective, "default_params")
     defaults = dict(defaults_fn()) if defaults_fn else None
     for i, (name, train, test) in enumerate(folds):
-        evaluate = _LiveMap(cfg, n_jobs)
+        evaluate = LiveMap(cfg, n_jobs)
         try:
             params, train_fit, sel = _procedure(cfg, train, evaluate)
         finally:
@@ -198,7 +180,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         if full_params is not None:
             params, train_fit = dict(full_params), math.nan
         else:
-            evaluate = _LiveMap(cfg, n_jobs)
+            evaluate = LiveMap(cfg, n_jobs)
             try:
                 params, train_fit, sel = _procedure(cfg, objective, evaluate)
             finally:
