@@ -51,7 +51,9 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude.catalog import METRICS
 from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.disturbance import CONTEXT_KEYS as _CONTEXT_KEYS
 from objectives.attitude.divergence import unbounded_growth
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective_options import (
@@ -66,10 +68,7 @@ from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
-METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
 _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
-#: filter values on which precomputed fuzzy inputs (disturbance measures) depend
-_CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
 
 def _split_data(data: Any) -> tuple[list, list]:

@@ -1,4 +1,5 @@
-"""Report figures of the closed-loop objective: fuzzy action surfaces (thesis Figs. 2.19-2.20)."""
+"""Report figures of the closed-loop objective: fuzzy action surfaces (thesis Figs. 2.19-2.20), and the
+one way its figures are written (:func:`save_figure`)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,19 @@ import pathlib
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["plot_surfaces"]
+__all__ = ["plot_surfaces", "save_figure"]
+
+
+def save_figure(fig, path: str | pathlib.Path) -> pathlib.Path:
+    """Lay out ``fig``, write it as a PNG at 110 dpi (creating the folder) and close it."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def plot_surfaces(
