@@ -5,7 +5,7 @@ BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 EXTRAS  ?= dev,cluster
 
-.PHONY: setup demo test test-fast bench bench-smoke lint clean papers
+.PHONY: setup demo test test-fast bench bench-smoke lint clean papers package-configs
 
 setup: $(STAMP)
 
@@ -45,3 +45,8 @@ clean:
 # The seeds' headline claims from configs/papers/ at reduced budgets; writes docs/papers.md.
 papers: setup
 	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m benchmarks.papers
+
+# The example jobs shipped in the package (tuner/data/configs/, `tuner demo`): copies of the configs/*.yaml
+# that need no shared data (no `broad:` source). Run after editing one; tests/tuner/test_package.py checks it.
+package-configs:
+	for f in configs/*.yaml; do grep -q 'broad:' "$$f" || cp -L "$$f" tuner/data/configs/; done

@@ -113,6 +113,16 @@ class FunctionObjective:
         """Provenance for ``tuner export``."""
         return {"objective": {"kind": "function", "function": self.function}, "data": None}
 
+    def deployment(self, params: dict[str, Any]) -> dict[str, Any]:
+        """The point itself: a test function has nothing else to deploy."""
+        values = {f"x{i}": float(params[f"x{i}"]) for i in range(self.dim)}
+        return {"kind": "function", "name": self.function, "values": values,
+                "sources": {k: "searched" for k in values}, "scoring": {"dim": self.dim}}
+
+    def build(self, params: dict[str, Any]) -> np.ndarray:
+        """The point as a (dim,) array."""
+        return np.array([float(params[f"x{i}"]) for i in range(self.dim)])
+
     def default_space(self) -> Space:
         lo, hi = FUNCTIONS[self.function][1]
         return Space(Real(f"x{i}", lo, hi) for i in range(self.dim))

@@ -26,6 +26,8 @@ EPILOG = """examples:
   tuner sweep configs/thesis_tilt_sweep.yaml       many runs and one report
   tuner list                                       optimizers, objectives, filters, controllers, metrics, data
   tuner describe ekf                               parameters, bounds, units and equations of one name
+  tuner init madgwick                              write madgwick.yaml, a commented starter job
+  tuner demo                                       the packaged demo (EKF vs FAEKF, about two minutes)
 """
 
 
@@ -109,6 +111,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory")
     p.add_argument("path")
+
+    p = sub.add_parser("init", help="write a commented starter job for a filter or controller")
+    p.add_argument("name", help="a filter or controller `tuner list` prints, e.g. madgwick, pid")
+    p.add_argument("-o", "--output", help="file to write (default: NAME.yaml); an existing file is never overwritten")
+
+    p = sub.add_parser("demo", help="run a job shipped with the package (default: the demo, EKF vs FAEKF)")
+    p.add_argument("job", nargs="?", default="demo", help="a packaged job, e.g. thesis_kf1d (see --list)")
+    p.add_argument("--list", action="store_true", help="list the packaged jobs and where they are")
+    p.add_argument("-q", "--quiet", action="store_true")
     return ap
 
 
@@ -304,6 +315,9 @@ def _cmd_evaluate(a) -> int:
         for rec, metrics in out.get("recordings", {}).items():
             vals = "  ".join(f"{k}={v:.4g}" for k, v in metrics.items() if isinstance(v, (int, float)))
             print(f"  {rec}: {vals}")
+        dep = out.get("deployment") or {}
+        if dep:  # every value of the scored filter/controller (searched, fixed, defaults)
+            print(f"deployed {dep['kind']} {dep['name']}: " + ", ".join(f"{k}={v!r}" for k, v in dep["values"].items()))
     return 0
 
 
@@ -366,9 +380,36 @@ def _cmd_report(a) -> int:
     return 0
 
 
+def _cmd_init(a) -> int:
+    from tuner.starter import StarterError, write_starter
+
+    try:
+        out = write_starter(a.name, a.output)
+    except StarterError as exc:
+        raise UsageError(str(exc)) from None
+    print(f"wrote {out}; run it with: tuner run {out}")
+    return 0
+
+
+def _cmd_demo(a) -> int:
+    from tuner.starter import StarterError, packaged_config, packaged_configs
+
+    if a.list:
+        names = packaged_configs()
+        print(f"packaged jobs ({packaged_config(names[0]).parent}):")
+        print("  " + ", ".join(n.removesuffix(".yaml") for n in names))
+        return 0
+    try:
+        path = packaged_config(a.job if a.job.endswith(".yaml") else f"{a.job}.yaml")
+    except StarterError as exc:
+        raise UsageError(str(exc)) from None
+    return _cmd_run(argparse.Namespace(config=str(path), overrides=[], seed=None, n_jobs=None, run_dir=None,
+                                       quiet=a.quiet))
+
+
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
             "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "evaluate": _cmd_evaluate,
-            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report}
+            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report, "init": _cmd_init, "demo": _cmd_demo}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from tuner.config import ConfigError, RunConfig, ValidationConfig
+from tuner.deployment import DEFAULTS_MEANING, defaults_baseline
 from tuner.loop import minimize
 from tuner.objective import hook
 from tuner.selection import plain_score, tune_and_select
@@ -162,8 +163,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
     n_jobs, notes = worker_count(cfg, cfg.space(objective))
     out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
-    defaults_fn = hook(objective, "default_params")
-    defaults = dict(defaults_fn()) if defaults_fn else None
+    defaults = defaults_baseline(objective, cfg.space(objective))  # fixed values wherever written
     for i, (name, train, test) in enumerate(folds):
         evaluate = LiveMap(cfg, n_jobs)
         try:
@@ -243,7 +243,7 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
 
     lines = [f"# Cross-validation of {out.name}", "",
              f"{len(out.folds)} folds, {out.seconds:.0f} s. Each fold: tuned on the other folds, scored on the "
-             "held-out recordings (plain metric, no prior); defaults scored on the same recordings."
+             f"held-out recordings (plain metric, no prior); {DEFAULTS_MEANING}, scored on the same recordings."
              + (" Each fold's final choice: the best of the tuning's top candidates"
                 " (and the defaults, where included) on an inner held-out part of the fold's tuning recordings,"
                 " as `validation.select` does in a run." if with_sel else ""), "",

@@ -1,6 +1,11 @@
 """Best parameters out of a run, in forms other projects import: YAML, JSON, Python, C header.
 
-Every format carries the provenance (run id, fitness, objective, data, date). The C header holds
+Every format carries the complete deployed configuration (:mod:`tuner.deployment`): ``params`` holds
+every value of the tuned filter or controller (searched, fixed and defaults), ``deployment`` says which
+is which, their units, allowed choices, the sample rate and the settings that only served scoring
+(``scoring``: never part of the exported system; e.g. a run scored from the ground-truth start exports
+a filter that starts from the first acc/mag sample, and says so under ``notes``). Every format also
+carries the provenance (run id, fitness, objective, data, date). The C header holds
 the parameters as named ``static const`` constants and, where the objective has them, look-up tables.
 What is said about the objective comes from the objective itself, through its optional hooks
 (:class:`tuner.objective.TunableObjective`): ``describe()`` for the provenance and
@@ -70,7 +75,16 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
     run_dir = Path(run_dir)
     objective = _build(run_dir) if objective_tables else None
     doc = provenance(run_dir, objective)
-    doc.update(units=_units(run_dir, objective, doc["params"]), **_sample_rate(objective))
+    dep = _deployment(run_dir)
+    units = _units(run_dir, objective, doc["params"])
+    rate = _sample_rate(objective)
+    if dep is not None:  # the complete deployed system: every value, scoring-only settings apart
+        doc["params"] = dict(dep.values)
+        doc["deployment"] = {k: v for k, v in dep.to_doc().items() if k not in ("values", "units", "docs")}
+        units = {**dict(dep.units), **units}  # a unit written in the config wins
+        if dep.sample_rate_hz is not None and rate["sample_rate_hz"] is None:
+            rate = {"sample_rate_hz": dep.sample_rate_hz, "sample_rate_note": "recorded with the run"}
+    doc.update(units={k: units[k] for k in doc["params"] if k in units}, **rate)
     fn = hook(objective, "export_tables") if objective is not None else None
     tables = fn(doc["params"]) if fn is not None else None
     if fmt != "c":  # what firmware runs (LQR gain K, Nx, Nu; fuzzy LUTs) in every format, as nested lists
@@ -82,6 +96,21 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
 
         prefix = c_prefix(RunDir(run_dir).meta().name or run_dir.name)
     return to_c(doc, prefix=c_prefix(prefix), tables=tables)
+
+
+def _deployment(run_dir: Path) -> Any:
+    """The run's :class:`tuner.deployment.Deployment`, or None when ``best.yaml`` records none and the
+    objective no longer builds (an older run: the parameters of ``best.yaml`` are exported then). A
+    recorded but malformed deployment is a :class:`tuner.rundir.RunError` naming the file."""
+    from tuner.deployment import load_deployment
+    from tuner.rundir import RunDir, RunError
+
+    if RunDir(run_dir).best().deployment:
+        return load_deployment(run_dir)
+    try:
+        return load_deployment(run_dir)
+    except RunError:
+        return None
 
 
 def _units(run_dir: Path, obj: Any, params: dict[str, Any]) -> dict[str, str]:

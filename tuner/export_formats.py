@@ -113,15 +113,28 @@ def _py(v: Any) -> str:
     return repr(str(v))
 
 
+def _notes(doc: dict[str, Any]) -> list[str]:
+    """One line per deployment note (e.g. how a filter scored from truth starts on live data)."""
+    dep = doc.get("deployment") or {}
+    what = f"{dep.get('kind')} {dep.get('name')}".strip() if dep else ""
+    out = [f"Deployed: {what}; every value of it below (searched, fixed and defaults; sources in "
+           "DEPLOYMENT). Settings that only served scoring (DEPLOYMENT['scoring']) are not part of it."] if dep else []
+    return out + [f"Note: {n}." for n in dep.get("notes") or ()]
+
+
 def to_python(doc: dict[str, Any]) -> str:
-    """A module defining ``PARAMS``, ``UNITS``, ``PROVENANCE`` (and ``TABLES`` when the objective exports
-    matrices or look-up tables); importable from anywhere (needs only ``math``)."""
+    """A module defining ``PARAMS`` (every value of the deployed system), ``UNITS``, ``PROVENANCE``,
+    ``DEPLOYMENT`` (sources, choices, scoring-only settings, notes; when the run records them) and
+    ``TABLES`` (when the objective exports matrices or look-up tables); importable from anywhere
+    (needs only ``math``)."""
     doc = _plain(doc)
-    prov = {k: v for k, v in doc.items() if k not in ("params", "units", "tables")}
+    prov = {k: v for k, v in doc.items() if k not in ("params", "units", "tables", "deployment")}
     lines = [f'"""Tuned parameters from tuner run {doc["run"]} (fitness {doc["fitness"]!r}).', "",
-             _rate_line(doc), '"""', "", "import math", "",
+             _rate_line(doc), *_notes(doc), '"""', "", "import math", "",
              f"PARAMS = {_py(doc['params'])}", "", f"UNITS = {_py(doc.get('units') or {})}", "",
              f"PROVENANCE = {_py(prov)}", ""]
+    if doc.get("deployment"):
+        lines += [f"DEPLOYMENT = {_py(doc['deployment'])}", ""]
     if doc.get("tables"):  # {name: {"table": nested lists, "doc": ..., ...}}: matrices and look-up tables
         lines += [f"TABLES = {_py(doc['tables'])}", ""]
     return "\n".join(lines)
@@ -188,11 +201,31 @@ def _rate_line(doc: dict[str, Any]) -> str:
     return s + (f" ({note})." if note else ".")
 
 
-def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | None = None) -> str:
-    """A C99 header: ``static const`` parameters (``int``, ``double``, ``char[]``, ``double[]``), look-up tables.
+def _c_value(prefix: str, name: str, v: Any, choices: list | None) -> list[str]:
+    """The C lines of one value: booleans as ``int`` 0/1, numbers as ``int``/``double`` (arrays of
+    numbers as ``double[]``), an option with choices as one ``#define`` per choice and an ``int`` equal to
+    the chosen one; other strings have no C form (a comment)."""
+    ident = f"{prefix}_{_c_ident(name)}"
+    if isinstance(v, bool) or isinstance(v, int):
+        return [f"static const int {ident} = {_c_number(v)};"]
+    if isinstance(v, float):
+        return [f"static const double {ident} = {_c_number(v)};"]
+    if isinstance(v, str) and choices and v in choices:
+        lines = [f"#define {ident}_{_c_ident(c)} {i} /* {_comment(c)} */" for i, c in enumerate(choices)]
+        return lines + [f"static const int {ident} = {ident}_{_c_ident(v)};"]
+    if isinstance(v, list) and v and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+        return [f"static const double {ident}[{len(v)}] = {{{', '.join(_c_number(float(x)) for x in v)}}};"]
+    return [f"/* {_comment(name)}: {_comment(repr(v))} has no C form */"]
 
-    Compiles with ``cc -std=c99 -Wall -Werror``; non-finite values use ``INFINITY``/``NAN`` of
-    ``<math.h>``. ``prefix`` must be a C identifier (see :func:`c_prefix`).
+
+def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | None = None) -> str:
+    """A C99 header: ``static const`` values (``int``, ``double``, ``double[]``), choices, look-up tables.
+
+    Compiles with ``cc -std=c99 -Wall -Wextra -Werror -pedantic``; booleans are ``int`` 0/1, an option
+    with a set of choices is one ``#define PREFIX_NAME_CHOICE i`` per choice and ``static const int
+    PREFIX_NAME`` equal to the chosen one (strings are never C strings), non-finite values use
+    ``INFINITY``/``NAN`` of ``<math.h>``. Settings that only served scoring are a comment, never values.
+    ``prefix`` must be a C identifier (see :func:`c_prefix`).
     """
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", prefix or ""):
         raise ValueError(f"prefix: expected a C identifier ([A-Za-z_][A-Za-z0-9_]*), got {prefix!r}")
@@ -208,21 +241,19 @@ def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | No
         f" * Exported {_comment(doc.get('exported'))}; commit {_comment(doc.get('git_commit') or 'unknown')}.",
         " * Units (per parameter, as the objective defines them):",
     ]
+    dep = doc.get("deployment") or {}
+    sources = dep.get("sources") or {}
     for name in doc["params"]:
-        lines.append(f" *   {prefix}_{_c_ident(name)}: {_comment(units.get(name) or 'unit not declared')}")
+        src = f" [{sources[name]}]" if name in sources else ""
+        lines.append(f" *   {prefix}_{_c_ident(name)}: {_comment(units.get(name) or 'unit not declared')}{src}")
+    for line in _notes(doc):
+        lines.append(f" * {_comment(line)}")
+    for key, v in (dep.get("scoring") or {}).items():  # never values: they only served scoring the run
+        lines.append(f" * Scoring only (not part of the deployed system): {_comment(key)} = {_comment(json.dumps(v))}")
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <math.h> /* INFINITY, NAN */", ""]
+    choices = dep.get("choices") or {}
     for name, v in doc["params"].items():
-        ident = f"{prefix}_{_c_ident(name)}"
-        if isinstance(v, bool) or isinstance(v, int):
-            lines.append(f"static const int {ident} = {_c_number(v)};")
-        elif isinstance(v, float):
-            lines.append(f"static const double {ident} = {_c_number(v)};")
-        elif isinstance(v, str):
-            lines.append(f"static const char {ident}[] = {_c_string(v)};")
-        elif isinstance(v, list) and v and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
-            lines.append(f"static const double {ident}[{len(v)}] = {{{', '.join(_c_number(float(x)) for x in v)}}};")
-        else:
-            lines.append(f"/* {_comment(name)}: {_comment(repr(v))} has no C form */")
+        lines += _c_value(prefix, name, v, choices.get(name))
     for name, t in (tables or {}).items():
         ident = f"{prefix}_{_c_ident(name)}"
         arr = np.asarray(t["table"], float)

@@ -159,6 +159,17 @@ class TunableObjective(Objective, Protocol):
         objectives with ``takes_seed = True``: the seed of each candidate. An empty ``params_list``
         prepares (loads data, compiles kernels) and returns ``[]``."""
 
+    def deployment(self, params: Mapping[str, Any]) -> Mapping[str, Any]:
+        """The complete configuration that ``params`` deploy (:class:`tuner.deployment.Deployment` or its
+        ``to_doc()`` dict): ``kind``, ``name``, ``values`` (searched, fixed and default values: every value
+        that defines the deployed filter or controller), ``units``, ``docs``, ``sources``, ``choices``,
+        ``scoring`` (settings that only serve scoring, never exported as part of the system),
+        ``sample_rate_hz``, ``notes``. Written into ``best.yaml`` and every export."""
+
+    def build(self, params: Mapping[str, Any]) -> Any:
+        """The ready deployed object for ``params`` (e.g. the filter instance with its complete
+        configuration, whose ``run(gyr, acc, mag, rate_hz=...)`` and ``stream()`` work on live data)."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
@@ -166,7 +177,8 @@ class TunableObjective(Objective, Protocol):
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "parameter_names", "check_params", "preflight", "score", "has_test_data",
-         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize")
+         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize",
+         "deployment", "build")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

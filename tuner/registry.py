@@ -84,6 +84,14 @@ class PythonObjective:
     def __call__(self, params: dict[str, Any]) -> Any:
         return resolve_callable(self.callable)(params, **self.options)
 
+    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The parameters as they are: a user callable declares nothing else."""
+        from tuner.rundir import plain
+
+        values = plain(dict(params))
+        return {"kind": "python", "name": self.callable, "values": values,
+                "sources": {k: "searched" for k in values}, "scoring": {"options": plain(dict(self.options))}}
+
 
 class Registry:
     """Kind name -> factory, filled from entry points on first use and by :meth:`register`."""

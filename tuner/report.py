@@ -24,6 +24,7 @@ from typing import Any
 
 import pandas as pd
 
+from tuner.deployment import DEFAULTS_MEANING
 from tuner.figures import (
     convergence_table,
     load_history,
@@ -206,7 +207,8 @@ def _validation_md(val: dict[str, Any]) -> list[str]:
                           f"std over folds {fmt_num(cv.get('cv_fold_std'), 3)}"],
                 ["budget per fold", f"{cv.get('budget_fraction', 1.0):g} x the run's"]]
         md += ["## Generalisation", "", f"Cross-validation of this job ([cv.md](cv.md)); the gap is large when "
-               f"{md_escape(cv.get('gap_rule', ''))}.", "", _rows_table(rows, ["item", "value"], 4), ""]
+               f"{md_escape(cv.get('gap_rule', ''))}; {DEFAULTS_MEANING}.", "", _rows_table(rows, ["item", "value"], 4),
+               ""]
     sel = val.get("selection") or {}
     if sel:
         rows = [[c["eval"], c["tuning_fitness"], c["holdout_fitness"],

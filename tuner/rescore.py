@@ -21,7 +21,9 @@ __all__ = ["evaluate_target"]
 
 def evaluate_target(target: str | Path, params_file: str | Path | None = None,
                     data_file: str | Path | None = None) -> dict[str, Any]:
-    """``{"fitness": float, "recordings": {name: {metric: value}}, "params": {...}}`` (plus test scores)."""
+    """``{"fitness": float, "recordings": {name: {metric: value}}, "params": {...}, "deployment": {...}}``
+    (plus test scores); ``deployment`` is the complete configuration the scored parameters deploy
+    (:mod:`tuner.deployment`)."""
     target = Path(target)
     best_params = None
     if target.is_dir():
@@ -43,10 +45,12 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     elif best_params is not None:
         params = best_params
     else:
-        default_params = hook(objective, "default_params")
-        if default_params is None:
+        from tuner.deployment import defaults_baseline
+
+        baseline = defaults_baseline(objective, space)  # the config's fixed values, searched ones at defaults
+        if baseline is None:
             raise ConfigError(target, "", "no parameters: give --params (a config has no best)")
-        params = {k: v for k, v in default_params().items() if k in space}
+        params = {k: v for k, v in baseline.items() if k in space}
     full = {**space.fixed, **params}
     missing = [n for n in space.free_names if n not in full]
     if missing:
@@ -64,10 +68,13 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
                 preflight()
         except ValueError as exc:
             raise ConfigError(data_file, "data", str(exc)) from None
+    from tuner.deployment import deployment_for
+
+    deployment = deployment_for(objective, full, space.free_names, list(space.fixed)).to_doc()
     score = hook(objective, "score")
     if score is not None:
         s = score(full, "train")
-        out = {"fitness": s.fitness, "recordings": _plain(s.recordings), "params": full}
+        out = {"fitness": s.fitness, "recordings": _plain(s.recordings), "params": full, "deployment": deployment}
         if s.failed:
             out["failed"] = s.failed
         has_test = hook(objective, "has_test_data")
@@ -81,7 +88,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     rec = evaluate_one(objective, full)
     ev = rec.evaluation
     return {"fitness": ev.fitness if ev.status == "ok" else math.nan, "recordings": {"all": dict(ev.metrics)},
-            "params": full, **({"failed": ev.error} if ev.status != "ok" else {})}
+            "params": full, "deployment": deployment, **({"failed": ev.error} if ev.status != "ok" else {})}
 
 
 def _plain(recordings: Any) -> dict[str, dict[str, Any]]:

@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from tuner.config import RunConfig
+from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import EvalRecord, sigint_count, watch_sigint
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
 from tuner.objective import Evaluation
@@ -103,14 +104,11 @@ def read_meta(run_dir: Path) -> dict[str, Any]:
     return RunDir(run_dir).meta().to_dict()
 
 
-def load_best(run_dir: str | Path) -> dict[str, Any]:
-    """The best parameters of a run (from ``best.yaml``) as a plain dict."""
-    return dict(RunDir(run_dir).best().params)
-
-
 def _git_commit() -> str:
+    root = Path(__file__).resolve().parents[1]
+    if not (root / ".git").exists():  # an installed package: a repository around site-packages is not ours
+        return ""
     try:
-        root = Path(__file__).resolve().parents[1]
         out = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True, text=True,
                              timeout=5)
         return out.stdout.strip() if out.returncode == 0 else ""
@@ -214,10 +212,11 @@ class Run:
     """Drives one run directory. Use :func:`run` and :func:`resume`."""
 
     def __init__(self, cfg: RunConfig, rd: RunDir, objective: Any, space: Space,
-                 progress: Callable[[str], None] | None, meta: Meta, n_jobs: int):
+                 progress: Callable[[str], None] | None, meta: Meta, n_jobs: int,
+                 on_generation: Callable[[Generation], None] | None = None):
         self.cfg, self.rd, self.dir = cfg, rd, rd.path
         self.objective, self.base_space, self.progress = objective, space, progress
-        self.meta, self.n_jobs = meta, n_jobs
+        self.meta, self.n_jobs, self.on_generation = meta, n_jobs, on_generation or (lambda g: None)
         self.best: Best | None = None
 
     # --- optimiser of a stage -----------------------------------------------------------------
@@ -272,6 +271,7 @@ class Run:
                 self._live_report()
             now = time.perf_counter()
             self._progress(g, stages, now - state["t0"])
+            self.on_generation(g)  # after the generation is on disk (tuner.api's callback)
             state["t0"] = now
             if sigint_count() != sigints:  # a Ctrl-C whose KeyboardInterrupt was swallowed on the way
                 raise _Interrupted()
@@ -377,8 +377,9 @@ class Run:
         return extra
 
     def _finalize(self) -> dict[str, Any]:
-        """The objective's report step; its results go into ``self.best.evaluation``."""
+        """The complete tuned system (the deployment) and the objective's report step, both into ``self.best``."""
         assert self.best is not None
+        self.best = attach_deployment(self.best, self.objective, self.base_space)
         extra: dict[str, Any] = {}
         finalize = getattr(self.objective, "finalize", None)
         if callable(finalize):
@@ -416,9 +417,7 @@ class Run:
 
 
 def _printer(quiet: bool) -> Callable[[str], None] | None:
-    if quiet:
-        return None
-    return lambda msg: print(msg, file=sys.stderr, flush=True)
+    return None if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
 
 
 def _resolved(cfg: RunConfig, space: Space) -> dict[str, Any]:
@@ -441,11 +440,11 @@ _UNSTARTED = {"config.yaml", ".config.json", ".lock"}
 
 
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
-        progress: Callable[[str], None] | None = None) -> RunResult:
-    """Create a run directory for ``cfg`` and run it to the end (or until interrupted).
-
-    Everything that can be refused (objective, parameters, optimiser options) is built before the
-    directory is created, so a bad config leaves nothing behind.
+        progress: Callable[[str], None] | None = None,
+        on_generation: Callable[[Generation], None] | None = None) -> RunResult:
+    """Create a run directory for ``cfg`` and run it to the end (or until interrupted); ``on_generation(g)``
+    is called after each generation is written. Everything that can be refused (objective, parameters,
+    optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
     """
     objective, space = _build(cfg)
     n_jobs, notes = worker_count(cfg, space)
@@ -466,7 +465,7 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
             printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
         meta = _new_meta(cfg, rd.write_config(_resolved(cfg, space)), n_jobs, notes)
         rd.write_meta(meta)
-        r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation)
         if printer:
             printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
                     f"{cfg.parallel.backend} x {n_jobs})")

@@ -267,16 +267,21 @@ class Meta:
 @dataclass(frozen=True)
 class Best(BestPoint):
     """``best.yaml``: the best successful evaluation of the history (a :class:`tuner.loop.BestPoint`),
-    the run it belongs to, and the objective's held-out scores after the run (``evaluation``)."""
+    the run it belongs to, the objective's held-out scores after the run (``evaluation``) and the
+    complete configuration of the tuned system (``deployment``: a :class:`tuner.deployment.Deployment`
+    as plain data; ``params`` stays the run's point as the history records it)."""
 
     run: str = ""
     evaluation: dict[str, Any] = field(default_factory=dict)
+    deployment: dict[str, Any] = field(default_factory=dict)
 
     def to_doc(self) -> dict[str, Any]:
         doc = {"params": self.params, "fitness": self.fitness, "metrics": self.metrics,
                "found": {"stage": self.stage, "generation": self.generation, "eval": self.eval}, "run": self.run}
         if self.evaluation:
             doc["evaluation"] = self.evaluation
+        if self.deployment:
+            doc["deployment"] = self.deployment
         return plain(doc)
 
     @classmethod
@@ -288,9 +293,12 @@ class Best(BestPoint):
         found = doc.get("found") or {}
         if not isinstance(found, dict):
             raise RunError(f"{where}: found: expected a mapping, got {found!r}")
+        deployment = doc.get("deployment") or {}
+        if not isinstance(deployment, dict):
+            raise RunError(f"{where}: deployment: expected a mapping, got {deployment!r}")
         return cls(dict(params), float(fitness), dict(doc.get("metrics") or {}), int(found.get("stage", 0)),
                    int(found.get("generation", -1)), int(found.get("eval", -1)), str(doc.get("run", "")),
-                   dict(doc.get("evaluation") or {}))
+                   dict(doc.get("evaluation") or {}), dict(deployment))
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,8 @@ from tuner.optimizers import get_optimizer
 from tuner.rundir import RunDir
 from tuner.space import Space
 
-__all__ = ["run_config", "build_objective", "build", "new_optimizer", "worker_count", "worker_cap", "LiveMap"]
+__all__ = ["run_config", "run_objective", "build_objective", "build", "new_optimizer", "worker_count", "worker_cap",
+           "LiveMap"]
 
 
 def run_config(rd: RunDir, raw: dict[str, Any] | None = None) -> RunConfig:
@@ -34,6 +35,13 @@ def run_config(rd: RunDir, raw: dict[str, Any] | None = None) -> RunConfig:
     raw = dict(rd.config() if raw is None else raw)
     source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
     return config_from_dict(raw, source=source, base_dir=base_dir)
+
+
+def run_objective(rd: RunDir) -> tuple[RunConfig, Any, Space]:
+    """A run directory's config, objective (as registered, no preflight, no data loaded) and search space."""
+    cfg = run_config(rd)
+    objective = build_objective(cfg)
+    return cfg, objective, cfg.space(objective)
 
 
 def build_objective(cfg: RunConfig) -> Any:

@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude import deployment as _deployment
 from objectives.attitude.catalog import METRICS
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.disturbance import CONTEXT_KEYS as _CONTEXT_KEYS
@@ -369,11 +370,7 @@ class FilterObjective:
 
     def recordings(self, which: str = "train") -> list[Recording]:
         if which not in self._cache:
-            specs = self.train_specs if which == "train" else self.test_specs
-            try:
-                self._cache[which] = self._load(specs)
-            except RecordingError:
-                raise
+            self._cache[which] = self._load(self.train_specs if which == "train" else self.test_specs)
         return self._cache[which]
 
     # --- scoring ------------------------------------------------------------------------------
@@ -577,6 +574,14 @@ class FilterObjective:
                 sides.append(obj)
             out.append((fname, sides[0], sides[1]))
         return out
+
+    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The complete tuned filter: every value, scoring-only settings apart (objectives.attitude.deployment)."""
+        return _deployment.filter_deployment(self, params)
+
+    def build(self, params: Mapping[str, Any]):
+        """The deployed filter instance of ``params`` (``.run(gyr, acc, mag, rate_hz=...)``, ``.stream()``)."""
+        return _deployment.filter_build(self, params)
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:

@@ -277,6 +277,18 @@ class ClosedLoopObjective:
         """Provenance for ``tuner export``: controller and reference profile."""
         return {"objective": {"kind": "closed_loop", "controller": self.controller}, "data": self.profile}
 
+    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+        """The complete tuned controller, scoring-only settings apart (objectives.control.deployment)."""
+        from objectives.control.deployment import controller_deployment
+
+        return controller_deployment(self, params)
+
+    def build(self, params: Mapping[str, Any]) -> Any:
+        """The deployed controller instance of ``params`` (``values``, ``param_array()``)."""
+        from objectives.control.deployment import controller_build
+
+        return controller_build(self, params)
+
     # --- evaluation -----------------------------------------------------------------------------
     def traces(self, params: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
         """Speed, yaw rate, IB angle and average current of ``params`` against the references

@@ -93,9 +93,12 @@ def test_two_c_headers_compile_in_one_translation_unit(tmp_path):
         "int main(void) {\n"
         '  printf("%.17g %.17g %d %d %d\\n", EKF1_Q_Q, EKF2_Q_Q, isinf(EKF1_ACC_GATE) && EKF1_ACC_GATE > 0,\n'
         "         isinf(EKF2_LOW) && EKF2_LOW < 0, isnan(EKF1_OFF));\n"
-        '  printf("%s|%s|%d|%d|%.17g\\n", EKF1_VARIANT, EKF1_NAME, EKF1_N, EKF1_FLAG, EKF1_VEC[2]);\n'
+        '  printf("%d|%d|%.17g\\n", EKF1_N, EKF1_FLAG, EKF1_VEC[2]);\n'
         "  return isinf(EKF1_VEC[1]) ? 0 : 3;\n}\n")
-    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-o", "main", "main.c", "-lm"],
+    body = text.split("#ifndef")[1]
+    assert "char" not in body and "EKF1_VARIANT " not in body and "EKF1_NAME " not in body  # comments only
+    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-o", "main", "main.c",
+                         "-lm"],
                         cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert cc.returncode == 0, cc.stderr
     out = subprocess.run([str(tmp_path / "main")], capture_output=True, text=True, timeout=30)
@@ -103,7 +106,29 @@ def test_two_c_headers_compile_in_one_translation_unit(tmp_path):
     line1, line2 = out.stdout.splitlines()
     a, b, pinf, ninf, nan = line1.split()
     assert float(a) == 4.5e-9 and float(b) == 1.5e-9 and (pinf, ninf, nan) == ("1", "1", "1")
-    assert line2 == 'inf|a "quoted" */ name|7|1|-2.5'
+    assert line2 == "7|1|-2.5"  # strings without declared choices are comments, never C strings
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+def test_c_choices_are_defines_and_booleans_0_1(tmp_path):
+    doc = {**DOC, "params": {"variant": "original_c", "init": "broad", "use_mag": False, "rest_bias": True},
+           "deployment": {"kind": "filter", "name": "madgwick", "choices": {"variant": ["paper", "original_c"],
+                                                                           "init": ["accmag", "broad"]},
+                          "scoring": {"init": "truth", "warmup_s": 2.0}, "notes": ["starts from accmag"]}}
+    (tmp_path / "t.h").write_text(to_c(doc, prefix="M"))
+    text = (tmp_path / "t.h").read_text()
+    assert "#define M_VARIANT_PAPER 0" in text and "#define M_INIT_BROAD 1" in text
+    assert "Scoring only" in text and "M_WARMUP_S" not in text  # scoring settings are never values
+    (tmp_path / "main.c").write_text(
+        '#include <stdio.h>\n#include "t.h"\nint main(void) {\n'
+        '  printf("%d %d %d %d\\n", M_VARIANT == M_VARIANT_ORIGINAL_C, M_INIT == M_INIT_BROAD,'
+        ' M_USE_MAG, M_REST_BIAS);\n'
+        "  return 0;\n}\n")
+    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-o", "main", "main.c"],
+                        cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert cc.returncode == 0, cc.stderr
+    out = subprocess.run([str(tmp_path / "main")], capture_output=True, text=True, timeout=30)
+    assert out.stdout.split() == ["1", "1", "0", "1"]
 
 
 def test_bad_prefix_is_refused():
@@ -147,8 +172,9 @@ def test_exports_of_a_run_with_inf_round_trip_to_the_same_score(ekf_run, tmp_pat
     loaded["python"] = mod.PARAMS
     cfg = yaml.safe_load((ekf_run / "config.yaml").read_text())
     obj = build_objective(dict(cfg["objective"]), ekf_run)
-    for fmt, params in loaded.items():
-        assert _same(params, best["params"]), fmt
+    for fmt, params in loaded.items():  # every value of the deployed filter: the run's point and the rest
+        assert _same({k: params[k] for k in best["params"]}, best["params"]), fmt
+        assert len(params) > len(best["params"]) and params["q_w"] == 9.71e-10, fmt  # a default, now exported
         assert obj(params).fitness == best["fitness"], fmt
 
 

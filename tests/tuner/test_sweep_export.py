@@ -169,10 +169,14 @@ def test_export_yaml_json_python_round_trip(run_dir):
     j = json.loads(export(run_dir, "json"))
     ns: dict = {}
     exec(export(run_dir, "python"), ns)
+    full = tuner.load_best(run_dir)  # every value of the deployed filter: the searched ones and the rest
+    from objectives.attitude.filters.madgwick import Madgwick
+
+    assert set(full) == set(Madgwick.defaults) and full["init"] == "accmag"  # init auto: the run's q0, resolved
+    assert {k: full[k] for k in best if k != "init"} == {k: v for k, v in best.items() if k != "init"}
     for doc in (y, j, {"params": ns["PARAMS"], **ns["PROVENANCE"]}):
-        assert doc["params"] == best
+        assert doc["params"] == full
         assert doc["run"] == run_dir.name and doc["fitness"] > 0 and doc["objective"]["filter"] == "madgwick"
-    assert tuner.load_best(run_dir) == best
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
@@ -182,14 +186,16 @@ def test_c_header_compiles_and_prints_the_same_values(run_dir, tmp_path):
     best = yaml.safe_load((run_dir / "best.yaml").read_text())["params"]
     prog = tmp_path / "main.c"
     prog.write_text('#include <stdio.h>\n#include "tuned.h"\n'
-                    'int main(void) { printf("%.17g\\n", TUNER_BETA); printf("%s\\n", TUNER_VARIANT);'
+                    'int main(void) { printf("%.17g\\n", TUNER_BETA);'
+                    ' printf("%d\\n", TUNER_VARIANT == TUNER_VARIANT_PAPER);'
                     ' printf("%d\\n", TUNER_USE_MAG); return 0; }\n')
     exe = tmp_path / "main"
     cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-o", str(exe), str(prog)], capture_output=True,
                         text=True, cwd=tmp_path)
     assert cc.returncode == 0, cc.stderr
     out = subprocess.run([str(exe)], capture_output=True, text=True).stdout.split()
-    assert float(out[0]) == best["beta"] and out[1] == best["variant"] and int(out[2]) == int(best["use_mag"])
+    assert float(out[0]) == best["beta"] and int(out[1]) == (best["variant"] == "paper")
+    assert int(out[2]) == int(best["use_mag"])
 
 
 def test_filter_from_run_in_three_lines(run_dir):

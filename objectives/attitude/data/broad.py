@@ -21,8 +21,13 @@ _KEYS = ("imu_gyr", "imu_acc", "imu_mag", "opt_quat", "movement", "sampling_rate
 
 
 def default_broad_dir() -> Path:
-    """``../shared/data/broad`` relative to the project root (where tests and configs expect it)."""
-    return Path(__file__).resolve().parents[3].parent / "shared" / "data" / "broad"
+    """``../shared/data/broad`` relative to the project root in a clone (where tests and configs expect it).
+
+    An installed package has no project root (``parents[3]`` is inside the environment), so there the same
+    relative path is taken from the current directory, as a config's ``dir: ../shared/data/broad`` is."""
+    root = Path(__file__).resolve().parents[3]
+    base = root if (root / "pyproject.toml").is_file() else Path.cwd()
+    return base.parent / "shared" / "data" / "broad"
 
 
 def _read_mat(path: Path) -> dict:

@@ -104,13 +104,29 @@ class AttitudeFilter(Declared):
 
     @classmethod
     def from_run(cls, run_dir: str | Path, **overrides: Any) -> AttitudeFilter:
-        """The filter with the best parameters of a finished run (``best.yaml``)."""
-        import yaml
+        """The deployed filter of a finished run: every value the run tuned, fixed or relied on as default
+        (:func:`tuner.deployment.load_deployment`), ``overrides`` applied.
 
-        best = yaml.safe_load((Path(run_dir) / "best.yaml").read_text())
-        params = dict(best.get("params", best))
-        params = {k: v for k, v in params.items() if k in cls.defaults}
-        return cls(**{**params, **overrides})
+        Called on :class:`AttitudeFilter` itself it builds the run's filter class; on a subclass, a run
+        of another filter is a ``ValueError``. Settings that only served scoring are not part of it: a run
+        scored from the ground-truth start gives a filter that starts from the first acc/mag sample, so
+        ``from_run(run).run(gyr, acc, mag, rate_hz=...)`` works on live data.
+        """
+        from tuner.deployment import load_deployment
+
+        dep = load_deployment(run_dir)
+        if dep.kind != "filter":
+            raise ValueError(f"{run_dir}: the run tuned a {dep.kind} objective ({dep.name!r}), not a filter")
+        target = cls
+        if cls is AttitudeFilter or not cls.name:
+            from objectives.attitude.filters import get_filter
+
+            target = get_filter(dep.name)
+        elif dep.name and dep.name != cls.name:
+            raise ValueError(f"{run_dir}: the run tuned filter {dep.name!r}; use {dep.name}'s class "
+                             f"(or AttitudeFilter.from_run), not {cls.__name__}")
+        params = {k: v for k, v in dep.values.items() if k in target.defaults}
+        return target(**{**params, **overrides})
 
     # --- running ----------------------------------------------------------------------------
     def run(self, data: Recording | Any, acc: Any = None, mag: Any = None, *, rate_hz: float | None = None,

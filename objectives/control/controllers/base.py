@@ -55,6 +55,8 @@ class Controller(Declared):
     def __init__(self, plant: WMPParams | None = None, sensors: SensorParams | None = None):
         self.plant = plant or WMPParams()
         self.sensors = sensors or SensorParams()
+        #: the deployed controller's complete values (``build`` hook); None: ``param_array`` defaults
+        self.values: dict[str, Any] | None = None
 
     @classmethod
     def default_space(cls) -> Space:
@@ -79,7 +81,10 @@ class Controller(Declared):
         return out
 
     def param_array(self, values: Mapping[str, Any] | None = None) -> np.ndarray:
-        """The float64 parameter array of the kernel step for ``values`` (defaults filled in)."""
+        """The float64 parameter array of the kernel step for ``values`` (defaults filled in; without
+        ``values``, the instance's own :attr:`values` when it has them)."""
+        if values is None:
+            values = self.values
         arr = np.ascontiguousarray(self._build(self.resolve(values)), dtype=float)
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"controller {self.name!r}: non-finite parameter array for {dict(values or {})}")

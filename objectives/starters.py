@@ -1,0 +1,113 @@
+"""Starter jobs for ``tuner init NAME``: a commented YAML job that tunes filter or controller NAME.
+
+Registered in the entry-point group ``tuner.starters`` (pyproject.toml), one function per objective
+kind: ``starter(name) -> str`` (YAML text) or None when the kind has no such name. The searched
+parameters are the declaration's default space (``objectives/params.py``) with unit, doc and default
+in a comment; every other declared value is listed, commented out, under ``objective.fixed`` with its
+default, so a user sees what can be set. The data are synthetic benches, so the job runs anywhere.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+__all__ = ["filter_starter", "closed_loop_starter"]
+
+
+def _num(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float) and not math.isfinite(v):
+        return ".nan" if v != v else (".inf" if v > 0 else "-.inf")  # YAML's spelling
+    if isinstance(v, float):
+        text = repr(v) if v != int(v) or abs(v) >= 1e16 else f"{v:.1f}"
+        mant, e, exp = text.partition("e")  # YAML 1.1 reads 1e-05 as a string, 1.0e-05 as a number
+        return f"{mant}.0e{exp}" if e and "." not in mant else text
+    if isinstance(v, str):
+        return v
+    return str(v)
+
+
+def _blocks(params: list[dict[str, Any]]) -> tuple[list[str], list[str]]:
+    """``parameters:`` lines of the searched values and commented ``fixed:`` lines of the others."""
+    searched, fixed = [], []
+    for p in params:
+        unit = f"{p['unit']}: " if p.get("unit") else ""
+        doc = str(p.get("doc", ""))
+        note = f"{unit}{doc if len(doc) <= 90 else doc[:87].rsplit(' ', 1)[0] + ' ...'}"
+        if p.get("bounds"):
+            low, high = p["bounds"]
+            scale = p.get("scale") or "linear"
+            searched.append(f"  {p['name']}: {{low: {_num(float(low))}, high: {_num(float(high))}, scale: {scale}}}"
+                            f"   # {note}; default {_num(p['default'])}")
+        else:
+            allowed = p.get("allowed")
+            listed = p.get("kind") == "choice" and allowed and allowed != [True, False]
+            allowed = f" ({', '.join(map(str, allowed))})" if listed else ""
+            fixed.append(f"    # {p['name']}: {_num(p['default'])}   # {note}{allowed}")
+    return searched, fixed
+
+
+_TAIL = """optimizer:
+  method: auto                   # picks PSO, CMA-ES or a trust region by dimension and budget
+  max_evals: {evals}                 # the budget; `tuner describe pso` lists an optimiser's options
+parallel: {{backend: loky, n_jobs: 2}}   # serial | loky | threads | dask
+"""
+
+
+def filter_starter(name: str) -> str | None:
+    """A job tuning attitude filter ``name`` on synthetic recordings (None when no such filter)."""
+    from objectives.attitude.catalog import explain
+    from objectives.attitude.filters import filter_names
+
+    if name not in filter_names():
+        return None
+    d = explain(name)
+    searched, fixed = _blocks(d["params"])
+    one_d = name.endswith("1d")  # the tilt filters of thesis 3.1 estimate one angle: the 1-D bench, mse_1d
+    if one_d:
+        data = ("    train: [{synthetic: {generator: tilt1d, duration_s: 60, rate_hz: 800, seed: 1}}]\n"
+                "    test: [{synthetic: {generator: tilt1d, duration_s: 60, rate_hz: 800, seed: 2}}]\n")
+        metric = "  metric: mse_1d                 # tilt-angle MSE (thesis eq. 3.18)\n"
+    else:
+        data = ("    train:                       # your own data: {csv: {path, columns, gyr_unit, ...}} or\n"
+                "                                 # {broad: {dir, trials}}; `tuner describe csv` lists the keys\n"
+                "      - synthetic: {generator: bench6dof, duration_s: 30, rate_hz: 200, seed: 1}\n"
+                "      - synthetic: {generator: bench6dof, duration_s: 30, rate_hz: 200, seed: 2}\n"
+                "    test:                        # held out: scored after tuning, never used for it\n"
+                "      - synthetic: {generator: bench6dof, duration_s: 30, rate_hz: 200, seed: 101}\n")
+        metric = ("  metric: euler_rmse_mean        # `tuner list metrics` lists the others\n"
+                  "  warmup_s: 2.0                  # seconds at the start of each recording not scored\n")
+    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    return (f"# Starter job: tune the {name} filter ({d.get('summary', '')})\n"
+            f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
+            f"# `tuner describe {name}` lists every parameter with its unit, bounds and equation.\n"
+            f"name: {name}\nseed: 1\nobjective:\n  kind: filter\n  filter: {name}\n"
+            f"{fixed_block}\n  data:\n{data}{metric}"
+            "parameters:                      # searched: {low, high, scale: linear|log} or {fixed: value}\n"
+            + "\n".join(searched) + "\n" + _TAIL.format(evals=200))
+
+
+def closed_loop_starter(name: str) -> str | None:
+    """A job tuning controller ``name`` on the wheeled mobile pendulum (None when no such controller)."""
+    from objectives.control.controllers import CONTROLLERS, get_controller
+
+    if name not in CONTROLLERS:
+        return None
+    d = get_controller(name).describe()
+    searched, fixed = _blocks(d["params"])
+    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    return (f"# Starter job: tune the {name} controller ({d.get('summary', '')})\n"
+            f"# on the wheeled mobile pendulum of Odry's thesis (chapter 2), cost eq. 2.39.\n"
+            f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
+            f"# `tuner describe {name}` lists every parameter with its unit, bounds and equation.\n"
+            f"name: {name}\nseed: 1\nobjective:\n  kind: closed_loop\n  plant: wmp\n  controller: {name}\n"
+            f"{fixed_block}\n"
+            "  plant_params: {}               # plant values by name; empty: the thesis's pendulum\n"
+            "  profile: thesis_2s             # reference steps of speed and yaw rate (`tuner list data`)\n"
+            "  duration_s: 8.0\n"
+            "  cost: {alpha1: 1.4, alpha2: 0.85, beta: 1.6, gamma: 0.4}   # eq. 2.39 weights\n"
+            "  requirements: thesis           # the thesis's tracking requirements (a failed one fails)\n"
+            "parameters:                      # searched: {low, high, scale: linear|log} or {fixed: value}\n"
+            + "\n".join(searched) + "\n" + _TAIL.format(evals=200))

@@ -1,0 +1,160 @@
+"""The installable package: packaged example jobs, `tuner init`, `tuner demo`, and (slow) the wheel built,
+installed into a fresh virtualenv and run from outside the clone."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from tuner.cli import main as cli_main
+from tuner.config import config_from_dict
+from tuner.starter import packaged_config, packaged_configs, starter_names, starter_text
+
+ROOT = Path(__file__).resolve().parents[2]
+PACKAGED = ROOT / "tuner" / "data" / "configs"
+
+
+def test_packaged_jobs_are_the_repository_jobs_that_need_no_shared_data():
+    repo = {p.name for p in (ROOT / "configs").glob("*.yaml")}
+    shipped = set(packaged_configs())
+    needs_data = {n for n in repo if "broad:" in (ROOT / "configs" / n).read_text()}
+    assert needs_data and shipped == repo - needs_data, "run `make package-configs`"
+    for name in shipped:  # copies, kept equal
+        assert (PACKAGED / name).read_bytes() == (ROOT / "configs" / name).read_bytes(), \
+            f"tuner/data/configs/{name} differs from configs/{name}: run `make package-configs`"
+        assert "../shared" not in (PACKAGED / name).read_text()
+    # a sweep's base files ship beside it
+    for name in ("demo.yaml", "thesis_tilt_sweep.yaml", "wmp_compare.yaml"):
+        sw = yaml.safe_load((PACKAGED / name).read_text())["sweep"]
+        bases = [sw["base"]] + [v["base"] for v in sw["variants"].values() if "base" in v]
+        assert all((PACKAGED / b).is_file() for b in bases)
+    assert packaged_config("demo.yaml") == PACKAGED / "demo.yaml"
+
+
+def test_every_filter_and_controller_gets_a_starter_that_builds_and_preflights(tmp_path, monkeypatch):
+    """Each starter job is valid YAML, a valid config, names only parameters its objective has, and its
+    default parameters evaluate (the preflight that `tuner run` does before the first generation)."""
+    from tuner.run import _build, new_optimizer
+
+    names = starter_names()
+    assert {"madgwick", "ekf", "kf1d", "vqf", "pid", "lqr", "protective_fuzzy"} <= set(names)
+    monkeypatch.chdir(tmp_path)
+    for name in sorted(names):
+        if name == "vqf":
+            pytest.importorskip("vqf", reason="vqf is an optional extra")
+        text = starter_text(name)
+        raw = yaml.safe_load(text)
+        assert text.startswith("# Starter job") and raw["name"] == name
+        assert raw["objective"].get("filter", raw["objective"].get("controller")) == name
+        short = {"synthetic": {"generator": "tilt1d" if name.endswith("1d") else "bench6dof", "duration_s": 5.0,
+                               "rate_hz": 100, "seed": 1}}  # the starter's data, shorter: the test stays fast
+        if "data" in raw["objective"]:
+            assert raw["objective"]["data"]["train"][0]["synthetic"]["generator"] == short["synthetic"]["generator"]
+            raw["objective"]["data"] = {"train": [short], "test": [short]}
+        cfg = config_from_dict(raw, source=f"{name}.yaml", base_dir=tmp_path)
+        objective, space = _build(cfg)
+        assert new_optimizer(cfg, 0, space, None).population >= 1  # `auto` accepts the budget
+        declared = set(objective.parameter_names())
+        assert set(space.names) <= declared and space.free_names, name
+        commented = [ln.split(":")[0].strip("# ") for ln in text.splitlines() if ln.startswith("    # ")]
+        assert set(commented) <= declared and not set(commented) & set(space.free_names), name
+
+
+def test_init_writes_a_starter_and_refuses_unknown_names_and_overwriting(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli_main(["init", "madgwick"]) == 0
+    text = (tmp_path / "madgwick.yaml").read_text()
+    assert text == starter_text("madgwick") and "beta: {low: 0.001, high: 1.0, scale: log}" in text
+    assert cli_main(["init", "madgwick"]) == 2
+    err = capsys.readouterr().err
+    assert "error: madgwick.yaml: exists; not overwritten" in err
+    assert (tmp_path / "madgwick.yaml").read_text() == text
+    assert cli_main(["init", "pid", "-o", "ctl.yaml"]) == 0 and (tmp_path / "ctl.yaml").is_file()
+    assert cli_main(["init", "madgwik"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: init: unknown filter or controller 'madgwik'; did you mean 'madgwick'")
+    assert not (tmp_path / "madgwik.yaml").exists()
+
+
+def test_demo_lists_and_refuses_unknown_jobs(capsys):
+    assert cli_main(["demo", "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "demo" in out and "thesis_kf1d" in out and "broad" not in out
+    assert cli_main(["demo", "nope"]) == 2
+    assert "error: nope.yaml: not a packaged job" in capsys.readouterr().err
+
+
+def test_installed_package_records_no_git_commit_of_a_surrounding_repository(tmp_path, monkeypatch):
+    import tuner.run as run_mod
+
+    monkeypatch.setattr(run_mod, "__file__", str(tmp_path / "site-packages" / "tuner" / "run.py"))
+    assert run_mod._git_commit() == ""
+
+
+@pytest.mark.slow
+def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
+    """python -m build -> sdist and wheel; the wheel into a virtualenv without this clone on its path; then
+    `tuner --version`, `tuner describe madgwick`, `tuner init` and a short synthetic run, all from a
+    directory outside the clone (about 1-2 min with pip's cache warm)."""
+    pytest.importorskip("build", reason="`build` is in the dev extra")
+    dist = tmp_path / "dist"
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    subprocess.run([sys.executable, "-m", "build", "--outdir", str(dist), str(ROOT)], check=True, env=env,
+                   capture_output=True, timeout=600)
+    wheels, sdists = list(dist.glob("attitude_tuner-*.whl")), list(dist.glob("attitude_tuner-*.tar.gz"))
+    assert len(wheels) == 1 and len(sdists) == 1
+    import zipfile
+
+    names = zipfile.ZipFile(wheels[0]).namelist()
+    assert "tuner/data/configs/demo.yaml" in names and "objectives/starters.py" in names
+    assert not any(n.startswith(("tests/", "configs/", "benchmarks/")) for n in names)
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    bin_dir = venv / "bin"
+    subprocess.run([str(bin_dir / "python"), "-m", "pip", "install", "--quiet", str(wheels[0])], check=True,
+                   env=env, timeout=900)
+    work = tmp_path / "outside"
+    work.mkdir()
+    env = {**env, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PATH": f"{bin_dir}:{env.get('PATH', '')}"}
+
+    def tuner_cmd(*args: str) -> str:
+        out = subprocess.run([str(bin_dir / "tuner"), *args], cwd=work, env=env, capture_output=True, text=True,
+                             timeout=600)
+        assert out.returncode == 0, (args, out.stdout, out.stderr)
+        return out.stdout
+
+    where = subprocess.run([str(bin_dir / "python"), "-c", "import tuner, objectives; print(tuner.__file__); "
+                            "print(objectives.__file__)"], cwd=work, env=env, capture_output=True, text=True,
+                           check=True).stdout.split()
+    assert all(Path(w).is_relative_to(venv) for w in where), where
+    from tuner import __version__
+
+    assert tuner_cmd("--version").strip() == f"tuner {__version__}"
+    assert "beta" in tuner_cmd("describe", "madgwick")
+    assert "thesis_kf1d" in tuner_cmd("demo", "--list")
+    tuner_cmd("init", "madgwick")
+    short = "[{synthetic: {generator: bench6dof, duration_s: 6, rate_hz: 100, seed: 1}}]"
+    out = tuner_cmd("run", "madgwick.yaml", "-q", "--set", "optimizer.max_evals=8", "--set", "parallel.backend=serial",
+                    "--set", f"objective.data.train={short}", "--set", f"objective.data.test={short}")
+    assert "status: finished" in out
+    run_dirs = list((work / "runs").iterdir())
+    assert len(run_dirs) == 1 and (run_dirs[0] / "history.csv").is_file()
+    meta = yaml.safe_load((run_dirs[0] / "meta.json").read_text())
+    assert meta["git_commit"] == ""  # not the commit of a repository the venv happens to sit in
+    shutil.rmtree(venv)
+
+
+def test_default_broad_dir_is_not_read_relative_to_an_installed_package(tmp_path, monkeypatch):
+    import objectives.attitude.data.broad as broad
+
+    assert broad.default_broad_dir() == ROOT.parent / "shared" / "data" / "broad"  # a clone: beside it
+    site = tmp_path / "venv" / "lib" / "python3" / "site-packages"
+    monkeypatch.setattr(broad, "__file__", str(site / "objectives" / "attitude" / "data" / "broad.py"))
+    monkeypatch.chdir(tmp_path)
+    assert broad.default_broad_dir() == tmp_path.parent / "shared" / "data" / "broad"
