@@ -48,9 +48,11 @@ from tuner.rundir import (
     parse_cell,
     plain,
 )
+from tuner.selection import select_best
 from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
 from tuner.setup import build as _build  # the old name, used by benchmarks
 from tuner.space import Space
+from tuner.validation import validate_run
 
 __all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "RunError"]
 
@@ -361,18 +363,17 @@ class Run:
 
     def _finish(self) -> dict[str, Any]:
         """The end of a finished run: the final choice on a held-out fold (``validation.select``), the
-        objective's report step, the cross-validation (``validation.cv``); then ``best.yaml``, derived from
-        the history with all their results, written once. Returns the report step's results."""
-        from tuner.selection import select_best
-        from tuner.validation import validate_run
-
+        objective's report step, the defaults' scores and the cross-validation (``validation.cv``); then
+        ``best.yaml``, derived from the history with all their results, written once. Returns the report
+        step's results."""
         assert self.best is not None
         selection = None
         if self.cfg.validation.select is not None:
             self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
         extra = self._finalize()
-        if self.cfg.validation.active:  # CV into the run directory, the scores into best's evaluation
-            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress)
+        # the defaults' scores, the CV into the run directory: their numbers into best's evaluation
+        self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
+                                 self.base_space)
         self.rd.write_best(self.best)
         return extra
 

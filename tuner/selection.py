@@ -18,7 +18,7 @@ from tuner.objective import as_evaluation, hook
 from tuner.rundir import FIXED_COLUMNS, RESULT_COLUMNS, Best, RunDir, parse_cell, plain
 
 __all__ = ["selection_split", "tuning_objective", "select_best", "inner_split", "defaults_candidate",
-           "tune_and_select", "plain_score", "FALLBACK_FRACTION"]
+           "tune_and_select", "plain_score", "scored", "FALLBACK_FRACTION"]
 
 
 #: held-out fraction inside a CV fold whose tuning recordings lack the named ``holdout`` fold
@@ -260,9 +260,16 @@ def tune_and_select(cfg: RunConfig, objective: Any, tune: Callable[[Any, Callabl
 
 def plain_score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
     """Plain score (fitness, failure, number of recordings) of ``params`` on ``objective``'s data."""
+    fit, failed, names = scored(objective, params)
+    return fit, failed, max(len(names), 1)
+
+
+def scored(objective: Any, params: dict[str, Any], which: str = "train") -> tuple[float, str, tuple[str, ...]]:
+    """Plain score (fitness, failure, recording names) of ``params`` on ``objective``'s ``which`` data
+    (``train`` or ``test``); no names for an objective without a ``score`` hook."""
     score = hook(objective, "score")
     if score is None:
         ev = objective(params)
-        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), 1
-    s = score(params, "train")
-    return float(s.fitness), s.failed, max(len(s.recordings), 1)
+        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), ()
+    s = score(params, which)
+    return float(s.fitness), s.failed, tuple(str(n) for n in s.recordings)
