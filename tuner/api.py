@@ -150,16 +150,10 @@ class Result:
 
 def _objective_of(run_dir: Path) -> tuple[Any, Any]:
     """The objective and search space of a run, re-created from its ``config.yaml`` (no data loaded)."""
-    from tuner.registry import build_objective
+    from tuner.setup import run_objective
 
-    raw = dict(RunDir(run_dir).config())
-    source, base_dir = raw.pop("source", str(Path(run_dir) / "config.yaml")), Path(raw.pop("base_dir", run_dir))
-    cfg = config_from_dict(raw, source=source, base_dir=base_dir)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except ValueError as exc:
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
-    return objective, cfg.space(objective)
+    _, objective, space = run_objective(RunDir(run_dir))
+    return objective, space
 
 
 def _config(config: str | Path | Mapping[str, Any] | RunConfig, overrides: list[str] | None, seed: int | None,

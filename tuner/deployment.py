@@ -197,15 +197,11 @@ def load_deployment(run_dir: str | Path) -> Deployment:
             return Deployment.from_doc(best.deployment, "deployment")
         except ValueError as exc:
             raise RunError(f"{rd.file('best.yaml')}: {exc}") from None
-    from tuner.config import ConfigError, config_from_dict
-    from tuner.registry import build_objective
+    from tuner.config import ConfigError
+    from tuner.setup import run_objective
 
-    raw = dict(rd.config())
-    source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
     try:
-        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-        space = cfg.space(objective)
+        _, objective, space = run_objective(rd)
     except (ConfigError, ValueError, OSError, ImportError) as exc:
         raise RunError(f"{rd.file('best.yaml')}: no deployment recorded and the objective does not "
                        f"rebuild from config.yaml: {exc}") from None

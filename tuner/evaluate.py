@@ -36,30 +36,16 @@ import threading
 import time
 import traceback
 import uuid
-from dataclasses import dataclass, field
 from typing import Any
 
 from tuner import signals as _signals
-from tuner.objective import Evaluation, as_evaluation, hook
+from tuner.objective import EvalRecord, Evaluation, SeededCall, as_evaluation, hook
 
 __all__ = ["Evaluator", "EvalRecord", "BACKENDS", "evaluate_one", "TimedObjective"]
 
 BACKENDS = ("serial", "loky", "dask", "threads")
 
 _WORKER_CACHE: dict[str, Any] = {}
-
-
-@dataclass(frozen=True)
-class EvalRecord:
-    """One evaluation as the run records it.
-
-    ``raised`` is True when the objective raised (or timed out) rather than returning a result.
-    """
-
-    evaluation: Evaluation
-    seconds: float
-    worker: str = field(default="")
-    raised: bool = False
 
 
 class _SigintWatch:
@@ -119,8 +105,6 @@ def evaluate_one(objective: Any, params: dict[str, Any]) -> EvalRecord:
 
     A :class:`TimedObjective` runs the call in a child process that is killed after its timeout.
     """
-    from tuner.loop import SeededCall
-
     t0 = time.perf_counter()
     if isinstance(objective, TimedObjective) and objective.timeout_s:
         ev, raised = objective.call_with_timeout(params)
@@ -387,8 +371,6 @@ class Evaluator:
 
     def _run_threads(self, items: list[Any]) -> list[EvalRecord]:
         """The whole batch through ``evaluate_batch`` (see the module docstring); serial without it."""
-        from tuner.loop import SeededCall
-
         seeded = isinstance(self.objective, SeededCall)
         inner = self.objective.objective if seeded else self.objective
         timed = inner if isinstance(inner, TimedObjective) and inner.timeout_s else None

@@ -33,7 +33,7 @@ from tuner.config import ConfigError, RunConfig
 from tuner.objective import hook
 from tuner.space import Space
 
-__all__ = ["preflight", "check_names", "check_bounds", "check_folds", "reference_point"]
+__all__ = ["preflight", "check_names", "check_bounds", "check_cv_folds", "reference_point"]
 
 
 def _key_error(cfg: RunConfig, exc: ValueError, default_key: str = "objective") -> ConfigError:
@@ -94,21 +94,6 @@ def check_bounds(cfg: RunConfig, objective: Any, space: Space) -> None:
             except ValueError as exc:
                 raise ConfigError(cfg.source, f"parameters.{p.name}.{side}",
                                   f"{value!r} is outside what the objective accepts ({exc})") from None
-
-
-def check_folds(cfg: RunConfig, objective: Any) -> None:
-    """``validation.cv`` needs folds the objective can make (e.g. ``folds`` <= tuning recordings): checked
-    before the tuning, not only after it. With ``select`` the run tunes a reduced objective and the CV
-    splits the full one, so the check is left to the CV."""
-    v = cfg.validation
-    fn = hook(objective, "cv_folds")
-    if v.cv is None or v.select is not None or fn is None:
-        return
-    try:
-        fn(v.folds if v.cv == "kfold" else None)
-    except ValueError as exc:
-        raise ConfigError(cfg.source, "validation.folds" if v.cv == "kfold" else "validation.cv",
-                          f"{exc}; the cross-validation after the run needs it") from None
 
 
 def reference_point(objective: Any, space: Space) -> dict[str, Any]:
@@ -188,7 +173,8 @@ def check_cv_folds(cfg: RunConfig, objective: Any) -> None:
     try:
         n = len(list(fn(v.folds if v.cv == "kfold" else None)))
     except ValueError as exc:
-        raise ConfigError(cfg.source, "validation", str(exc)) from None
+        raise ConfigError(cfg.source, "validation.folds" if v.cv == "kfold" else "validation.cv",
+                          f"{exc}; the cross-validation after the run needs it") from None
     if n < 2:
         raise ConfigError(cfg.source, "validation", f"the objective gives {n} fold(s) here; cross-validation "
                                                     "needs at least 2")
@@ -260,7 +246,6 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
             raise _key_error(cfg, exc, "objective.data") from None
         except OSError as exc:
             raise ConfigError(cfg.source, "objective.data", f"{exc.filename or ''} {exc.strerror or exc}") from None
-    check_folds(cfg, objective)
     if cfg.parallel.backend == "dask" and cfg.parallel.address:
         _dask_check(cfg, objective)
     if evaluate:

@@ -11,10 +11,11 @@ import math
 from pathlib import Path
 from typing import Any
 
-from tuner.config import ConfigError, config_from_dict, load_config, read_yaml
+from tuner.config import ConfigError, load_config, read_yaml
 from tuner.objective import hook
-from tuner.registry import build_objective, say_imports
+from tuner.registry import say_imports
 from tuner.rundir import RunDir
+from tuner.setup import build_objective, run_config
 
 __all__ = ["evaluate_target"]
 
@@ -30,21 +31,13 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
         rd = RunDir(target)
         if not rd.file("config.yaml").exists():
             raise ConfigError(target, "", "not a run directory (no config.yaml)")
-        raw = dict(rd.config())
-        source, base_dir = raw.pop("source", str(target / "config.yaml")), Path(raw.pop("base_dir", target))
-        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
+        cfg = run_config(rd)
         if rd.has_best():
             best_params = dict(rd.best().params)
     else:
         cfg = load_config(target)
     say_imports(cfg.objective, cfg.source)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except ValueError as exc:
-        key, _, rest = str(exc).partition(": ")
-        if key.startswith("objective") and rest:
-            raise ConfigError(cfg.source, key, rest) from None
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
+    objective = build_objective(cfg)
     space = cfg.space(objective)
     if params_file:
         doc = read_yaml(params_file, "--params")

@@ -30,11 +30,10 @@ from typing import Any
 import numpy as np
 
 from tuner import signals as stop_signals
-from tuner.config import ConfigError, RunConfig, config_from_dict
+from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
-from tuner.evaluate import EvalRecord, Evaluator, sigint_count
+from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
-from tuner.optimizers import get_optimizer
 from tuner.replay import Replay as _Replay
 from tuner.rundir import (
     Best,
@@ -49,6 +48,9 @@ from tuner.rundir import (
     parse_cell,
     plain,
 )
+from tuner.selection import select_best
+from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
+from tuner.setup import build as _build  # the old name, used by benchmarks
 from tuner.space import Space
 from tuner.validation import validate_run
 
@@ -174,26 +176,6 @@ class _Interrupted(BaseException):
     """A stop signal whose KeyboardInterrupt was swallowed on the way (never a recorded failure)."""
 
 
-class _LiveMap:
-    """``evaluate(fn, items)`` on the configured backend; the pool starts at the first live generation."""
-
-    def __init__(self, cfg: RunConfig, n_jobs: int):
-        self.cfg, self.n_jobs, self.evaluator = cfg, n_jobs, None
-
-    def __call__(self, fn: Callable, items: list) -> list[EvalRecord]:
-        if self.evaluator is None:
-            p = self.cfg.parallel
-            self.evaluator = Evaluator(fn, p.backend, self.n_jobs, p.address)
-            self.evaluator.connect_timeout_s = p.connect_timeout_s
-        return self.evaluator(items)
-
-    def describe(self) -> str:
-        p = self.cfg.parallel
-        return Evaluator(None, p.backend, self.n_jobs, p.address).describe()
-
-    def close(self) -> None:
-        if self.evaluator is not None:
-            self.evaluator.close()
 
 
 class Run:
@@ -233,7 +215,7 @@ class Run:
     def _execute(self, replay_rows: list[dict[str, str]] | None) -> RunResult:
         stages = self.cfg.optimizer.refine.stages
         history = self.rd.history(self.base_space.names, self.meta.config_hash)
-        live = _LiveMap(self.cfg, self.n_jobs)
+        live = LiveMap(self.cfg, self.n_jobs)
         replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
                          history.path)
         t = self.meta.timing
@@ -317,15 +299,7 @@ class Run:
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
-        selection = None
-        if self.best is not None and self.cfg.validation.select is not None:  # final choice on a held-out fold
-            from tuner.validation import select_best
-
-            self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
-        extra = self._finalize() if self.best is not None else {}
-        if self.best is not None:  # the defaults' scores, CV into the run directory (tuner.validation)
-            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
-                                     self.base_space)
+        extra = self._finish() if self.best is not None else {}
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None:
@@ -361,10 +335,26 @@ class Run:
         fail = f"  failed {g.n_failed}" if g.n_failed else ""
         self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
+    def _finish(self) -> dict[str, Any]:
+        """The end of a finished run: the final choice on a held-out fold (``validation.select``), the
+        objective's report step, the defaults' scores and the cross-validation (``validation.cv``); then
+        ``best.yaml``, derived from the history with all their results, written once. Returns the report
+        step's results."""
+        assert self.best is not None
+        selection = None
+        if self.cfg.validation.select is not None:
+            self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
+        extra = self._finalize()
+        # the defaults' scores, the CV into the run directory: their numbers into best's evaluation
+        self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
+                                 self.base_space)
+        self.rd.write_best(self.best)
+        return extra
+
     def _finalize(self) -> dict[str, Any]:
-        """The objective's report step; ``best.yaml`` rewritten from the history with its results."""
-        self.best = attach_deployment(self.best, self.objective, self.base_space)  # the complete tuned system
-        self.rd.write_best(self.best)  # derived from the history, whatever happened before
+        """The complete tuned system (the deployment) and the objective's report step, both into ``self.best``."""
+        assert self.best is not None
+        self.best = attach_deployment(self.best, self.objective, self.base_space)
         extra: dict[str, Any] = {}
         finalize = getattr(self.objective, "finalize", None)
         if callable(finalize):
@@ -376,7 +366,6 @@ class Run:
                     self.progress(f"warning: the objective's report step failed: {exc}")
         if extra:
             self.best = dataclasses.replace(self.best, evaluation=plain(extra))
-            self.rd.write_best(self.best)
         return extra
 
     def _report(self) -> None:
@@ -402,74 +391,8 @@ class Run:
         return RunResult(self.dir, status, self.best, n_evals, gens, reason, dict(extra or {}))
 
 
-def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | None):
-    """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``."""
-    o = cfg.optimizer
-    rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, stage]))
-    kwargs = dict(o.options)
-    if o.population is not None:
-        kwargs["population"] = o.population
-    kwargs["generations"] = o.generations
-    if x0 is not None:
-        kwargs["x0"] = x0
-    try:
-        if isinstance(kwargs.get("x0"), dict):
-            kwargs["x0"] = space.encode(kwargs["x0"])
-        return get_optimizer(o.method)(space.dim, rng, **kwargs)
-    except (ValueError, TypeError) as exc:  # OptionError, or e.g. pycma refusing a population of 1
-        raise ConfigError(cfg.source, f"optimizer ({o.method})", str(exc)) from None
-
-
 def _printer(quiet: bool) -> Callable[[str], None] | None:
     return None if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
-
-
-def _build(cfg: RunConfig):
-    """Objective and space of ``cfg``, checked by :func:`tuner.preflight.preflight` (bad data, names,
-    a failing default evaluation are :class:`ConfigError` before anything is written)."""
-    from tuner.evaluate import TimedObjective
-    from tuner.preflight import check_cv_folds, preflight
-    from tuner.registry import build_objective, say_imports
-
-    say_imports(cfg.objective, cfg.source)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except FileNotFoundError as exc:
-        raise ConfigError(cfg.source, "objective", f"file not found: {exc.filename or exc}") from None
-    except ValueError as exc:
-        msg = str(exc)
-        key, _, rest = msg.partition(": ")
-        if key.startswith("objective") and rest:
-            raise ConfigError(cfg.source, key, rest) from None
-        raise ConfigError(cfg.source, "objective", msg) from None
-    check_cv_folds(cfg, objective)  # an impossible `validation.cv` is refused now, not after the tuning
-    if cfg.validation.select is not None:  # tune without the held-out fold of the final selection
-        from tuner.validation import tuning_objective
-
-        objective = tuning_objective(cfg, objective)
-    space = cfg.space(objective)
-    if space.dim == 0:
-        raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
-    if cfg.objective.get("timeout_s"):
-        objective = TimedObjective(objective, cfg.objective["timeout_s"])
-    preflight(cfg, objective, space, warn=lambda msg: print(msg, file=sys.stderr, flush=True))
-    return objective, space
-
-
-def _n_jobs(cfg: RunConfig, population: int) -> tuple[int, list[str]]:
-    """Workers actually used: at most the population and, for local pools, the CPU count."""
-    p = cfg.parallel
-    n, notes = int(p.n_jobs), []
-    if p.backend == "serial":
-        return n, notes
-    cpus = os.cpu_count() or 1
-    if n > population:
-        notes.append(f"n_jobs {n} capped at the population {population} (more workers would idle)")
-        n = population
-    if not p.address and n > cpus:
-        notes.append(f"n_jobs {n} capped at the {cpus} CPUs of this machine")
-        n = cpus
-    return n, notes
 
 
 def _resolved(cfg: RunConfig, space: Space) -> dict[str, Any]:
@@ -499,7 +422,7 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
     optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
     """
     objective, space = _build(cfg)
-    n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
+    n_jobs, notes = worker_count(cfg, space)
     printer = progress or _printer(quiet)
     if run_dir is None:
         stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
@@ -547,11 +470,9 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
         ck = rd.checkpoint()
-        raw = rd.check_config(meta) if meta is not None else rd.config()
-        source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
-        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
+        cfg = run_config(rd, rd.check_config(meta) if meta is not None else None)
         objective, space = _build(cfg)
-        n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
+        n_jobs, notes = worker_count(cfg, space)
         removed = rd.remove_tmp()
         if printer and removed:
             printer(f"removed {len(removed)} temporary file(s) left by the kill: {', '.join(sorted(removed))}")

@@ -52,9 +52,11 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude import deployment as _deployment
+from objectives.attitude.catalog import METRICS
 from objectives.attitude.cexport import hooks as _c_hooks
 from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.disturbance import CONTEXT_KEYS as _CONTEXT_KEYS
 from objectives.attitude.divergence import unbounded_growth
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective_options import (
@@ -69,10 +71,7 @@ from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
-METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
 _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
-#: filter values on which precomputed fuzzy inputs (disturbance measures) depend
-_CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
 
 def _split_data(data: Any) -> tuple[list, list]:

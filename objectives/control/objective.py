@@ -70,6 +70,7 @@ from objectives.control.metrics import (
     settling_time_s,
 )
 from objectives.control.profiles import profile_from_config
+from objectives.control.report import plot_surfaces, save_figure
 from objectives.control.wmp import STATUS_OK, SensorParams, WMPParams, simulate_closed_loop
 from tuner.objective import Evaluation
 from tuner.space import Space
@@ -460,9 +461,8 @@ class ClosedLoopObjective:
 
         Writes ``figures/response.png`` (initial vs tuned closed loop, Figs. 2.16-2.17) and, for
         controllers with ``surfaces`` (the fuzzy ones), ``figures/surface_<flc>.png`` (initial vs
-        tuned action surfaces, Figs. 2.19-2.20), ``response_best.npz`` (:meth:`save_response`) and,
-        for a sweep job (``.../jobs/<id>``), ``figures/controllers.png``: the tuned responses of every
-        job of the sweep finished so far (the last job's figure has them all).
+        tuned action surfaces, Figs. 2.19-2.20) and ``response_best.npz`` (:meth:`save_response`). A sweep
+        compares the controllers' tuned responses in the engine's sweep figure, through :meth:`traces`.
         Returns ``initial_fitness``, the initial and best peak IB angle, peak current and rise times,
         ``improvement_pct`` = 100 (F_init - F_opt) / F_init, and ``train`` = {profile: {F, peaks, rise
         times, MAEs}} of the best parameters, which the sweep tables collect as ``train.*`` columns.
@@ -500,13 +500,7 @@ class ClosedLoopObjective:
         from objectives.control.report import traces_doc
 
         (run_dir / "traces.json").write_text(json.dumps(traces_doc(self, init, best), separators=(",", ":")))
-        if run_dir.parent.name == "jobs":  # a sweep job: every finished sibling's response on one figure
-            from objectives.control.compare import collect_runs, plot_responses
-
-            plot_responses(collect_runs(run_dir.parent.parent), fig_dir / "controllers.png")
         if callable(getattr(self._ctrl, "surfaces", None)):
-            from objectives.control.report import plot_surfaces
-
             values = dict(self.fixed)
             values.update(best)
             plot_surfaces(self._ctrl, init, values, fig_dir)
@@ -573,15 +567,3 @@ class ClosedLoopObjective:
         ax[-1].set_xlabel("time (s)")
         ax[0].set_title(f"WMP closed loop, controller {self.controller}")
         return save_figure(fig, path)
-
-
-def save_figure(fig, path: str | pathlib.Path) -> pathlib.Path:
-    """Lay out ``fig``, write it as a PNG at 110 dpi (creating the folder) and close it."""
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path

@@ -205,6 +205,7 @@ NATIVE = {"madgwick", "mahony", "lcf", "ncf", "ccf", "ekf", "kf1d", "mahony1d", 
 
 
 @pytest.mark.parametrize("name", NAMES)
+@pytest.mark.slow
 def test_stream_equals_batch_sample_by_sample(name, rec):
     flt = get_filter(name)()
     want = flt.run(rec)

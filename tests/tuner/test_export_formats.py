@@ -155,6 +155,7 @@ def _tuner(*args, **kw):
     return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, timeout=300, **kw)
 
 
+@pytest.mark.slow
 def test_exports_of_a_run_with_inf_round_trip_to_the_same_score(ekf_run, tmp_path):
     from objectives.registry import build_objective
 
@@ -178,6 +179,7 @@ def test_exports_of_a_run_with_inf_round_trip_to_the_same_score(ekf_run, tmp_pat
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+@pytest.mark.slow
 def test_cli_export_c_with_prefix_states_rate_and_units(ekf_run, tmp_path):
     out = _tuner("export", str(ekf_run), "--format", "c", "--prefix", "EKF1", "-o", str(tmp_path / "a.h"))
     assert out.returncode == 0, out.stderr

@@ -82,6 +82,7 @@ def _check_scores(run_dir, tmp, rebuild):
 
 
 @pytest.mark.parametrize("name", FILTERS)
+@pytest.mark.slow
 def test_filter_export_round_trip(name, tmp_path):
     from objectives.attitude.data.synthetic import synthetic
     from objectives.attitude.filters import get_filter
@@ -100,6 +101,7 @@ def test_filter_export_round_trip(name, tmp_path):
 
 
 @pytest.mark.parametrize("name", LOOP_CONTROLLERS)
+@pytest.mark.slow
 def test_loop_controller_export_round_trip(name, tmp_path):
     from objectives.control.objective import ClosedLoopObjective
 
@@ -114,6 +116,7 @@ def test_loop_controller_export_round_trip(name, tmp_path):
 
 
 @pytest.mark.parametrize("name", WMP_CONTROLLERS)
+@pytest.mark.slow
 def test_controller_export_round_trip(name, tmp_path):
     from objectives.control.controllers import get_controller
 
