@@ -19,6 +19,7 @@ and ``explain(name) -> dict | None`` (parameters, bounds, units, equations) show
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -37,9 +38,17 @@ class RegistryError(ValueError):
     """A kind that cannot be registered or loaded (name collision, broken entry point)."""
 
 
-def resolve_callable(spec: str) -> Any:
-    """``"package.module:attr.sub"`` -> the object (``ImportError``/``AttributeError`` if missing)."""
+def resolve_callable(spec: str, base_dir: str | Path | None = None) -> Any:
+    """``"package.module:attr.sub"`` -> the object (``ImportError``/``AttributeError`` if missing).
+
+    With ``base_dir`` (a config's folder) that folder is searched first, so a module next to the config
+    imports without ``PYTHONPATH``.
+    """
     module, _, attr = spec.partition(":")
+    if base_dir is not None:
+        d = str(Path(base_dir).resolve())
+        if d not in sys.path:
+            sys.path.insert(0, d)
     obj = importlib.import_module(module)
     for part in attr.split("."):
         obj = getattr(obj, part)
@@ -56,6 +65,8 @@ class PythonObjective:
 
     callable: str
     options: dict = field(default_factory=dict)
+    #: the config's folder, searched first for the module (no PYTHONPATH needed)
+    base_dir: str | None = None
 
     @classmethod
     def from_config(cls, section: Mapping[str, Any], base_dir: Path | None = None) -> PythonObjective:
@@ -67,14 +78,14 @@ class PythonObjective:
         options = section.get("options") or {}
         if not isinstance(options, Mapping):
             raise ValueError(f"objective.options: expected a mapping of keyword arguments, got {options!r}")
-        obj = cls(str(section["callable"]), dict(options))
+        obj = cls(str(section["callable"]), dict(options), str(base_dir) if base_dir is not None else None)
         obj.preflight()
         return obj
 
     def preflight(self) -> list[str]:
         """Import the callable (in the process that calls this: the driver, or a Dask worker)."""
         try:
-            fn = resolve_callable(self.callable)
+            fn = resolve_callable(self.callable, self.base_dir)
         except (ImportError, AttributeError) as exc:
             raise ValueError(f"objective.callable: cannot import {self.callable!r} ({exc})") from None
         if not callable(fn):
@@ -82,7 +93,7 @@ class PythonObjective:
         return []
 
     def __call__(self, params: dict[str, Any]) -> Any:
-        return resolve_callable(self.callable)(params, **self.options)
+        return resolve_callable(self.callable, self.base_dir)(params, **self.options)
 
     def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
         """The parameters as they are: a user callable declares nothing else."""

@@ -1,5 +1,8 @@
 """Closed-loop objective: simulate the WMP with a controller on a reference profile, score eq. 2.39.
 
+``plant: wmp`` (the default) is the thesis's pendulum, below; a mapping as ``plant`` (``tf``, ``zpk``,
+``ss``, ``python``) is any plant, handed to :mod:`objectives.control.plants.objective`.
+
 YAML section (``objective:``)::
 
     kind: closed_loop
@@ -171,13 +174,18 @@ class ClosedLoopObjective:
     ) -> ClosedLoopObjective:
         """Build from the YAML ``objective:`` mapping; unknown keys and bad values are ``ValueError``."""
         section = dict(section)
+        if isinstance(section.get("plant"), Mapping):  # any plant: objectives.control.plants
+            from objectives.control.plants.objective import LoopObjective
+
+            return LoopObjective.from_config(section, base_dir)
         unknown = sorted(set(section) - _KEYS)
         if unknown:
             raise ValueError(f"objective: unknown key(s) {unknown}; allowed: {sorted(_KEYS)}")
         if section.get("kind", "closed_loop") != "closed_loop":
             raise ValueError(f"objective.kind must be 'closed_loop', got {section.get('kind')!r}")
         if section.get("plant", "wmp") != "wmp":
-            raise ValueError(f"objective.plant: only 'wmp' is available, got {section.get('plant')!r}")
+            raise ValueError(
+                f"objective.plant: 'wmp' or a mapping (tf, zpk, ss, python), got {section.get('plant')!r}")
         profile = section.get("profile", "thesis")
         if isinstance(profile, str) and profile.endswith((".yaml", ".yml")):
             import yaml
@@ -237,9 +245,12 @@ class ClosedLoopObjective:
     def catalog(cls) -> dict[str, list[str]]:
         """Names ``objective.controller``, the cost and the profiles (``tuner list``)."""
         from objectives.control.controllers import CONTROLLERS
+        from objectives.control.plants.controllers import LOOP_CONTROLLERS
         from objectives.control.profiles import PROFILES
 
-        return {"controllers": sorted(CONTROLLERS), "metrics": ["mae_weighted_cost"], "data": sorted(PROFILES)}
+        loop = {n for n in LOOP_CONTROLLERS if n != "open_loop"}  # open_loop has nothing to tune
+        return {"controllers": sorted({*CONTROLLERS, *loop}), "metrics": ["mae_weighted_cost"],
+                "data": sorted(PROFILES), "plants": ["plant"]}
 
     @classmethod
     def explain(cls, name: str) -> dict[str, Any] | None:
@@ -249,6 +260,10 @@ class ClosedLoopObjective:
 
         if name in CONTROLLERS:
             return {"section": "controllers", **get_controller(name).describe()}
+        from objectives.control.plants.objective import LoopObjective
+
+        if (d := LoopObjective.explain(name)) is not None:
+            return d
         if name == "mae_weighted_cost":
             doc = (mae_weighted_cost.__doc__ or "").strip().splitlines()[0]
             weights = [{"name": k, "default": v, "unit": "1", "doc": "exponent (objective.cost)", "eq": "eq. 2.39"}

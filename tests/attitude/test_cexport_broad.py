@@ -13,6 +13,10 @@ rounding, not a loss a float formulation could avoid: the double model itself, g
 moves its total RMSE on trial 07 by 0.055 deg (NCF). The bound there is 0.05 deg (measured NCF 0.020 on 07,
 0.014 on 28, the rest below 0.003 deg; Cody-Waite reduction of the float angles and wraps moved them about as
 much in either direction).
+The realtime filter's bound is 0.05 deg: its bias Kalman filter works with variances up to 1e8 (0.01 deg/s units,
+as VQF) and its rest and disturbance decisions are thresholds, so in float single samples decide differently;
+measured 0.009 deg at VQF's values, 0.028 deg (trial 28) as configs/broad_realtime.yaml tuned it; double 2.5e-12
+rad.
 Trials 28 and 30 (stationary magnet) and the trials with breaks exercise magnetic rejection and the rest bias;
 the test checks that they fire.
 """
@@ -34,6 +38,7 @@ TOL_RAD = 1e-9
 FLOAT_TOL_DEG = 0.01
 GIMBAL_FLOAT_TOL_DEG = 0.05
 GIMBAL_MARGIN_DEG = 0.2
+REALTIME_FLOAT_TOL_DEG = 0.05
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +88,9 @@ def _compare(flt, recs, tmp_path, exact: bool) -> dict[str, float]:
         d = abs(broad_errors(out["float"], rec.quat, rec.motion).total_rmse_deg
                 - broad_errors(out["O2"], rec.quat, rec.motion).total_rmse_deg)
         worst["float_deg"] = max(worst["float_deg"], d)
-        tol = FLOAT_TOL_DEG
+        if flt.name == "realtime":
+            worst.setdefault("float_by_trial", {})[rec.name] = d
+        tol = REALTIME_FLOAT_TOL_DEG if flt.name == "realtime" else FLOAT_TOL_DEG
         if flt.name in ("lcf", "ncf", "ccf") and _max_pitch_deg(out["O2"], rec.frame) > 90.0 - GIMBAL_MARGIN_DEG:
             tol = GIMBAL_FLOAT_TOL_DEG
         assert d < tol, (flt, rec.name, d, tol)
@@ -91,7 +98,7 @@ def _compare(flt, recs, tmp_path, exact: bool) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("case", ["madgwick_c_zeta", "mahony_robust", "mahony_imu", "ekf_robust", "ekf_paper_euler",
-                                  "lcf_tau", "ncf", "ccf_robust"])
+                                  "lcf_tau", "ncf", "ccf_robust", "realtime_vqf", "realtime_tuned"])
 def test_every_trial(case, trials, tmp_path):
     _compare(CONFIGS[case](), trials, tmp_path, exact=True)
 
