@@ -201,7 +201,16 @@ def _akf_defines(flt: Any, rate_hz: float) -> list[str]:
             f"#define AKF_OMEGA_THR {_literal(v['omega_thr'], 'real')}",
             f"#define AKF_NRULES {fis.rules.shape[0]}", f"#define AKF_MF_INIT {arr(fis.mf_params)}",
             f"#define AKF_KIND_INIT {arr(fis.mf_kind, 'int')}", f"#define AKF_RULES_INIT {arr(fis.rules, 'int')}",
-            f"#define AKF_CONS_INIT {arr(fis.consequents)}"]
+            f"#define AKF_CONS_INIT {arr(fis.consequents)}", *_akf_twiddles(int(v["fft_length"]))]
+
+
+def _akf_twiddles(n_fft: int) -> list[str]:
+    """sin(2 pi r / n_fft), r = 0 .. n_fft / 4: the DFT's twiddle factors by quarter-wave symmetry, so that
+    the packet's DFT needs no sine or cosine per term (n_fft not a multiple of 4: computed per term)."""
+    if n_fft % 4:
+        return []
+    tw = [math.sin(2.0 * math.pi * r / n_fft) for r in range(n_fft // 4 + 1)]
+    return [f"#define AKF_TW_INIT {{{', '.join(_literal(x, 'real') for x in tw)}}}"]
 
 
 def _literal(x: Any, ctype: str) -> str:
@@ -218,6 +227,10 @@ def _literal(x: Any, ctype: str) -> str:
 
 def _quat_literal(q: np.ndarray) -> str:
     return "{" + ", ".join(_literal(float(c), "real") for c in q) + "}"
+
+
+#: the streaming functions' definitions in the templates, made static (run.c defines the exported names)
+_API_DEF = re.compile(r"^void PFX_(init|update|quaternion|set_quaternion)\(", re.MULTILINE)
 
 
 def _template(name: str) -> str:
@@ -332,7 +345,8 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
     extra = ["bias_prologue.c"] if name in ("madgwick", "mahony") else ["trig.c"]
     parts = ["common.c", *(["robust.c"] if name not in (*_TILT, "realtime") else []), *extra, C_FILTERS[name],
              "run.c"]
-    body = "\n".join(_template(p) for p in parts)
+    body = _API_DEF.sub(r"static void PFX_\1_(", "\n".join(_template(p) for p in parts[:-1]))
+    body += "\n" + _template(parts[-1])  # run.c: the exported names of the static functions and PFX_run
     if name == "madgwick":
         body = body.replace("BIAS_OUT", "int i;\n    for (i = 0; i < 3; i++)\n"
                                         "        b[i] = f->b[i] + (f->p.rest_bias ? f->rs[8 + i] : 0.0);")
