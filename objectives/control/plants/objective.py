@@ -94,7 +94,9 @@ class LoopObjective:
         self._real = realism_from_spec(self.actuator, self.sensor)
         self._cost = cost_from_spec(self.cost)
         self.lti = hasattr(self._plant, "Ad")
-        self._req = requirements_from_spec(self.requirements, self._sc.first_step() is not None, self.lti)
+        step = self._sc.first_step()
+        self._req = requirements_from_spec(self.requirements, step is not None, self.lti,
+                                           (step[1] - step[0]) * float(p) if step else math.inf)
         n_meas = self._plant.n_states if self._ctrl.name == "lqr_sf" else self._plant.n_outputs
         std = np.array(self._real.noise_std, dtype=float)
         if std.size not in (1, n_meas):
