@@ -92,6 +92,13 @@ class LoopObjective:
         self._decl.validate(self.fixed)
         self._sc = scenario_from_spec(self.scenario, float(p))
         self._real = realism_from_spec(self.actuator, self.sensor)
+        # the controller's output limits default to the actuator's: its anti-windup must see the saturation
+        # (with infinite limits back-calculation and clamping never act), and the export carries them
+        names = {q.name for q in self._decl}
+        for k in ("u_min", "u_max"):
+            lim = getattr(self._real, k)
+            if k in names and k not in self.fixed and math.isfinite(lim):
+                self.fixed[k] = lim
         self._cost = cost_from_spec(self.cost)
         self.lti = hasattr(self._plant, "Ad")
         step = self._sc.first_step()
