@@ -179,14 +179,14 @@ class ClosedLoopObjective:
             from objectives.control.plants.objective import LoopObjective
 
             return LoopObjective.from_config(section, base_dir)
+        if section.get("plant", "wmp") != "wmp":  # before the pendulum's keys: a typo'd plant is the cause
+            raise ValueError(
+                f"objective.plant: 'wmp' or a mapping (tf, zpk, ss, python, fmu), got {section.get('plant')!r}")
         unknown = sorted(set(section) - _KEYS)
         if unknown:
             raise ValueError(f"objective: unknown key(s) {unknown}; allowed: {sorted(_KEYS)}")
         if section.get("kind", "closed_loop") != "closed_loop":
             raise ValueError(f"objective.kind must be 'closed_loop', got {section.get('kind')!r}")
-        if section.get("plant", "wmp") != "wmp":
-            raise ValueError(
-                f"objective.plant: 'wmp' or a mapping (tf, zpk, ss, python), got {section.get('plant')!r}")
         profile = section.get("profile", "thesis")
         if isinstance(profile, str) and profile.endswith((".yaml", ".yml")):
             import yaml

@@ -51,6 +51,29 @@ BAD = {
                      "objective.controller: unknown controller 'pid' for this plant"),
     "margin on nonlinear": ({"plant": {"python": "dyn:linear", "x0": [0.0, 0.0]}, "requirements": {"max_ms": 1.4}},
                             "objective.requirements.max_ms: margins and Ms need an LTI plant"),
+    # limits no loop can meet, and signals the scenario never reaches, are errors up front (not 0 % tuned)
+    "negative overshoot": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}},
+                            "requirements": {"max_overshoot_pct": -5}},
+                           "objective.requirements.max_overshoot_pct: -5 cannot be met; must be >= 0"),
+    "ms below one": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}}, "requirements": {"max_ms": 0.5}},
+                     "objective.requirements.max_ms: 0.5 cannot be met; must be >= 1"),
+    "phase margin 200": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}},
+                          "requirements": {"min_phase_margin_deg": 200}},
+                         "objective.requirements.min_phase_margin_deg: 200 cannot be met"),
+    "zero settling": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}}, "requirements": {"max_settling_time_s": 0}},
+                      "objective.requirements.max_settling_time_s: 0 cannot be met; must be > 0"),
+    "settling beyond window": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}},
+                                "scenario": {"duration_s": 1.0, "reference": [{"t": 0.1, "value": 1.0}]},
+                                "requirements": {"max_settling_time_s": 50}},
+                               "objective.requirements.max_settling_time_s: 50 s is longer than the first step's "
+                               "window (0.9 s)"),
+    "step after the end": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}},
+                            "scenario": {"duration_s": 1.0, "reference": [{"t": 5.0, "value": 1.0}]}},
+                           "objective.scenario.reference[0].t: 5.0 s is after the end of the scenario"),
+    "load after the end": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}},
+                            "scenario": {"duration_s": 1.0, "load": [{"t": 1.5, "value": 1.0}]}},
+                           "objective.scenario.load[0].t: 1.5 s is after the end of the scenario"),
+    "plant a list": ({"plant": [1, 2]}, "objective.plant: 'wmp' or a mapping (tf, zpk, ss, python, fmu), got [1, 2]"),
 }
 
 

@@ -280,3 +280,20 @@ def test_cost_terms_of_a_decaying_error_are_the_integrals():
     assert f == pytest.approx(2.0 * terms["iae"] + terms["ise"])
     g, _ = loop_cost({"mae_product": {"e": 1.4, "u": 0.4, "y1": 1.0}}, t, e, u, y, y, h)
     assert g == pytest.approx(np.mean(e) ** 1.4 * 2.0**0.4 * np.mean(e))
+
+
+def test_antiwindup_sees_the_actuator_limits():
+    """Without own output limits the PID takes the actuator's, so back-calculation and clamping act on its
+    saturation: a PI on 1/(s+1) saturating at 1.5 overshoots ~30 % with windup, < 1 % with either scheme."""
+    over = {}
+    for aw in ("backcalc", "clamp", "none"):
+        obj = _obj({"tf": {"num": [1.0], "den": [1.0, 1.0]}}, "pid2dof",
+                   fixed={"antiwindup": aw, "K": 5.0, "Ti_s": 0.5, "Td_s": 0.0},
+                   scenario={"duration_s": 6.0, "reference": [{"t": 0.1, "value": 1.0}]},
+                   actuator={"u_min": -1.5, "u_max": 1.5}, cost={"iae": 1.0})
+        assert obj.coeffs({})[8:10].tolist() == [-1.5, 1.5]
+        over[aw] = obj({}).metrics["overshoot_pct"]
+    assert over["none"] > 20.0 and over["backcalc"] < 1.0 and over["clamp"] < 1.0, over
+    own = _obj({"tf": {"num": [1.0], "den": [1.0, 1.0]}}, "pid2dof", fixed={"u_max": 1.0},
+               actuator={"u_min": -1.5, "u_max": 1.5})
+    assert own.coeffs({})[8:10].tolist() == [-1.5, 1.0]  # a limit of its own is kept

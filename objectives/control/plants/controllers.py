@@ -43,8 +43,8 @@ def _common(owner: str) -> tuple[Param, ...]:
         Param("N", 10.0, unit="1", allowed=POSITIVE, doc="derivative filter: time constant Td / N"),
         Param("antiwindup", "backcalc", choices=_AW, doc="integrator anti-windup: back-calculation, clamping, none"),
         Param("Tt_s", 0.0, unit="s", allowed=NONNEG, doc="back-calculation tracking time (0: sqrt(Ti Td), or Ti/2)"),
-        Param("u_min", -math.inf, unit="u", allowed=_EXT, doc="controller output lower limit"),
-        Param("u_max", math.inf, unit="u", allowed=_EXT, doc="controller output upper limit"),
+        Param("u_min", -math.inf, unit="u", allowed=_EXT, doc="controller output lower limit (unset: the actuator's)"),
+        Param("u_max", math.inf, unit="u", allowed=_EXT, doc="controller output upper limit (unset: the actuator's)"),
     )
 
 
@@ -222,8 +222,8 @@ class LQRStateFeedback(LoopController):
                     doc=f"LQR state weight Q[{i},{i}] of state {i}") for i in range(n)),
             *(Param(f"r{i + 1}", 1.0, (1e-3, 1e3), "log", unit="1/u^2", allowed=POSITIVE,
                     doc=f"LQR input weight R[{i},{i}] of input {i}") for i in range(m)),
-            Param("u_min", -math.inf, unit="u", allowed=_EXT, doc="controller output lower limit"),
-            Param("u_max", math.inf, unit="u", allowed=_EXT, doc="controller output upper limit"),
+            Param("u_min", -math.inf, unit="u", allowed=_EXT, doc="output lower limit (unset: the actuator's)"),
+            Param("u_max", math.inf, unit="u", allowed=_EXT, doc="output upper limit (unset: the actuator's)"),
         ))
 
     @classmethod

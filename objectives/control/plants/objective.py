@@ -92,9 +92,18 @@ class LoopObjective:
         self._decl.validate(self.fixed)
         self._sc = scenario_from_spec(self.scenario, float(p))
         self._real = realism_from_spec(self.actuator, self.sensor)
+        # the controller's output limits default to the actuator's: its anti-windup must see the saturation
+        # (with infinite limits back-calculation and clamping never act), and the export carries them
+        names = {q.name for q in self._decl}
+        for k in ("u_min", "u_max"):
+            lim = getattr(self._real, k)
+            if k in names and k not in self.fixed and math.isfinite(lim):
+                self.fixed[k] = lim
         self._cost = cost_from_spec(self.cost)
         self.lti = hasattr(self._plant, "Ad")
-        self._req = requirements_from_spec(self.requirements, self._sc.first_step() is not None, self.lti)
+        step = self._sc.first_step()
+        self._req = requirements_from_spec(self.requirements, step is not None, self.lti,
+                                           (step[1] - step[0]) * float(p) if step else math.inf)
         n_meas = self._plant.n_states if self._ctrl.name == "lqr_sf" else self._plant.n_outputs
         std = np.array(self._real.noise_std, dtype=float)
         if std.size not in (1, n_meas):

@@ -47,6 +47,17 @@ REQUIREMENTS = {
     "min_phase_margin_deg": ("pm_deg", "min", "phase margin (deg)"),
     "max_ms": ("ms", "max", "maximum sensitivity Ms"),
 }
+#: requirement key -> (lowest allowed value, strict, why): limits no loop can meet are errors up front
+_REQ_RANGE = {
+    "max_overshoot_pct": (0.0, False, "overshoot is >= 0 %"),
+    "max_rise_time_s": (0.0, True, "a time limit must be > 0 s"),
+    "max_settling_time_s": (0.0, True, "a time limit must be > 0 s"),
+    "max_ss_error": (0.0, False, "the error is an absolute value"),
+    "max_peak_u": (0.0, True, "peak |u| is >= 0 and 0 allows no control"),
+    "max_ms": (1.0, False, "Ms = max |S| is >= 1 for a strictly proper loop; 1.2-2.0 is usual"),
+    "min_phase_margin_deg": (-math.inf, False, ""),
+    "min_gain_margin_db": (-math.inf, False, ""),
+}
 _STEP_METRICS = ("overshoot_pct", "rise_time_s", "settling_time_s", "ss_error")
 _MARGIN_METRICS = ("gm_db", "pm_deg", "ms")
 
@@ -98,6 +109,9 @@ def _steps(key: str, items: Any, t: np.ndarray) -> np.ndarray:
         if t0 < last_t:
             raise ValueError(f"{key}[{i}].t: times must increase, got {t0} after {last_t}")
         last_t = t0
+        if t0 > t[-1]:
+            raise ValueError(f"{key}[{i}].t: {t0} s is after the end of the scenario ({t[-1]:g} s); "
+                             "raise objective.scenario.duration_s or move the step")
         start = np.interp(t0, t, out) if t0 <= t[-1] else out[-1]
         frac = np.clip((t - t0) / ramp, 0.0, 1.0) if ramp > 0 else (t >= t0 - 1e-12).astype(float)
         out = np.where(t >= t0 - 1e-12, start + (v - start) * frac, out)
@@ -244,12 +258,25 @@ def check_requirements(req: Mapping[str, float], m: Mapping[str, float]) -> str:
     return ""
 
 
-def requirements_from_spec(spec: Any, has_step: bool, lti: bool) -> dict[str, float]:
+def requirements_from_spec(spec: Any, has_step: bool, lti: bool, window_s: float = math.inf) -> dict[str, float]:
+    """Checked requirement limits; ``window_s``: the first step's window (s), over which a rise or
+    settling time is measured (a longer limit could not be checked)."""
     spec = dict(spec or {})
     for k, v in spec.items():
         if k not in REQUIREMENTS:
             raise ValueError(f"objective.requirements.{k}: unknown; allowed: {sorted(REQUIREMENTS)}")
-        _num(f"objective.requirements.{k}", v)
+        v = _num(f"objective.requirements.{k}", v)
+        lo, strict, why = _REQ_RANGE[k]
+        if v < lo or (strict and v == lo):
+            raise ValueError(f"objective.requirements.{k}: {v:g} cannot be met; must be {'>' if strict else '>='} "
+                             f"{lo:g} ({why})")
+        if k == "min_phase_margin_deg" and v >= 180.0:
+            raise ValueError(f"objective.requirements.{k}: {v:g} cannot be met; a phase margin is below 180 deg "
+                             "(30-60 is usual)")
+        if k in ("max_rise_time_s", "max_settling_time_s") and v > window_s:
+            raise ValueError(f"objective.requirements.{k}: {v:g} s is longer than the first step's window "
+                             f"({window_s:g} s) in which it is measured; raise objective.scenario.duration_s "
+                             "or lower the limit")
         metric = REQUIREMENTS[k][0]
         if metric in _STEP_METRICS and not has_step:
             raise ValueError(f"objective.requirements.{k}: needs a reference step in objective.scenario.reference")
