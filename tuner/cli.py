@@ -252,6 +252,8 @@ def _show_scores(path: Path, fit: float | None, evaluation: dict, params: dict) 
             print(title)
         for k, v in items:
             print(f"  {k:24s} {fmt(v)}")
+    for note in t.get("notes", []):  # e.g. the scoring-only truth start the deployment replaced
+        print(f"note:       {note}")
 
 
 def _cmd_compare(a) -> int:
@@ -335,9 +337,11 @@ def _cmd_export(a) -> int:
     run_dir = Path(a.run_dir)
     if not (run_dir / "best.yaml").exists():
         raise UsageError(f"{run_dir}: no best.yaml (not a run directory, or nothing evaluated yet)")
-    if a.prefix is not None and (a.format not in ("c", "c-filter") or not a.prefix.isidentifier()
-                                 or not a.prefix.isascii()):
-        raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c")
+    if a.prefix is not None and a.format not in ("c", "c-filter"):
+        raise UsageError(f"--prefix {a.prefix!r}: names C identifiers, only for --format c or c-filter "
+                         f"(got --format {a.format})")
+    if a.prefix is not None and (not a.prefix.isidentifier() or not a.prefix.isascii()):
+        raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*)")
     if a.format == "c-filter":
         from tuner.export import export_c_filter
 
@@ -390,6 +394,8 @@ def _cmd_evaluate(a) -> int:
         dep = out.get("deployment") or {}
         if dep:  # every value of the scored filter/controller (searched, fixed, defaults)
             print(f"deployed {dep['kind']} {dep['name']}: " + ", ".join(f"{k}={v!r}" for k, v in dep["values"].items()))
+            for note in dep.get("notes") or []:  # the scores above used the run's scoring settings (a truth start)
+                print(f"note: the scores above use the run's scoring settings; {note}")
     return 0
 
 

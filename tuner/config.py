@@ -235,7 +235,7 @@ def read_yaml(path: str | Path, what: str = "") -> Any:
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+        raise ConfigError(path, "", f"not valid YAML: {' '.join(str(exc).split())}") from None
 
 
 def load_config(path: str | Path, overrides: list[str] | None = None, seed: int | None = None,

@@ -90,6 +90,9 @@ class Deployment:
         extra = sorted(set(self.sources) - set(self.values))
         if extra:
             raise ValueError(f"deployment.sources: {extra} name no value")
+        for k, options in self.choices.items():  # a value outside its choices has no C enum: never silently
+            if k in self.values and isinstance(options, (list, tuple)) and self.values[k] not in options:
+                raise ValueError(f"deployment.values.{k}: {self.values[k]!r} is not one of its choices {list(options)}")
         rate = self.sample_rate_hz
         if rate is not None and not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
             raise ValueError(f"deployment.sample_rate_hz: expected a positive number or null, got {rate!r}")

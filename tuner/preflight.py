@@ -5,11 +5,14 @@
 
 1. every name under ``parameters:`` and ``objective.fixed:`` is one the objective knows
    (``parameter_names`` hook; a misspelled ``betta:`` names the key, the allowed names and the
-   closest one);
+   closest one); a name under ``objective.fixed:`` that ``parameters:`` also searches, or fixes to
+   another value, is an error (one value, one place);
    and each searched parameter's ``low`` and ``high`` is a value the objective accepts
    (``check_params`` hook, at the default point with one parameter moved to its bound);
 2. the objective's ``preflight`` hook loads and validates all its data once (bad files, missing
    columns, NaN rows, ``warmup_s`` longer than a recording...) and returns warnings (units);
+   then ``validation.cv`` must give folds (``cv_folds`` hook: e.g. ``folds`` at most the tuning
+   recordings), so a CV that cannot run is found before the tuning, not after it;
 3. with ``parallel.backend: dask`` and a scheduler ``address``, the same hook runs on every worker
    (a ``kind: python`` callable or a data file missing there is found now);
 4. the default parameters (``default_params`` hook, else the centre of the space) are evaluated
@@ -29,7 +32,7 @@ from tuner.config import ConfigError, RunConfig
 from tuner.objective import hook
 from tuner.space import Space
 
-__all__ = ["preflight", "check_names", "check_bounds", "reference_point"]
+__all__ = ["preflight", "check_names", "check_bounds", "check_folds", "reference_point"]
 
 
 def _key_error(cfg: RunConfig, exc: ValueError, default_key: str = "objective") -> ConfigError:
@@ -57,6 +60,17 @@ def check_names(cfg: RunConfig, objective: Any, space: Space) -> None:
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
                 raise ConfigError(cfg.source, f"{where}.{name}",
                                   f"not a parameter of this objective{hint}; allowed: {', '.join(known)}")
+    if cfg.parameters is None or not isinstance(fixed, dict):
+        return
+    for name, value in fixed.items():  # one value in two places: which one the run used would be a guess
+        if name in space.free_names:
+            raise ConfigError(cfg.source, f"objective.fixed.{name}",
+                              f"{value!r} is fixed here but parameters.{name} searches it; write it in one "
+                              f"place (objective.fixed, or parameters.{name} with low/high or fixed)")
+        if name in space.fixed and space.fixed[name] != value:
+            raise ConfigError(cfg.source, f"objective.fixed.{name}",
+                              f"{value!r} contradicts parameters.{name}: {{fixed: {space.fixed[name]!r}}}; "
+                              f"write it in one place")
 
 
 def check_bounds(cfg: RunConfig, objective: Any, space: Space) -> None:
@@ -79,6 +93,21 @@ def check_bounds(cfg: RunConfig, objective: Any, space: Space) -> None:
             except ValueError as exc:
                 raise ConfigError(cfg.source, f"parameters.{p.name}.{side}",
                                   f"{value!r} is outside what the objective accepts ({exc})") from None
+
+
+def check_folds(cfg: RunConfig, objective: Any) -> None:
+    """``validation.cv`` needs folds the objective can make (e.g. ``folds`` <= tuning recordings): checked
+    before the tuning, not only after it. With ``select`` the run tunes a reduced objective and the CV
+    splits the full one, so the check is left to the CV."""
+    v = cfg.validation
+    fn = hook(objective, "cv_folds")
+    if v.cv is None or v.select is not None or fn is None:
+        return
+    try:
+        fn(v.folds if v.cv == "kfold" else None)
+    except ValueError as exc:
+        raise ConfigError(cfg.source, "validation.folds" if v.cv == "kfold" else "validation.cv",
+                          f"{exc}; the cross-validation after the run needs it") from None
 
 
 def reference_point(objective: Any, space: Space) -> dict[str, Any]:
@@ -140,6 +169,7 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
             raise _key_error(cfg, exc, "objective.data") from None
         except OSError as exc:
             raise ConfigError(cfg.source, "objective.data", f"{exc.filename or ''} {exc.strerror or exc}") from None
+    check_folds(cfg, objective)
     if cfg.parallel.backend == "dask" and cfg.parallel.address:
         _dask_check(cfg, objective)
     if evaluate:

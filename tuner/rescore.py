@@ -59,10 +59,21 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
         if baseline is None:
             raise ConfigError(target, "", "no parameters: give --params (a config has no best)")
         params = {k: v for k, v in baseline.items() if k in space}
+    names_fn = hook(objective, "parameter_names")
+    unknown = sorted(set(params) - set(names_fn())) if params_file and names_fn is not None else []
+    if unknown:  # a misspelt name would otherwise be reported as the right name missing
+        raise ConfigError(params_file, f"params.{unknown[0]}", f"not a parameter of this objective; allowed: "
+                                                                 f"{', '.join(sorted(names_fn()))}")
     full = {**space.fixed, **params}
     missing = [n for n in space.free_names if n not in full]
     if missing:
         raise ConfigError(params_file or target, "params", f"missing value(s) for {missing}")
+    check = hook(objective, "check_params")
+    try:  # a value the objective refuses is an error line, not a traceback from the scoring
+        if check is not None:
+            check(full)
+    except ValueError as exc:
+        raise ConfigError(params_file or target, "params", str(exc)) from None
     warnings: list[str] = []  # the new data's preflight warnings (units, a start in motion)
     if data_file:
         doc = read_yaml(data_file, "--data")

@@ -119,7 +119,8 @@ def _check_specs(specs: list, base_dir: Path, where: str) -> None:
             p = Path(str(opts.get("path", "")))
             p = p if p.is_absolute() else base_dir / p
             if not p.is_file():
-                raise ValueError(f"{where}[{i}].csv.path: file not found: {p}")
+                raise ValueError(f"{where}[{i}].csv.path: " + (("not a file" if p.exists() else "file not found")
+                                 + f": {p}" if opts.get("path") else "missing (required): the CSV file"))
         if kind == "broad":
             from objectives.attitude.data.broad import default_broad_dir
 
@@ -165,9 +166,10 @@ class FilterObjective:
         if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
             raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
         if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth", "broad")):
-            q = np.asarray(self.q0, float)
-            if q.shape != (4,):
-                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 numbers, got {self.q0!r}")
+            q = np.zeros(0) if isinstance(self.q0, str) else np.asarray(self.q0, float)  # 'up': a misspelt name
+            if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.any(q):
+                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 finite numbers (w, x, y, z), "
+                                 f"not all 0, got {self.q0!r}")
         if self.warmup_s < 0:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._cache: dict[str, Any] = {}

@@ -7,7 +7,10 @@ gimbal lock on trial 07: 2.7e-8 rad).
 Float: total RMSE within 0.01 deg of the double result for the quaternion filters (measured at most 0.0005 deg).
 The Euler-angle filters (LCF, NCF, CCF) integrate roll, pitch and yaw themselves, and in float the fast-rotation
 trials 07 and 09 (pitch up to 84 deg) move their total RMSE by up to 0.023 deg (LCF tau form 0.021, NCF 0.023,
-CCF with its robust options 0.0015): their bound is 0.05 deg.
+CCF with its robust options 0.0015): their bound is 0.05 deg. So is the realtime filter's: its bias Kalman filter
+works with variances up to 1e8 (0.01 deg/s units, as VQF) and its rest and disturbance decisions are thresholds,
+so in float single samples decide differently; measured 0.009 deg at VQF's values, 0.028 deg (trial 28) as
+configs/broad_realtime.yaml tuned it; double 2.5e-12 rad.
 Trials 28 and 30 (stationary magnet) and the trials with breaks exercise magnetic rejection and the rest bias;
 the test checks that they fire.
 """
@@ -69,12 +72,15 @@ def _compare(flt, recs, tmp_path, exact: bool) -> dict[str, float]:
         d = abs(broad_errors(out["float"], rec.quat, rec.motion).total_rmse_deg
                 - broad_errors(out["O2"], rec.quat, rec.motion).total_rmse_deg)
         worst["float_deg"] = max(worst["float_deg"], d)
-        assert d < (EULER_FLOAT_TOL_DEG if flt.name in ("lcf", "ncf", "ccf") else FLOAT_TOL_DEG), (flt, rec.name, d)
+        if flt.name == "realtime":
+            worst.setdefault("float_by_trial", {})[rec.name] = d
+        assert d < (EULER_FLOAT_TOL_DEG if flt.name in ("lcf", "ncf", "ccf", "realtime") else FLOAT_TOL_DEG), \
+            (flt, rec.name, d)
     return worst
 
 
 @pytest.mark.parametrize("case", ["madgwick_c_zeta", "mahony_robust", "mahony_imu", "ekf_robust", "ekf_paper_euler",
-                                  "lcf_tau", "ncf", "ccf_robust"])
+                                  "lcf_tau", "ncf", "ccf_robust", "realtime_vqf", "realtime_tuned"])
 def test_every_trial(case, trials, tmp_path):
     _compare(CONFIGS[case](), trials, tmp_path, exact=True)
 

@@ -46,6 +46,7 @@ NONDEFAULT = {
     "qraukf": {"window": 10, "mag_rejection": True, "rest_bias": True, "init": "broad"},
     "qukf": {"p0_att": 0.2, "p0_bias": 0.02, "init": "broad"},
     "vqf": {"offline": True, "magDistRejectionEnabled": False, "tauMag": 5.0},
+    "realtime": {"mag_first_at_rest": True, "mag_recover_tau_s": 4.0, "motion_bias": False, "start": "q0"},
 }
 
 

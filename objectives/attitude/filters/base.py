@@ -204,8 +204,11 @@ class AttitudeFilter(Declared):
         elif dep.name and dep.name != cls.name:
             raise ValueError(f"{run_dir}: the run tuned filter {dep.name!r}; use {dep.name}'s class "
                              f"(or AttitudeFilter.from_run), not {cls.__name__}")
-        params = {k: v for k, v in dep.values.items() if k in target.defaults}
-        return target(**{**params, **overrides})
+        unknown = sorted(set(dep.values) - set(target.defaults))
+        if unknown:  # a value the filter would drop: the filter built would not be the one recorded
+            raise ValueError(f"{run_dir}: deployment.values.{unknown[0]}: not a parameter of {target.name}; "
+                             f"allowed: {', '.join(sorted(target.defaults))}")
+        return target(**{**dep.values, **overrides})
 
     # --- running ----------------------------------------------------------------------------
     def run(self, data: Recording | Any, acc: Any = None, mag: Any = None, *, rate_hz: float | None = None,
