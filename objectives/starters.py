@@ -79,7 +79,8 @@ def filter_starter(name: str) -> str | None:
                 "      - synthetic: {generator: bench6dof, duration_s: 30, rate_hz: 200, seed: 101}\n")
         metric = ("  metric: euler_rmse_mean        # `tuner list metrics` lists the others\n"
                   "  warmup_s: 2.0                  # seconds at the start of each recording not scored\n")
-    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
+        fixed)
     return (f"# Starter job: tune the {name} filter ({d.get('summary', '')})\n"
             f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
             f"# `tuner describe {name}` lists every parameter with its unit, bounds and equation.\n"
@@ -100,7 +101,8 @@ def closed_loop_starter(name: str) -> str | None:
         return None
     d = get_controller(name).describe()
     searched, fixed = _blocks(d["params"])
-    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
+        fixed)
     return (f"# Starter job: tune the {name} controller ({d.get('summary', '')})\n"
             f"# on the wheeled mobile pendulum of Odry's thesis (chapter 2), cost eq. 2.39.\n"
             f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
@@ -141,7 +143,8 @@ def _loop_starter(name: str) -> str | None:
     obj = LoopObjective(plant=plant, controller=name, period_s=0.01, scenario=scenario)
     searched, fixed = _blocks(obj._decl.describe())
     summary = (obj._ctrl.__doc__ or "").strip().splitlines()[0]
-    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
+        fixed)
     return (f"# Starter job: tune the {name} controller ({summary})\n"
             "# on an example plant: replace objective.plant with yours (`tuner describe plant`).\n"
             f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"

@@ -207,11 +207,14 @@ class FilterObjective:
             get_filter(section["filter"])
         except ValueError as exc:
             raise ValueError(f"objective.filter: {exc}") from None
+        warmup = section.get("warmup_s", 0.0)
+        if isinstance(warmup, bool) or not isinstance(warmup, (int, float)):
+            raise ValueError(f"objective.warmup_s: expected a number of seconds >= 0, got {warmup!r}")
         return cls(
             filter=section["filter"], train_specs=train, test_specs=test, fixed=dict(fixed),
             metric=section.get("metric", "euler_mse_geomean"),
             metric_options=dict(section.get("metric_options") or {}),
-            q0=section.get("q0", "accmag"), warmup_s=float(section.get("warmup_s", 0.0)),
+            q0=section.get("q0", "accmag"), warmup_s=float(warmup),
             report=dict(section.get("report") or {}), base_dir=str(base), prior=section.get("prior") or {},
         )
 
