@@ -217,3 +217,14 @@ def test_sine_and_cosine_without_libm(tmp_path):
         assert abs(c.value - math.cos(x)) <= 4e-16, x
     lib.sc(ctypes.c_double(math.inf), ctypes.byref(s), ctypes.byref(c))
     assert math.isnan(s.value) and math.isnan(c.value)
+
+
+def test_a_fast_math_build_leaves_this_process_with_subnormal_numbers(bench, tmp_path):
+    """Linking with -ffast-math would add crtfastmath.o, which sets flush-to-zero in the loading process: every
+    later test in this Python would then see subnormals as 0 (numpy's hypothesis-driven tests fail on that)."""
+    flt = _truth_start(CONFIGS["madgwick_c_zeta"]())
+    tiny = np.float64(2.2250738585072014e-308) / 4  # a subnormal
+    assert tiny / 2 > 0
+    c = build(flt, tmp_path, 1.0 / bench.dt, "double", ("-O2", "-ffast-math"), init="given")
+    run_c(c, flt, bench, bench.quat[0])
+    assert tiny / 2 > 0 and tiny * 0.5 == np.float64(2.2250738585072014e-308) / 8

@@ -51,11 +51,20 @@ def compile_shared(files: dict[str, str], out_dir: str | Path, opt: tuple[str, .
         (out_dir / name).write_text(text)
     src = [out_dir / n for n in files if n.endswith(".c")]
     lib = out_dir / f"lib{src[0].stem}.so"
-    cmd = [cc, *STRICT_FLAGS, *opt, "-fPIC", "-shared", "-o", str(lib), *map(str, src), "-lm"]
+    # Compile and link apart: linking with -ffast-math (or -Ofast) adds gcc's crtfastmath.o, whose
+    # constructor sets flush-to-zero/denormals-are-zero in the MXCSR of the process that loads the library
+    # (here: Python itself, for every later computation). The optimisation flags belong to the compile step.
+    objs = [s.with_suffix(".o") for s in src]
+    for s, o in zip(src, objs):
+        _run_compiler([cc, *STRICT_FLAGS, *opt, "-fPIC", "-c", "-o", str(o), str(s)])
+    _run_compiler([cc, "-shared", "-o", str(lib), *map(str, objs), "-lm"])
+    return lib
+
+
+def _run_compiler(cmd: list[str]) -> None:
     res = subprocess.run(cmd, capture_output=True, text=True)
     if res.returncode != 0 or res.stderr.strip():
         raise CompileError(f"{' '.join(cmd)}\n{res.stderr}")
-    return lib
 
 
 class CFilter:
