@@ -18,9 +18,8 @@ YAML section (``objective:``)::
     # aggregation over recordings and a prior toward the defaults (objectives.attitude.objective_options):
     # metric_options: {aggregate: mean|median|worst_k|cvar, k: 3, alpha: 0.5, group_balanced: true, groups: broad}
     # prior: {strength: 3.0, center: defaults}
-    q0: accmag                          # initial orientation: accmag (first sample), truth or broad
-                                        # (a filter's own `init` option, e.g. fixed: {init: broad} or
-                                        # `init: broad` in a --params file, takes precedence)
+    q0: accmag                          # start: accmag (first sample), truth or broad; a filter's own
+                                        # `init` (fixed: {init: broad}, or a --params file) wins
     warmup_s: 0.0                       # seconds at the start of each recording left out of metrics
     report: {traces: true, per_trial_optimum: false, per_trial_budget: 120}
 
@@ -35,10 +34,8 @@ Metrics (lower is better):
                        criterion of BROAD's trial-agnostic good parameters (TAGP).
 ``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
 
-A filter whose output is not finite, or whose attitude error grows without bound (steadily over the
-recording to more than 60 deg, :mod:`objectives.attitude.divergence`), scores the penalty and the
-evaluation is recorded as failed with the recording's name. Recordings are loaded once per worker
-process (lazily, on first call) and are not pickled with the objective.
+A filter whose output is not finite, or whose error grows without bound (:mod:`objectives.attitude.divergence`)
+is a failed evaluation naming the recording. Recordings load once per worker (lazily), never pickled.
 """
 
 from __future__ import annotations
