@@ -143,25 +143,15 @@ def _sample_rate(obj: Any) -> dict[str, Any]:
 
 def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, dict[str, Any]]:
     """The run's objective (on ``data_file``'s data when given) and the complete deployed values."""
-    from tuner.config import ConfigError, read_yaml
+    from tuner.config import ConfigError
     from tuner.deployment import load_deployment
+    from tuner.rescore import objective_on_data
 
     objective = _build(run_dir)
     if objective is None:
         raise ConfigError(run_dir / "config.yaml", "objective", "does not build any more (data moved?)")
     if data_file:
-        doc = read_yaml(data_file, "--data")
-        data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
-        with_data = hook(objective, "with_data")
-        if with_data is None:
-            raise ConfigError(data_file, "data", "this objective does not take other data")
-        try:
-            objective = with_data(data)
-            fn = hook(objective, "preflight")
-            if fn is not None:
-                fn()
-        except ValueError as exc:
-            raise ConfigError(data_file, "data", str(exc)) from None
+        objective, _ = objective_on_data(objective, data_file)
     return objective, dict(load_deployment(run_dir).values)
 
 

@@ -70,18 +70,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
         raise ConfigError(params_file or target, "params", str(exc)) from None
     warnings: list[str] = []  # the new data's preflight warnings (units, a start in motion)
     if data_file:
-        doc = read_yaml(data_file, "--data")
-        data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
-        with_data = hook(objective, "with_data")
-        if with_data is None:
-            raise ConfigError(data_file, "data", "this objective does not take other data")
-        try:
-            objective = with_data(data)
-            preflight = hook(objective, "preflight")
-            if preflight is not None:  # load the new data now: a bad file is an error line, not a traceback
-                warnings = list(preflight() or [])
-        except ValueError as exc:
-            raise ConfigError(data_file, "data", str(exc)) from None
+        objective, warnings = objective_on_data(objective, data_file)
     from tuner.deployment import deployment_for
 
     deployment = deployment_for(objective, full, space.free_names, list(space.fixed)).to_doc()
@@ -109,3 +98,21 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
 
 def _plain(recordings: Any) -> dict[str, dict[str, Any]]:
     return {name: dict(m) for name, m in recordings.items()}
+
+
+def objective_on_data(objective: Any, data_file: str | Path) -> tuple[Any, list[str]]:
+    """``objective`` rebuilt on ``data_file``'s data (a YAML file, its ``data:`` block or the whole
+    document) and that data's preflight warnings. The data is loaded now, so a bad file is one
+    :class:`ConfigError` line on ``data_file``, not a traceback from the scoring."""
+    doc = read_yaml(data_file, "--data")
+    data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
+    with_data = hook(objective, "with_data")
+    if with_data is None:
+        raise ConfigError(data_file, "data", "this objective does not take other data")
+    try:
+        objective = with_data(data)
+        preflight = hook(objective, "preflight")
+        warnings = list(preflight() or []) if preflight is not None else []
+    except ValueError as exc:
+        raise ConfigError(data_file, "data", str(exc)) from None
+    return objective, warnings
