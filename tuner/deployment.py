@@ -139,6 +139,22 @@ class Deployment:
             raise ValueError(f"{where}: {exc}") from None
 
 
+def param_annotations(decl: Any) -> tuple[dict[str, str], dict[str, str], dict[str, list]]:
+    """``(units, docs, choices)`` of a parameter declaration (items with ``name``, ``unit``, ``doc``,
+    ``choices``; None for none): the parameters that have a unit, a doc line, or string choices."""
+    units: dict[str, str] = {}
+    docs: dict[str, str] = {}
+    choices: dict[str, list] = {}
+    for p in (decl or ()):
+        if p.unit:
+            units[p.name] = p.unit
+        if p.doc:
+            docs[p.name] = p.doc
+        if p.choices and all(isinstance(c, str) for c in p.choices):
+            choices[p.name] = list(p.choices)
+    return units, docs, choices
+
+
 def as_deployment(value: Deployment | Mapping[str, Any], where: str = "deployment") -> Deployment:
     """A :class:`Deployment` from itself or from the dict a ``deployment`` hook returns."""
     return value if isinstance(value, Deployment) else Deployment.from_doc(value, where)

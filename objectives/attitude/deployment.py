@@ -48,21 +48,13 @@ def deployed_values(obj: Any, params: Mapping[str, Any]) -> tuple[dict[str, Any]
 
 def filter_deployment(obj: Any, params: Mapping[str, Any]) -> dict[str, Any]:
     """The deployment document of ``params`` (see :class:`tuner.deployment.Deployment`)."""
+    from tuner.deployment import param_annotations
     from tuner.rundir import plain
 
     cls = obj._cls
     values, start = deployed_values(obj, params)
     sources = {k: ("searched" if k in params else "fixed" if k in obj.fixed else "default") for k in values}
-    units: dict[str, str] = {}
-    docs: dict[str, str] = {}
-    choices: dict[str, list] = {}
-    for p in (cls.decl or ()):
-        if p.unit:
-            units[p.name] = p.unit
-        if p.doc:
-            docs[p.name] = p.doc
-        if p.choices and all(isinstance(c, str) for c in p.choices):
-            choices[p.name] = list(p.choices)
+    units, docs, choices = param_annotations(cls.decl)
     if "init" in choices:  # what a deployed filter can do without ground truth
         choices["init"] = [c for c in choices["init"] if c not in ("truth", "auto")]
     desc = obj.describe()

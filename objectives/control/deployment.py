@@ -21,19 +21,13 @@ _SCORING = ("plant_params", "sensors", "profile", "cost", "noise_seed", "duratio
 
 def controller_deployment(obj: Any, params: Mapping[str, Any]) -> dict[str, Any]:
     """The deployment document of ``params`` (see :class:`tuner.deployment.Deployment`)."""
+    from tuner.deployment import param_annotations
     from tuner.rundir import plain
 
     cls = obj._cls
     values = cls.resolve({**obj.fixed, **params})
     sources = {k: ("searched" if k in params else "fixed" if k in obj.fixed else "default") for k in values}
-    units, docs, choices = {}, {}, {}
-    for p in (cls.decl or ()):
-        if p.unit:
-            units[p.name] = p.unit
-        if p.doc:
-            docs[p.name] = p.doc
-        if p.choices and all(isinstance(c, str) for c in p.choices):
-            choices[p.name] = list(p.choices)
+    units, docs, choices = param_annotations(cls.decl)
     scoring = {k: getattr(obj, k) for k in _SCORING if getattr(obj, k) is not None}
     notes = [f"the controller runs every Ts_s = {obj._sensors.Ts_s:g} s"]
     return plain({"kind": "closed_loop", "name": obj.controller, "values": values, "sources": sources,
