@@ -163,14 +163,8 @@ class TimedObjective:
 
     def call_with_timeout(self, params: Any, call: Any = None) -> tuple[Evaluation, bool]:
         """Evaluate ``(call or self.objective)(params)`` in a forked child killed after ``timeout_s``."""
-        import multiprocessing as mp
-
         self.prepare()
-        ctx = mp.get_context("fork")
-        recv, send = ctx.Pipe(duplex=False)
-        child = ctx.Process(target=_child, args=(call or self.objective, params, send), daemon=True)
-        child.start()
-        send.close()
+        child, recv = fork_child(_child, call or self.objective, params)
         try:
             if recv.poll(self.timeout_s):
                 try:
@@ -188,6 +182,19 @@ class TimedObjective:
         if ev is None:
             ev = Evaluation.failed(f"the evaluation process died (exit code {child.exitcode})")
         return ev, raised
+
+
+def fork_child(target: Any, *args: Any) -> tuple[Any, Any]:
+    """Start ``target(*args, send)`` in a forked daemon process: ``(process, recv)``, ``recv`` the read
+    end of a one-way pipe whose write end ``send`` only the child holds (EOF when it dies)."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=target, args=(*args, send), daemon=True)
+    child.start()
+    send.close()
+    return child, recv
 
 
 def _child(objective: Any, params: dict[str, Any], send: Any) -> None:
@@ -224,13 +231,7 @@ def _batch_child(fn: Any, args: tuple, send: Any) -> None:
 
 def _in_child(fn: Any, args: tuple, timeout_s: float) -> tuple[bool, Any]:
     """``fn(*args)`` in a forked child killed after ``timeout_s``: ``(True, value)`` or ``(False, why)``."""
-    import multiprocessing as mp
-
-    ctx = mp.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_batch_child, args=(fn, args, send), daemon=True)
-    child.start()
-    send.close()
+    child, recv = fork_child(_batch_child, fn, args)
     try:
         if not recv.poll(timeout_s):
             return False, f"no result after {timeout_s:g} s"

@@ -195,14 +195,11 @@ def _child_eval(objective: Any, point: dict[str, Any], send: Any) -> None:
 def _evaluate_in_child(cfg: RunConfig, objective: Any, point: dict[str, Any]) -> Any:
     """The default point evaluated in a forked child, so that an objective that calls ``os._exit`` or
     crashes the interpreter there is one :class:`ConfigError` naming the exit status or signal."""
-    import multiprocessing as mp
     import signal as _signal
 
-    ctx = mp.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
-    child = ctx.Process(target=_child_eval, args=(objective, point, send), daemon=True)
-    child.start()
-    send.close()
+    from tuner.evaluate import fork_child
+
+    child, recv = fork_child(_child_eval, objective, point)
     try:
         try:
             rec = recv.recv()
