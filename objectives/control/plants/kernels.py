@@ -111,6 +111,32 @@ def _measure(v, noise_row, q, out):
         out[i] = q * math.floor(w / q + 0.5) if q > 0.0 else w
 
 
+@njit(cache=True, inline="always")
+def _controller_period(k, fb, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out):
+    """Steps 1-3 of period ``k`` (module docstring) from the feedback ``fb`` (state or output): ``u``
+    and ``u_out[k]`` (without the load) are set, ``u_applied`` is the input of the delay line's end."""
+    kind, delay = int(opt[0]), int(opt[1])
+    _measure(fb, sig[k, 2:], opt[8], meas)
+    _control(kind, cp, cs, sig[k, 0], meas, int(opt[2]), int(opt[3]), u)
+    _actuate(u, u_prev, opt, sig[k, 1])
+    u_out[k] = u
+    u_out[k, 0] -= sig[k, 1]
+    line[k % (delay + 1)] = u
+    u_applied[:] = line[(k + 1) % (delay + 1)] if delay > 0 else u
+    if delay > 0 and k < delay:
+        u_applied[:] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _diverged(xn, div):
+    """Whether any state is not below ``div`` in magnitude (NaN included)."""
+    bad = False
+    for i in range(xn.size):
+        if not (abs(xn[i]) < div):
+            bad = True
+    return bad
+
+
 @njit(cache=True)
 def _loop_lti(ad, bd, cd, dd, x0, sig, cp, opt, y_out, u_out, x_out):
     """The closed loop with a discrete LTI plant; ``sig`` (N, 2 + n_meas): r, load, noise.
@@ -121,7 +147,7 @@ def _loop_lti(ad, bd, cd, dd, x0, sig, cp, opt, y_out, u_out, x_out):
     n_steps = sig.shape[0]
     n, m, p = ad.shape[0], bd.shape[1], cd.shape[0]
     kind, delay = int(opt[0]), int(opt[1])
-    out_idx, inner_idx, div = int(opt[2]), int(opt[3]), opt[9]
+    div = opt[9]
     x = x0.copy()
     xn = np.empty(n)
     y = np.empty(p)
@@ -142,15 +168,7 @@ def _loop_lti(ad, bd, cd, dd, x0, sig, cp, opt, y_out, u_out, x_out):
             y[i] = acc
         y_out[k] = y
         x_out[k] = x
-        _measure(x if kind == 3 else y, sig[k, 2:], opt[8], meas)
-        _control(kind, cp, cs, sig[k, 0], meas, out_idx, inner_idx, u)
-        _actuate(u, u_prev, opt, sig[k, 1])
-        u_out[k] = u
-        u_out[k, 0] -= sig[k, 1]
-        line[k % (delay + 1)] = u
-        u_applied[:] = line[(k + 1) % (delay + 1)] if delay > 0 else u
-        if delay > 0 and k < delay:
-            u_applied[:] = 0.0
+        _controller_period(k, x if kind == 3 else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
         for i in range(n):
             acc = 0.0
             for j in range(n):
@@ -158,11 +176,7 @@ def _loop_lti(ad, bd, cd, dd, x0, sig, cp, opt, y_out, u_out, x_out):
             for j in range(m):
                 acc += bd[i, j] * u_applied[j]
             xn[i] = acc
-        bad = False
-        for i in range(n):
-            if not (abs(xn[i]) < div):
-                bad = True
-        if bad:
+        if _diverged(xn, div):
             return STATUS_DIVERGED, k + 1
         x[:] = xn
     return STATUS_OK, n_steps
@@ -188,7 +202,7 @@ def _loop_nl(f, rk4, params, x0, sig, cp, opt, period, n_sub, y_idx, n_in, y_out
     n_steps = sig.shape[0]
     n, p = x0.size, y_idx.size
     kind, delay = int(opt[0]), int(opt[1])
-    out_idx, inner_idx, div = int(opt[2]), int(opt[3]), opt[9]
+    div = opt[9]
     x = x0.copy()
     y = np.empty(p)
     u = np.zeros(n_in)
@@ -203,23 +217,11 @@ def _loop_nl(f, rk4, params, x0, sig, cp, opt, period, n_sub, y_idx, n_in, y_out
             y[i] = x[y_idx[i]]
         y_out[k] = y
         x_out[k] = x
-        _measure(x if kind == 3 else y, sig[k, 2:], opt[8], meas)
-        _control(kind, cp, cs, sig[k, 0], meas, out_idx, inner_idx, u)
-        _actuate(u, u_prev, opt, sig[k, 1])
-        u_out[k] = u
-        u_out[k, 0] -= sig[k, 1]
-        line[k % (delay + 1)] = u
-        u_applied[:] = line[(k + 1) % (delay + 1)] if delay > 0 else u
-        if delay > 0 and k < delay:
-            u_applied[:] = 0.0
+        _controller_period(k, x if kind == 3 else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
         xn = rk4(f, x, u_applied.copy(), k * period, params, h, n_sub)
         if xn.size != n:
             return 3, k + 1
-        bad = False
-        for i in range(n):
-            if not (abs(xn[i]) < div):
-                bad = True
-        if bad:
+        if _diverged(xn, div):
             return STATUS_DIVERGED, k + 1
         x = xn
     return STATUS_OK, n_steps
