@@ -51,3 +51,10 @@ def append(out: str | Path, text: str) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     with out.open("a") as fh:
         fh.write(text)
+
+
+def publish(out: str | Path, lines: list[str]) -> None:
+    """Print the Markdown ``lines`` (one text, newline-terminated) and :func:`append` it to ``out``."""
+    text = "\n".join(lines) + "\n"
+    print(text)
+    append(out, text)

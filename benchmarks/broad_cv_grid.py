@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 try:
-    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, append, broad_folds, pairs
+    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, broad_folds, pairs, publish
 except ImportError:  # run as a script: benchmarks/ is on the path (broad_cv_common puts the checkout there)
-    from broad_cv_common import BROAD_DIR, RESULTS_MD, append, broad_folds, pairs
+    from broad_cv_common import BROAD_DIR, RESULTS_MD, broad_folds, pairs, publish
 
 from objectives.attitude.aggregate import aggregate, group_weights, prior_penalty  # noqa: E402
 from objectives.attitude.cv import filter_class, score_trials, search_space  # noqa: E402
@@ -127,9 +127,7 @@ def main(argv: list[str] | None = None) -> int:
         idx = [i for i, n in enumerate(names) if groups[n] == g]
         lines.append(f"| {g} ({len(idx)}) | {d_scores[idx].mean():.2f} | "
                      + " | ".join(f"{v[idx].mean():.2f}" for v in per_trial.values()) + " |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    append(a.out, text)
+    publish(a.out, lines)
     return 0
 
 

@@ -25,9 +25,9 @@ from fractions import Fraction
 import numpy as np
 
 try:
-    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, append, broad_folds, pairs
+    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, broad_folds, pairs, publish
 except ImportError:  # run as a script
-    from broad_cv_common import BROAD_DIR, RESULTS_MD, append, broad_folds, pairs
+    from broad_cv_common import BROAD_DIR, RESULTS_MD, broad_folds, pairs, publish
 
 from objectives.attitude.data.recording import Recording  # noqa: E402
 
@@ -134,9 +134,7 @@ def main(argv: list[str] | None = None) -> int:
             lo = score(flt, vals, [bench6dof(a.bench_duration, BROAD_RATE_HZ, s) for s in seeds]).mean()
             hi = score(flt, vals, [bench6dof(a.bench_duration, 1000.0, s) for s in seeds]).mean()
             lines.append(f"| {label} | {lo:.3f} | {hi:.3f} | {hi - lo:+.3f} |")
-    text = "\n".join(lines) + "\n"
-    print(text)
-    append(a.out, text)
+    publish(a.out, lines)
     return 0
 
 
