@@ -264,6 +264,17 @@ def _inv3(m, out):
     out[8] = (a * e - b * d) / det
 
 
+@njit(cache=True, inline="always")
+def _mul3(a, b, bo, out):
+    """``out = A B`` of row-major 3x3 matrices ``a[0:9]`` and ``b[bo:bo+9]`` (``out`` is neither)."""
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for m in range(3):
+                acc += a[3 * i + m] * b[bo + 3 * m + j]
+            out[3 * i + j] = acc
+
+
 @njit(cache=True)
 def _bias_update(s, c, r, e, w, t1, t2, t3):
     """Kalman update of the bias with measurement matrix ``r`` (9,), residual ``e`` (3,) and diagonal
@@ -285,27 +296,12 @@ def _bias_update(s, c, r, e, w, t1, t2, t3):
             t2[3 * i + j] = acc + (w[i] if i == j else 0.0)
     _inv3(t2, t3)
     # K = t1 t3 -> t2
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for m in range(3):
-                acc += t1[3 * i + m] * t3[3 * m + j]
-            t2[3 * i + j] = acc
+    _mul3(t1, t3, 0, t2)
     for i in range(3):
         s[S_BIAS + i] += t2[3 * i] * e[0] + t2[3 * i + 1] * e[1] + t2[3 * i + 2] * e[2]
     # t3 = K R ; P -= t3 P
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for m in range(3):
-                acc += t2[3 * i + m] * r[3 * m + j]
-            t3[3 * i + j] = acc
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for m in range(3):
-                acc += t3[3 * i + m] * s[p + 3 * m + j]
-            t1[3 * i + j] = acc
+    _mul3(t2, r, 0, t3)
+    _mul3(t3, s, p, t1)
     for k in range(9):
         s[p + k] -= t1[k]
 
