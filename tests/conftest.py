@@ -7,12 +7,16 @@
 - The ``broad_dir`` fixture is that directory; a test that takes it, or is marked ``broad``, is skipped
   with the reason when the data is absent (and gets the ``broad`` marker, so ``-m "not broad"`` leaves
   it out).
+- ``run_tuner`` runs the command line in a subprocess; ``one_error_line`` asserts that a run ended in
+  exactly one ``error:`` line with exit 2 and no traceback.
 - ``slow`` marks the tests that take seconds each (tunings, subprocess runs, whole BROAD trials);
   ``make test-fast`` runs ``-m "not slow"``, ``make test`` (CI) runs everything.
 """
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -29,6 +33,24 @@ def broad_dir() -> Path:
     if BROAD_DIR is None:
         pytest.skip(_NO_BROAD)
     return BROAD_DIR
+
+
+def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300) -> subprocess.CompletedProcess:
+    """``python -m tuner *args`` in a subprocess, output captured as text."""
+    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=timeout, env=env)
+
+
+def one_error_line(out: subprocess.CompletedProcess, *expected: str) -> str:
+    """Assert that ``out`` is exit 2 with one ``error:`` line on stderr containing each of ``expected``
+    and no traceback; returns that line."""
+    assert out.returncode == 2, (out.returncode, out.stderr)
+    assert "Traceback" not in out.stderr, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), out.stderr
+    for e in expected:
+        assert e in lines[0], (e, lines[0])
+    return lines[0]
 
 
 def pytest_collection_modifyitems(config, items):

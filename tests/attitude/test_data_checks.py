@@ -4,8 +4,6 @@ Each bad input is one warning or one ``error:`` line with exit 2 (``tests/tuner/
 """
 
 import shutil
-import subprocess
-import sys
 import warnings
 
 import numpy as np
@@ -26,23 +24,11 @@ from objectives.attitude.data.synthetic import simulate_imu
 from objectives.attitude.filters import filter_names, get_filter
 from objectives.attitude.objective import FilterObjective
 from tests.conftest import REPO as ROOT
+from tests.conftest import one_error_line
+from tests.conftest import run_tuner as tuner
 
 EXAMPLES = ROOT / "configs" / "examples"
 DT = 0.01
-
-
-def tuner(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=300)
-
-
-def one_error_line(out, *expected):
-    assert out.returncode == 2, (out.returncode, out.stderr)
-    assert "Traceback" not in out.stderr, out.stderr
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), lines
-    for e in expected:
-        assert e in lines[0], (e, lines[0])
 
 
 def _quat(t, rest_s=0.0):

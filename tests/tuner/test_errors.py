@@ -2,28 +2,20 @@
 
 import csv
 import errno
+import functools
 import subprocess
 import sys
 
 import pytest
 import yaml
 
+from tests.conftest import one_error_line, run_tuner
+
 BASE = {"name": "e", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
         "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
 
 
-def tuner(*args, cwd=None, env=None):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=180, env=env)
-
-
-def one_error_line(out, *expected):
-    assert out.returncode == 2, (out.returncode, out.stderr)
-    assert "Traceback" not in out.stderr, out.stderr
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), lines
-    for e in expected:
-        assert e in lines[0], (e, lines[0])
+tuner = functools.partial(run_tuner, timeout=180)
 
 
 @pytest.mark.parametrize("sets, expected", [

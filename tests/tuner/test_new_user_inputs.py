@@ -1,28 +1,13 @@
 """Bad inputs around the deployment, validation and CSV features, as a new user writes them: each is one
 ``error:`` line with exit 2 before any tuning (no run directory), and the notes of a deployment show."""
 
-import subprocess
-import sys
 
 import pytest
 import yaml
 
+from tests.conftest import one_error_line
+from tests.conftest import run_tuner as tuner
 from tests.tuner.test_preflight import COLUMNS, filter_job, no_run_dir, write_csv
-
-
-def tuner(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=300)
-
-
-def one_error_line(out, *expected):
-    assert out.returncode == 2, (out.returncode, out.stderr)
-    assert "Traceback" not in out.stderr, out.stderr
-    lines = out.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: "), out.stderr
-    for e in expected:
-        assert e in lines[0], (e, lines[0])
-    return lines[0]
 
 
 @pytest.mark.parametrize("over, expected", [

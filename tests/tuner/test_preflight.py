@@ -8,12 +8,9 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.conftest import run_tuner as tuner
+
 COLUMNS = {"time": "t", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "quat": ["qw", "qx", "qy", "qz"]}
-
-
-def tuner(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=300)
 
 
 def write_csv(path, n=300, rate_hz=100.0, gyr_scale=1.0, drop=None, nan_row=None):
