@@ -141,6 +141,22 @@ def test_every_filter_kind_has_non_default_options():
     assert sorted(NONDEFAULT) == sorted(FILTERS)
 
 
+def _check_controller_exports(run_dir, tmp_path, obj, name, fixed):
+    """:func:`_check_exports` of a closed-loop run: every export rebuilds the controller (its parameter
+    array equal to the one of best.yaml's params), and the deployment keeps the name and the fixed values."""
+
+    def rebuild(fmt, values):
+        built = obj.build(values)
+        np.testing.assert_array_equal(built.param_array(), obj.build(yaml.safe_load(
+            (run_dir / "best.yaml").read_text())["params"]).param_array(), err_msg=fmt)
+        assert built.values == dict(values)
+
+    dep = _check_exports(run_dir, tmp_path, rebuild)
+    assert dep.kind == "closed_loop" and dep.name == name and set(fixed) <= set(dep.names("fixed"))
+    assert {k: dep.values[k] for k in fixed} == fixed
+    return dep
+
+
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "qraukf" else n for n in FILTERS])
 def test_filter_deployment_round_trip(name, tmp_path):
     from objectives.attitude import metrics as M
@@ -250,15 +266,7 @@ def test_loop_controller_deployment_round_trip(name, tmp_path):
     run_dir = _tiny_run(tmp_path, objective)
     obj = ClosedLoopObjective.from_config(objective)
 
-    def rebuild(fmt, values):  # the discrete controller's coefficients from the exported values
-        built = obj.build(values)
-        np.testing.assert_array_equal(built.param_array(), obj.build(yaml.safe_load(
-            (run_dir / "best.yaml").read_text())["params"]).param_array(), err_msg=fmt)
-        assert built.values == dict(values)
-
-    dep = _check_exports(run_dir, tmp_path, rebuild)
-    assert dep.kind == "closed_loop" and dep.name == name and set(fixed) <= set(dep.names("fixed"))
-    assert {k: dep.values[k] for k in fixed} == fixed
+    dep = _check_controller_exports(run_dir, tmp_path, obj, name, fixed)
     assert dep.sample_rate_hz == pytest.approx(1.0 / LOOP_OBJECTIVE["period_s"])
     assert "plant" in dep.scoring and "scenario" in dep.scoring  # the simulation only served scoring
 
@@ -276,15 +284,7 @@ def test_controller_deployment_round_trip(name, tmp_path):
     run_dir = _tiny_run(tmp_path, objective)
     obj = ClosedLoopObjective.from_config(objective)
 
-    def rebuild(fmt, values):  # the kernel's parameter array (gains, LUTs...) from the exported values
-        built = obj.build(values)
-        np.testing.assert_array_equal(built.param_array(), obj.build(yaml.safe_load(
-            (run_dir / "best.yaml").read_text())["params"]).param_array(), err_msg=fmt)
-        assert built.values == dict(values)
-
-    dep = _check_exports(run_dir, tmp_path, rebuild)
-    assert dep.kind == "closed_loop" and dep.name == name and set(fixed) <= set(dep.names("fixed"))
-    assert {k: dep.values[k] for k in fixed} == fixed
+    dep = _check_controller_exports(run_dir, tmp_path, obj, name, fixed)
     assert dep.sample_rate_hz == pytest.approx(1.0 / obj._sensors.Ts_s)
     assert "profile" in dep.scoring and "cost" in dep.scoring  # the simulation only served scoring
 

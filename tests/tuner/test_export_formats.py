@@ -151,6 +151,14 @@ def ekf_run(tmp_path_factory):
     return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True).run_dir
 
 
+def _compile_and_run(tmp_path):
+    """Compile ``tmp_path/m.c`` (C99, warnings are errors) and assert that it runs with exit 0."""
+    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-o", "m", "m.c"], cwd=tmp_path, capture_output=True,
+                        text=True, timeout=120)
+    assert cc.returncode == 0, cc.stderr
+    assert subprocess.run([str(tmp_path / "m")], timeout=30).returncode == 0
+
+
 def _tuner(*args, **kw):
     return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, timeout=300, **kw)
 
@@ -191,10 +199,7 @@ def test_cli_export_c_with_prefix_states_rate_and_units(ekf_run, tmp_path):
     assert "static const double EKF1_ACC_GATE = INFINITY;" in text
     (tmp_path / "m.c").write_text('#include "a.h"\n#include "b.h"\nint main(void) { return EKF1_Q_Q == EKF_INF_Q_Q '
                                   "&& EKF1_ACC_GATE > 1e308 ? 0 : 1; }\n")
-    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-o", "m", "m.c"], cwd=tmp_path, capture_output=True,
-                        text=True, timeout=120)
-    assert cc.returncode == 0, cc.stderr
-    assert subprocess.run([str(tmp_path / "m")], timeout=30).returncode == 0
+    _compile_and_run(tmp_path)
     bad = _tuner("export", str(ekf_run), "--format", "c", "--prefix", "no-dash")
     assert bad.returncode == 2 and bad.stderr.startswith("error: --prefix")
 
@@ -231,7 +236,4 @@ def test_c_names_differing_only_in_case_get_distinct_constants(tmp_path):
     (tmp_path / "p.h").write_text(text)
     (tmp_path / "m.c").write_text('#include "p.h"\nint main(void) { return (P_K + P_K_2 + P_A_B + P_A_B_2) == 12.0 '
                                   "? 0 : 1; }\n")
-    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-o", "m", "m.c"], cwd=tmp_path, capture_output=True,
-                        text=True, timeout=120)
-    assert cc.returncode == 0, cc.stderr
-    assert subprocess.run([str(tmp_path / "m")], timeout=30).returncode == 0
+    _compile_and_run(tmp_path)

@@ -43,6 +43,11 @@ def _parse(page: str) -> _Tags:
 def _assert_inert(page: str) -> None:
     t = _parse(page)
     assert "script" not in t.tags
+    _assert_inert_attrs(t)
+
+
+def _assert_inert_attrs(t: _Tags) -> None:
+    """No event handler attribute, no script or data URL (but PNG images) in a link or source."""
     for tag, k, v in t.attrs:
         assert not k.startswith("on"), (tag, k, v)
         if k in ("href", "src"):
