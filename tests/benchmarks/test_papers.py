@@ -1,8 +1,13 @@
 """benchmarks.papers: the claims it measures at the paper's values, and the page it writes."""
 
+import re
+
 import pytest
 
 from benchmarks import papers
+from benchmarks.papers_common import DIRECTION, NOT_REPRODUCED, REPRODUCED, SENSITIVITY, UNTESTABLE
+
+VERDICTS = (REPRODUCED, DIRECTION, NOT_REPRODUCED, SENSITIVITY, UNTESTABLE)
 
 
 def test_qraukf_over_qukf_ratio_in_chiella_setting_is_near_the_papers_7x():
@@ -19,13 +24,29 @@ def test_f_at_table_27_initial_parameters_near_thesis():
     assert abs(f0 / 0.1049 - 1.0) < 0.10
 
 
-def test_page_has_one_row_per_claim(tmp_path):
-    rows = [papers.Row("c1", "1", "2", "ok", "cmd one"), papers.Row("c2", "3", "4", "no", "cmd two")]
+def _claims(text: str) -> list[str]:
+    """The claim cells of a page's table (the first column of the rows under "## Claims")."""
+    body = text.split("## Claims", 1)[1].split("\n## ", 1)[0]
+    return [line.split(" | ")[0][2:] for line in body.splitlines() if line.startswith("| ") and "---" not in line][1:]
+
+
+@pytest.mark.slow
+def test_smoke_run_writes_the_same_rows_as_docs_papers_md_with_its_provenance(tmp_path):
+    """docs/papers.md comes from one run of the generator: a smoke run (tiny budgets, two seeds) writes the
+    same claims in the same order, and the header names the wall time, the commit and the machine."""
     out = tmp_path / "papers.md"
-    papers.write(rows, out, 1.0, "notes\n")
-    text = out.read_text()
-    assert text.count("\n| c1 |") == 1 and text.count("\n| c2 |") == 1
-    assert "`cmd two`" in text and text.endswith("notes\n")
+    assert papers.main(["--smoke", "--out", str(out), "--runs", str(tmp_path / "runs")]) == 0
+    fresh = out.read_text()
+    committed = (papers.ROOT / "docs" / "papers.md").read_text()
+    assert _claims(fresh) == _claims(committed) and len(_claims(fresh)) > 50
+    for text in (fresh, committed):
+        head = text.split("## Verdict rules", 1)[0]
+        assert re.search(r"- wall time: \d+ s\n", head)
+        assert re.search(r"- commit: [0-9a-f]{40}(\+dirty)?\n", head)
+        assert re.search(r"- machine: .*\d+ logical CPUs", head)
+        rows = [line for line in text.splitlines() if line.startswith("| ") and "**" in line]
+        assert rows and all(any(f"**{v}**" in line for v in VERDICTS) for line in rows)
+    assert "budget `reduced`" in committed or "budget `full`" in committed
 
 
 def test_akf_fuzzy_config_searches_sets_and_singletons():
