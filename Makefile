@@ -39,7 +39,8 @@ clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache
 
 # The seeds' headline claims from configs/papers/ at reduced budgets, five seeds each; writes docs/papers.md
-# whole (~5 min on an idle 2-core machine). papers-full: the papers' own budgets (hours).
+# whole (budgets sized for under 15 min on 2 idle cores; the page gives the measured wall time).
+# papers-full: the papers' own budgets (hours).
 papers: setup
 	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m benchmarks.papers
 

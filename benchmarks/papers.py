@@ -6,7 +6,7 @@ over at least five seeds (median and range), the per-seed direction check and th
 page. The header names the wall time, the commit (``+dirty`` when the tree had changes) and the
 machine of that run. Nothing on the page is edited by hand.
 
-    python -m benchmarks.papers            # reduced budgets (make papers; ~5 min on an idle 2-core machine)
+    python -m benchmarks.papers            # reduced budgets (make papers; sized for under 15 min on 2 idle cores)
     python -m benchmarks.papers --full     # the papers' budgets (make papers-full; hours)
     python -m benchmarks.papers --smoke    # tiny budgets and two seeds, same rows (the tests)
 """
