@@ -203,10 +203,7 @@ def _cmd_show(a) -> int:
     print(f"status:     {s['status']} ({s['stop_reason']})")
     print(f"optimizer:  {s['optimizer']}  seed {s['seed']}")
     print(f"evals:      {s['n_evals']} ({s['n_failed']} failed), {s['wall_s'] or 0:.1f} s")
-    fit = s["best_fitness"]
-    print(f"best:       {fit:.6g}" if fit is not None else "best:       -")
-    for k, v in s["params"].items():
-        print(f"  {k:24s} {v:.6g}" if isinstance(v, float) else f"  {k:24s} {v}")
+    _show_scores(path, s["best_fitness"], s["evaluation"], s["params"])
     if s["evaluation"].get("summary_table"):
         print()
         print(s["evaluation"]["summary_table"])
@@ -215,17 +212,46 @@ def _cmd_show(a) -> int:
     return 0
 
 
+def _show_scores(path: Path, fit: float | None, evaluation: dict, params: dict) -> None:
+    """What was tuned; best, test and CV scores with the gap, each with the defaults'; searched and fixed values."""
+    from tuner.runinfo import fmt, scores, tuned_system
+
+    t = tuned_system(path)
+    print(f"tuned:      {t['kind']} {t['name']}".rstrip())
+    sc = scores(evaluation)
+    dflt = sc.get("defaults_fitness")
+    print(("best:       " + fmt(float(fit)) if fit is not None else "best:       -")
+          + (f" (defaults {fmt(dflt)})" if dflt is not None else ""))
+    if "test_fitness" in sc:
+        d = sc.get("defaults_test_fitness")
+        print(f"test:       {fmt(sc['test_fitness'])}" + (f" (defaults {fmt(d)})" if d is not None else ""))
+    if "cv_fitness" in sc:
+        d, gap = sc.get("defaults_cv_fitness"), sc.get("cv_gap")
+        print(f"cv:         {fmt(sc['cv_fitness'])}" + (f" (defaults {fmt(d)})" if d is not None else "")
+              + (f"; tuning score {fmt(sc['tuning_score'])}" if "tuning_score" in sc else "")
+              + (f", gap {gap:+.3g}" + (" LARGE" if sc.get("cv_gap_large") else "") if gap is not None else ""))
+    searched = [k for k in params if k in t["searched"]] or [k for k in params if k not in t["fixed"]]
+    for title, items in (("searched:", [(k, params[k]) for k in searched]), ("fixed:", list(t["fixed"].items()))):
+        if items:
+            print(title)
+        for k, v in items:
+            print(f"  {k:24s} {fmt(v)}")
+
+
 def _cmd_compare(a) -> int:
     import pandas as pd
 
     from tuner.report import run_summary
+    from tuner.runinfo import scores, tuned_system
 
     cols = {}
     for d in a.run_dirs:
         s = run_summary(Path(d))  # RunError naming the file if meta.json/best.yaml is missing or corrupt
-        col = {"status": s["status"], "optimizer": s["optimizer"], "seed": s["seed"], "n_evals": s["n_evals"],
-               "best_fitness": s["best_fitness"]}
-        col.update({f"param.{k}": v for k, v in s["params"].items()})
+        t = tuned_system(Path(d))
+        col = {"tuned": f"{t['kind']} {t['name']}".strip(), "status": s["status"], "optimizer": s["optimizer"],
+               "seed": s["seed"], "n_evals": s["n_evals"], "best_fitness": s["best_fitness"], **scores(s["evaluation"])}
+        col.update({f"param.{k}": v for k, v in s["params"].items() if k not in t["fixed"]})
+        col.update({f"fixed.{k}": v for k, v in t["fixed"].items()})
         col.update({f"metric.{k}": v for k, v in s["metrics"].items() if not isinstance(v, (dict, list))})
         cols[s["run"]] = col
     from tuner.render import fmt_num
@@ -308,6 +334,8 @@ def _cmd_evaluate(a) -> int:
     from tuner.rescore import evaluate_target
 
     out = evaluate_target(a.target, params_file=a.params, data_file=a.data)
+    for w in out.get("warnings", []):
+        print(f"warning: {w}", file=sys.stderr)
     if a.json:
         print(json.dumps(out, indent=1, default=float))
     else:

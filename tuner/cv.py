@@ -42,7 +42,8 @@ from tuner.deployment import DEFAULTS_MEANING, defaults_baseline
 from tuner.loop import minimize
 from tuner.objective import hook
 
-__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score"]
+__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score",
+           "scored", "scores_on_test_data"]
 
 
 @dataclass
@@ -57,11 +58,14 @@ class FoldOutcome:
     default_fitness: float
     failed: str = ""
     selection: dict[str, Any] = field(default_factory=dict)
+    recordings: tuple[str, ...] = ()  # the held-out recordings (as the objective names them)
 
 
 @dataclass
 class CVOutcome:
-    """All folds plus the tuning on all data (``full``)."""
+    """All folds plus the tuning on all data (``full``) and, where the job has ``test:`` data (never in the
+    folds), ``test``: ``{n, recordings, tuned, defaults, failed}``, its own held-out score of the tuning on
+    all data (``full``) and of the defaults."""
 
     name: str
     folds: list[FoldOutcome]
@@ -69,6 +73,7 @@ class CVOutcome:
     seconds: float = 0.0
     searched: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    test: dict[str, Any] = field(default_factory=dict)
 
     def _col(self, key: str) -> np.ndarray:
         return np.array([getattr(f, key) for f in self.folds], float)
@@ -88,12 +93,32 @@ class CVOutcome:
 
 def plain_score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
     """Plain score (fitness, failure, number of recordings) of ``params`` on ``objective``'s data."""
+    fit, failed, names = scored(objective, params)
+    return fit, failed, max(len(names), 1)
+
+
+def scored(objective: Any, params: dict[str, Any], which: str = "train") -> tuple[float, str, tuple[str, ...]]:
+    """Plain score (fitness, failure, recording names) of ``params`` on ``objective``'s ``which`` data
+    (``train`` or ``test``); no names for an objective without a ``score`` hook."""
     score = hook(objective, "score")
     if score is None:
         ev = objective(params)
-        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), 1
-    s = score(params, "train")
-    return float(s.fitness), s.failed, max(len(s.recordings), 1)
+        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), ()
+    s = score(params, which)
+    return float(s.fitness), s.failed, tuple(str(n) for n in s.recordings)
+
+
+def scores_on_test_data(objective: Any, params: dict[str, Any] | None,
+                        defaults: dict[str, Any] | None) -> dict[str, Any]:
+    """``{n, recordings, tuned, defaults, failed}`` on the objective's ``test:`` data; empty without any."""
+    has = hook(objective, "has_test_data")
+    if has is None or not has() or hook(objective, "score") is None:
+        return {}
+    tuned, failed, names = scored(objective, params, "test") if params else (math.nan, "no parameters", ())
+    dflt = scored(objective, defaults, "test")[0] if defaults is not None else math.nan
+    if not names and defaults is not None:
+        names = scored(objective, defaults, "test")[2]
+    return {"n": len(names), "recordings": list(names), "tuned": tuned, "defaults": dflt, "failed": failed}
 
 
 def scaled_budget(cfg: RunConfig, fraction: float) -> RunConfig:
@@ -188,9 +213,11 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
             params, train_fit, sel = _procedure(cfg, train, evaluate)
         finally:
             evaluate.close()
-        cv_fit, failed, n_test = plain_score(test, params) if params else (math.inf, "no successful evaluation", 1)
-        de_fit, _, n_test = plain_score(test, defaults) if defaults is not None else (math.nan, "", n_test)
-        out.folds.append(FoldOutcome(str(name), n_test, params, train_fit, cv_fit, de_fit, failed, sel))
+        cv_fit, failed, held = scored(test, params) if params else (math.inf, "no successful evaluation", ())
+        de_fit, _, held_d = scored(test, defaults) if defaults is not None else (math.nan, "", ())
+        held = held or held_d
+        out.folds.append(FoldOutcome(str(name), max(len(held), 1), params, train_fit, cv_fit, de_fit, failed, sel,
+                                     held))
         say(f"fold {i + 1}/{len(folds)} {name}: tuned {train_fit:.4g}, held out {cv_fit:.4g}, defaults {de_fit:.4g}"
             + (f"; chosen on inner fold {sel['holdout']}: {sel['chosen']}" if sel else ""))
     if full or full_params is not None:
@@ -209,10 +236,14 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
             if params else []
         plain = sum(s[0] * n for s, n in sc) / sum(n for _, n in sc) if sc else math.nan
         out.full = FoldOutcome("all", sum(f.n_test for f in out.folds), params, train_fit, plain, math.nan,
-                               selection=sel)
+                               selection=sel, recordings=tuple(r for f in out.folds for r in f.recordings))
         say(("all data: the run's best" if full_params is not None else f"all data: tuned {train_fit:.4g}")
             + f", scored as the folds {plain:.4g}" + (f"; chosen on fold {sel['holdout']}: {sel['chosen']}"
                                                       if sel else ""))
+        out.test = scores_on_test_data(objective, params, defaults)
+        if out.test:
+            say(f"test recordings (never in the folds): tuned {out.test['tuned']:.4g}, defaults "
+                f"{out.test['defaults']:.4g}")
     out.seconds = time.time() - t0
     return out
 
@@ -243,11 +274,15 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", "chosen",
-                "inner_holdout", *names])
+                "inner_holdout", "recordings", *names])
     for f in rows:
         w.writerow([f.name, f.n_test, f.train_fitness, f.cv_fitness, f.default_fitness, f.failed,
-                    f.selection.get("chosen", ""), f.selection.get("holdout", ""),
+                    f.selection.get("chosen", ""), f.selection.get("holdout", ""), ";".join(f.recordings),
                     *[f.params.get(n, "") for n in names]])
+    t = out.test
+    if t:  # the job's test: recordings, never in a fold: the tuning on all data and the defaults scored on them
+        w.writerow(["test", t["n"], "", t["tuned"], t["defaults"], t["failed"], "", "", ";".join(t["recordings"]),
+                    *[out.full.params.get(n, "") if out.full else "" for n in names]])
     s = out.summary()
     with_sel = any(f.selection for f in rows)
     sel_head, sel_cols = ("chosen (inner held-out fold) | ", 1) if with_sel else ("", 0)
@@ -275,6 +310,16 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
         lines.append(f"| *all (tuning)* | {out.full.n_test} | {_fmt(out.full.train_fitness)} | "
                      f"{_fmt(out.full.cv_fitness)} (on all, not held out) | | {chosen(out.full)}"
                      + " | ".join(_fmt(out.full.params.get(n, "")) for n in names) + " |")
+    if out.test:
+        t = out.test
+        lines.append(f"| *test (never in a fold)* | {t['n']} | | {_fmt(t['tuned'])} (tuned on all)"
+                     f"{' (failed)' if t['failed'] else ''} | {_fmt(t['defaults'])} | {'| ' if with_sel else ''}"
+                     + " | ".join("" for _ in names) + " |")
+    lines += ["", "Recordings held out by each fold (the job's tuning recordings only; `test:` recordings are "
+                  "never pooled into the folds):", ""]
+    lines += [f"- {f.name}: {', '.join(f.recordings) or '-'}" for f in out.folds]
+    if out.test:
+        lines.append(f"- test: {', '.join(out.test['recordings']) or '-'}")
     lines += ["", "| | tuned (CV) | defaults |", "|---|---|---|",
               f"| mean over held-out recordings | {s['cv_mean']:.4g} | {s['defaults_mean']:.4g} |",
               f"| mean over folds (std) | {s['cv_fold_mean']:.4g} ({s['cv_fold_std']:.3g}) | "

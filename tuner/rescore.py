@@ -22,8 +22,8 @@ __all__ = ["evaluate_target"]
 def evaluate_target(target: str | Path, params_file: str | Path | None = None,
                     data_file: str | Path | None = None) -> dict[str, Any]:
     """``{"fitness": float, "recordings": {name: {metric: value}}, "params": {...}, "deployment": {...}}``
-    (plus test scores); ``deployment`` is the complete configuration the scored parameters deploy
-    (:mod:`tuner.deployment`)."""
+    (plus test scores, and ``warnings`` of the ``--data`` recordings' preflight); ``deployment`` is the
+    complete configuration the scored parameters deploy (:mod:`tuner.deployment`)."""
     target = Path(target)
     best_params = None
     if target.is_dir():
@@ -63,6 +63,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     missing = [n for n in space.free_names if n not in full]
     if missing:
         raise ConfigError(params_file or target, "params", f"missing value(s) for {missing}")
+    warnings: list[str] = []  # the new data's preflight warnings (units, a start in motion)
     if data_file:
         doc = read_yaml(data_file, "--data")
         data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
@@ -73,7 +74,7 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
             objective = with_data(data)
             preflight = hook(objective, "preflight")
             if preflight is not None:  # load the new data now: a bad file is an error line, not a traceback
-                preflight()
+                warnings = list(preflight() or [])
         except ValueError as exc:
             raise ConfigError(data_file, "data", str(exc)) from None
     from tuner.deployment import deployment_for
@@ -82,7 +83,8 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     score = hook(objective, "score")
     if score is not None:
         s = score(full, "train")
-        out = {"fitness": s.fitness, "recordings": _plain(s.recordings), "params": full, "deployment": deployment}
+        out = {"fitness": s.fitness, "recordings": _plain(s.recordings), "params": full, "deployment": deployment,
+               **({"warnings": warnings} if warnings else {})}
         if s.failed:
             out["failed"] = s.failed
         has_test = hook(objective, "has_test_data")
@@ -96,7 +98,8 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
     rec = evaluate_one(objective, full)
     ev = rec.evaluation
     return {"fitness": ev.fitness if ev.status == "ok" else math.nan, "recordings": {"all": dict(ev.metrics)},
-            "params": full, "deployment": deployment, **({"failed": ev.error} if ev.status != "ok" else {})}
+            "params": full, "deployment": deployment, **({"failed": ev.error} if ev.status != "ok" else {}),
+            **({"warnings": warnings} if warnings else {})}
 
 
 def _plain(recordings: Any) -> dict[str, dict[str, Any]]:

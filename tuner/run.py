@@ -50,6 +50,7 @@ from tuner.rundir import (
     plain,
 )
 from tuner.space import Space
+from tuner.validation import validate_run
 
 __all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "RunError"]
 
@@ -349,10 +350,9 @@ class Run:
 
             self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
         extra = self._finalize() if self.best is not None else {}
-        if self.best is not None and self.cfg.validation.active:  # CV into the run directory (tuner.validation)
-            from tuner.validation import validate_run
-
-            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress)
+        if self.best is not None:  # the defaults' scores, CV into the run directory (tuner.validation)
+            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
+                                     self.base_space)
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None:

@@ -36,7 +36,8 @@ import yaml
 from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
 from tuner.rundir import RunDir
 
-__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file"]
+__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file", "ranked_by",
+           "RANKED_BY", "DEFAULTS_OF"]
 
 _SWEEP_KEYS = ("name", "description", "base", "variants", "grid", "seeds", "jobs", "output")
 
@@ -240,6 +241,9 @@ def collect(sweep_dir: Path) -> Any:
                 row["cv_fitness"] = ev["cv_fitness"]
                 row["cv_gap"] = ev.get("cv_gap")
                 row["cv_gap_large"] = "LARGE" if ev.get("cv_gap_large") else ""
+            for key in DEFAULTS_OF.values():  # the defaults scored as each ranked score (tuner.validation)
+                if ev.get(key) is not None:
+                    row[key] = ev[key]
             for split in ("train", "test"):
                 recs = ev.get(split) or {}
                 if recs:
@@ -265,14 +269,39 @@ def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
     return load_sweep(src)
 
 
+#: the scores a sweep ranks by, in order of preference: (column, what it is)
+RANKED_BY = (("cv_fitness", "CV score (validation ran in every job)"),
+             ("test_fitness", "test score (held-out recordings of every job)"),
+             ("best_fitness", "train score (the tuning fitness; no validation or test data in every job)"))
+#: ranked column -> the column of the defaults scored the same way
+DEFAULTS_OF = {"cv_fitness": "defaults_cv_fitness", "test_fitness": "defaults_test_fitness",
+               "best_fitness": "defaults_fitness"}
+
+
+def ranked_by(df: Any) -> tuple[str, str]:
+    """``(column, description)`` of the score a sweep ranks by: CV when every finished job has a CV score,
+    else test when every one has a test score, else the train (tuning) score."""
+    done = df[df["status"] == "finished"] if "status" in df else df
+    for col, what in RANKED_BY:
+        if col in done and len(done) and done[col].notna().all():
+            return col, what
+    return RANKED_BY[-1]
+
+
 def summarize(df: Any) -> Any:
-    """Mean, median, std, min over seeds for each method and numeric metric; ranked by median fitness."""
+    """Mean, median, std, min over seeds for each method and numeric metric, plus each method's defaults
+    row (its defaults scored as the ranked score); ranked by the median of :func:`ranked_by`'s score.
+
+    Columns ``("kind", "")`` (``tuned`` or ``defaults``) and ``("ranked_by", "")`` say what each row is and
+    which score ranks; a defaults row is named ``<method> (defaults)`` and fills the ranked score only.
+    """
     import pandas as pd
 
     if df.empty or "best_fitness" not in df:
         return pd.DataFrame()
-    metrics = [c for c in ("best_fitness", "train_fitness", "test_fitness") if c in df] + \
-              sorted(c for c in df.columns if c.startswith(("train.", "test.")))
+    key_col, what = ranked_by(df)
+    metrics = [c for c in ("cv_fitness", "best_fitness", "train_fitness", "test_fitness") if c in df] + \
+        sorted(c for c in df.columns if c.startswith(("train.", "test.")))
     g = df[df["status"] == "finished"].groupby("method")
     parts = {}
     for m in metrics:
@@ -281,9 +310,19 @@ def summarize(df: Any) -> Any:
             parts[(m, stat)] = agg[stat]
     out = pd.DataFrame(parts)
     out.insert(0, ("runs", "n"), g.size())
-    key = ("test_fitness", "median") if ("test_fitness", "median") in out else ("best_fitness", "median")
-    out = out.sort_values(key)
+    out.insert(0, ("kind", ""), "tuned")
+    dcol = DEFAULTS_OF[key_col]
+    if dcol in df:
+        d = g[dcol].agg(["mean", "median", "std", "min"]).dropna(how="all")
+        rows = pd.DataFrame({(key_col, stat): d[stat] for stat in d.columns})
+        rows.insert(0, ("runs", "n"), g.size().loc[d.index])
+        rows.insert(0, ("kind", ""), "defaults")
+        rows.index = [f"{m} (defaults)" for m in d.index]
+        out = pd.concat([out, rows])
+    out = out.sort_values([(key_col, "median"), ("kind", "")], ascending=[True, False], na_position="last")
+    out.insert(0, ("ranked_by", ""), key_col)
     out.insert(0, ("rank", ""), range(1, len(out) + 1))
+    out.attrs["ranked_by"] = (key_col, what)
     return out
 
 
@@ -320,19 +359,25 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
             if not versions:
                 versions = {**meta.versions, "git_commit": meta.git_commit}
     command = (sweep_dir / "command.txt").read_text().strip() if (sweep_dir / "command.txt").exists() else ""
-    fit_cols = ("train_fitness", "test_fitness") if "train_fitness.median" in flat.columns else ("best_fitness",)
-    show_cols = [c for c in ["rank", "runs"] if c in flat.columns] + \
+    key_col, what = summ.attrs.get("ranked_by", ranked_by(df)) if len(df) else RANKED_BY[-1]
+    fit_cols = tuple(dict.fromkeys((key_col, *(("train_fitness", "test_fitness") if "train_fitness.median"
+                                                in flat.columns else ("best_fitness",)))))
+    show_cols = [c for c in ["rank", "kind", "runs"] if c in flat.columns] + \
         [c for c in flat.columns if c.endswith((".median", ".mean", ".std")) and c.split(".")[0] in fit_cols]
     ranking = flat[show_cols].reset_index().rename(columns={"index": "method"}) if len(flat) else flat
     if len(ranking):
         ranking = ranking[["rank", "method"] + [c for c in ranking.columns if c not in ("rank", "method")]]
     main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
-                             "cv_fitness", "cv_gap", "cv_gap_large", "n_evals", "wall_s"] if c in df.columns]
+                             "cv_fitness", "cv_gap", "cv_gap_large", DEFAULTS_OF[key_col], "n_evals", "wall_s"]
+                 if c in df.columns]
     running = live and not (len(df) and (df["status"] == "finished").all())
     md = [f"# Sweep {md_escape(sw['name'])}", "", md_escape(sw.get("description") or ""), "",
           f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
           f"Written {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}.", "",
-          "## Ranking (over seeds)", "", _md(ranking), "",
+          "## Ranking (over seeds)", "",
+          f"Ranked by the median {what} (`{key_col}`). Each method's defaults row holds its defaults (the "
+          "config's fixed values with the searched parameters at the objective's defaults) scored the same "
+          "way.", "", _md(ranking), "",
           "## Every job", "", _md(df[main_cols]), "",
           *sweep_warnings_md(jobs_dir, [j["id"] for j in sw["jobs"]]),
           "Full tables: [results.csv](results.csv) (one row per job, all metrics and parameters), "
@@ -372,9 +417,20 @@ def show_sweep(sweep_dir: Path, as_json: bool = False) -> str:
     df = collect(Path(sweep_dir))
     if as_json:
         return df.to_json(orient="records", indent=1)
-    cols = [c for c in ["job", "status", "best_fitness", "train_fitness", "test_fitness", "n_evals", "wall_s"]
-            if c in df.columns]
-    return df[cols].to_string(index=False)
+    cols = [c for c in ["job", "status", "best_fitness", "train_fitness", "test_fitness", "cv_fitness", "cv_gap",
+                        "n_evals", "wall_s"] if c in df.columns]
+    return "\n".join([df[cols].to_string(index=False), *ranking_lines(df)])
+
+
+def ranking_lines(df: Any) -> list[str]:
+    """The sweep's ranking for the terminal: which score ranks, then one line per method and defaults row."""
+    summ = summarize(df)
+    if not len(summ):
+        return []
+    key_col, what = summ.attrs["ranked_by"]
+    return [f"ranking by the median {what}, with each method's defaults scored the same way:",
+            *(f"  {int(r[('rank', '')])}. {name}: {key_col} {r[(key_col, 'median')]:.4g}"
+              for name, r in summ.iterrows())]
 
 
 def list_runs(runs_dir: Path) -> str:
@@ -403,7 +459,7 @@ def summary_text(df: Any, sweep_dir: Path) -> str:
     """The terminal table of a sweep: one row per job with train/test fitness and per-axis RMSE."""
     if df is None or len(df) == 0:
         return "(no jobs)"
-    cols = [c for c in ["method", "seed", "status", "train_fitness", "test_fitness"] if c in df.columns]
+    cols = [c for c in ["method", "seed", "status", "train_fitness", "test_fitness", "cv_fitness"] if c in df.columns]
     split = "test" if any(c.startswith("test.") for c in df.columns) else "train"
     for ax in ("roll", "pitch", "yaw"):
         c = f"{split}.{ax}_rmse_deg"
@@ -413,7 +469,7 @@ def summary_text(df: Any, sweep_dir: Path) -> str:
         cols.insert(3, "best_fitness")
     out = df[cols].copy()
     out.columns = [c.replace(f"{split}.", f"{split} ").replace("_rmse_deg", " RMSE (deg)") for c in cols]
-    lines = [out.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
+    lines = [out.to_string(index=False, float_format=lambda v: f"{v:.4g}"), *ranking_lines(df)]
     for _, r in df.iterrows():
         lines.append(f"  {r['job']}: {Path(sweep_dir) / 'jobs' / r['job']}")
     return "\n".join(lines)

@@ -11,7 +11,13 @@ job (:class:`tuner.config.ValidationConfig`) measure and act on that, both throu
     *large* above ``gap_warn_rel`` times the tuning score or above ``gap_warn_abs`` (fitness units).
     ``cv.md``, ``cv.csv`` and ``validation.json`` go into the run directory (:mod:`tuner.rundir`), the
     numbers into ``best.yaml``'s ``evaluation`` (``tuning_score``, ``cv_fitness``, ``cv_gap``,
-    ``cv_gap_large``), which the run report and sweep reports show. ``tuner cv RUN_DIR`` does the
+    ``cv_gap_large``, ``defaults_cv_fitness``), which the run report and sweep reports show. Folds hold the
+    tuning recordings only; ``test:`` recordings keep their own score (``test_score``,
+    ``defaults_test_score`` in ``validation.json``).
+
+Every finished run also records its defaults (:func:`tuner.deployment.defaults_baseline`) scored as its best is
+(:func:`defaults_scores`: ``defaults_fitness``, ``defaults_train_fitness``, ``defaults_test_fitness``),
+which sweeps show as each method's defaults row. ``tuner cv RUN_DIR`` does the
     same for a finished run.
 
 ``validation: {select: {top_k: 5, holdout: NAME | fraction}}``
@@ -47,7 +53,7 @@ from tuner.objective import as_evaluation, hook
 from tuner.rundir import FIXED_COLUMNS, RESULT_COLUMNS, Best, RunDir, RunError, parse_cell, plain
 
 __all__ = ["selection_split", "tuning_objective", "select_best", "validate_run", "cv_run_dir", "inner_split",
-           "defaults_candidate", "tune_and_select", "FALLBACK_FRACTION"]
+           "defaults_candidate", "tune_and_select", "defaults_scores", "FALLBACK_FRACTION"]
 
 #: held-out fraction inside a CV fold whose tuning recordings lack the named ``holdout`` fold
 FALLBACK_FRACTION = 0.25
@@ -307,7 +313,11 @@ def _cv(cfg: RunConfig, rd: RunDir, params: dict[str, Any], progress: Callable[[
            "gap_large": v.gap_is_large(s.get("gap", math.nan), s.get("tuning_score", math.nan)),
            "gap_rule": v.gap_rule(), "defaults_cv_score": s["defaults_mean"], "cv_fold_std": s["cv_fold_std"],
            "cv_fold_worst": s["cv_fold_worst"], "seconds": round(time.time() - t0, 1),
-           "per_fold": {f.name: f.cv_fitness for f in out.folds}}
+           "per_fold": {f.name: f.cv_fitness for f in out.folds},
+           "per_fold_recordings": {f.name: list(f.recordings) for f in out.folds}}
+    if out.test:  # the job's test: recordings, never in a fold, keep their own held-out score
+        doc.update(test_score=out.test["tuned"], defaults_test_score=out.test["defaults"],
+                   test_recordings=out.test["recordings"])
     if any(f.selection for f in out.folds):  # which candidate each fold's inner selection chose
         doc["per_fold_selection"] = {f.name: f.selection for f in out.folds}
     return plain(doc)
@@ -325,7 +335,7 @@ def _record(rd: RunDir, best: Best, cv: dict[str, Any] | None, selection: dict[s
         doc["selection"] = selection
     if cv:
         ev.update(tuning_score=cv["tuning_score"], cv_fitness=cv["cv_score"], cv_gap=cv["gap"],
-                  cv_gap_large=cv["gap_large"])
+                  cv_gap_large=cv["gap_large"], defaults_cv_fitness=cv["defaults_cv_score"])
         doc["cv"] = cv
     best = dataclasses.replace(best, evaluation=plain(ev))
     rd.write_best(best)
@@ -334,9 +344,45 @@ def _record(rd: RunDir, best: Best, cv: dict[str, Any] | None, selection: dict[s
     return best
 
 
+def defaults_scores(cfg: RunConfig, objective: Any, space: Any = None) -> dict[str, Any]:
+    """The defaults (:func:`tuner.deployment.defaults_baseline`) scored as a run's best is: ``defaults_fitness`` (the
+    tuning fitness, as ``best_fitness``), ``defaults_train_fitness`` and ``defaults_test_fitness`` (the
+    objective's plain ``score`` on its train and test data, as ``train_fitness``/``test_fitness``) where
+    the objective has them. A defaults evaluation that fails, raises or times out scores inf."""
+    from tuner.cv import scored
+    from tuner.deployment import defaults_baseline
+
+    try:
+        params = defaults_baseline(objective, space if space is not None else cfg.space(objective))
+    except ConfigError:  # no search space of its own to take the fixed values from: no defaults row
+        return {}
+    if params is None:
+        return {}
+    from tuner.evaluate import evaluate_one
+
+    ev = evaluate_one(objective, params).evaluation  # as the preflight scores the defaults (timeout, failures)
+    out: dict[str, Any] = {"defaults_fitness": float(ev.fitness) if ev.status == "ok" else math.inf}
+    if hook(objective, "score") is not None:
+        has_test = hook(objective, "has_test_data")
+        for which in ("train", "test") if has_test is not None and has_test() else ("train",):
+            try:
+                fit, failed, _ = scored(objective, params, which)
+            except Exception:  # noqa: BLE001 - as above
+                fit, failed = math.inf, "raised"
+            out[f"defaults_{which}_fitness"] = math.inf if failed or not math.isfinite(fit) else fit
+    return out
+
+
 def validate_run(cfg: RunConfig, rd: RunDir, best: Best, selection: dict[str, Any] | None,
-                 progress: Callable[[str], None] | None = None) -> Best:
-    """After a run (its objective's report step done): record the selection, run the CV if configured."""
+                 progress: Callable[[str], None] | None = None, objective: Any = None, space: Any = None) -> Best:
+    """After a run (its objective's report step done): the defaults' scores (with ``objective``, the run's
+    own, and its search ``space``), the selection, the CV if configured, all recorded in ``best.yaml``."""
+    if objective is not None:
+        dflt = defaults_scores(cfg, objective, space)
+        best = dataclasses.replace(best, evaluation=plain({**best.evaluation, **dflt}))
+        if not cfg.validation.active:
+            rd.write_best(best)
+            return best
     cv = None
     if cfg.validation.cv is not None:
         if progress:

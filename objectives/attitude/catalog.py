@@ -55,7 +55,7 @@ def _generator_keys(name: str) -> list[dict[str, Any]]:
 def data_sources() -> dict[str, dict[str, Any]]:
     """``{name: description}`` of every data source a data spec may name (broad, csv, synthetic:<gen>)."""
     from objectives.attitude.data.cache import GENERATORS
-    from objectives.attitude.data.csv import CSV_OPTIONS
+    from objectives.attitude.data.csv import csv_keys
 
     out: dict[str, dict[str, Any]] = {
         "broad": {"summary": "BROAD trials (.mat/.hdf5, Laidig et al. 2021, CC-BY-4.0)",
@@ -66,10 +66,7 @@ def data_sources() -> dict[str, dict[str, Any]]:
                            *({"name": k, "default": None, "doc": d} for k, d in _CUT.items())]},
         "csv": {"summary": "your own recording as CSV with a column map",
                 "spec": "{csv: {path, columns: {gyr: [..], acc: [..], mag: [..], quat: [..], time: t}, ...}}",
-                "keys": [{"name": "path", "default": None, "doc": "CSV file"},
-                         {"name": "columns", "default": None, "doc": "column map (mapping or YAML file)"},
-                         *({"name": k, "default": None, "doc": "unit/format option of load_csv"}
-                           for k in CSV_OPTIONS),
+                "keys": [*csv_keys(),
                          *({"name": k, "default": None, "doc": d} for k, d in _CUT.items())]},
     }
     for gen, fn in sorted(GENERATORS.items()):

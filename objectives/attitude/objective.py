@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude import deployment as _deployment
+from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.divergence import unbounded_growth
 from objectives.attitude.fused_errors import error_sums
@@ -125,28 +126,6 @@ def _check_specs(specs: list, base_dir: Path, where: str) -> None:
             d = d if d.is_absolute() else base_dir / d
             if not d.is_dir():
                 raise ValueError(f"{where}[{i}].broad.dir: directory not found: {d}")
-
-
-#: |gyr| above this (rad/s, ~2000 deg/s, the largest common MEMS range) at the 99th percentile means deg/s
-_GYR_MAX_RAD_S = 35.0
-#: median |acc| inside this band (m/s^2) means the data are in g, not m/s^2 (at rest |acc| is 9.81)
-_ACC_G_BAND = (0.5, 2.0)
-
-
-def unit_warnings(rec: Recording) -> list[str]:
-    """Warnings when a recording's gyr/acc magnitudes do not fit their declared units (rad/s, m/s^2)."""
-    out = []
-    gyr_unit = str(dict(rec.units).get("gyr", "rad/s"))
-    acc_unit = str(dict(rec.units).get("acc", "m/s^2"))
-    g99 = float(np.percentile(np.linalg.norm(rec.gyr, axis=1), 99))
-    if gyr_unit == "rad/s" and g99 > _GYR_MAX_RAD_S:
-        out.append(f"{rec.name}: gyr is declared rad/s but its 99th-percentile magnitude is {g99:.4g} "
-                   f"(> {_GYR_MAX_RAD_S:g} rad/s = {math.degrees(_GYR_MAX_RAD_S):.0f} deg/s): is it in deg/s?")
-    a50 = float(np.median(np.linalg.norm(rec.acc, axis=1)))
-    if acc_unit == "m/s^2" and _ACC_G_BAND[0] < a50 < _ACC_G_BAND[1]:
-        out.append(f"{rec.name}: acc is declared m/s^2 but its median magnitude is {a50:.4g} "
-                   "(gravity is 9.81 m/s^2): is it in g?")
-    return out
 
 
 @dataclass
@@ -333,8 +312,27 @@ class FilterObjective:
                     raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "
                                      f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
                 warnings += unit_warnings(rec)
+                warnings += self._start_warning(rec)
             self._cache[which] = recs
         return warnings
+
+    def start_init(self) -> Any:
+        """The start the filter uses: its fixed ``init`` option unless ``auto``, else ``q0``."""
+        init = self.fixed.get("init", self._cls.defaults.get("init", "auto"))
+        return self.q0 if init == "auto" else init
+
+    def _start_warning(self, rec: Recording) -> list[str]:
+        """A warning when ``rec`` starts in motion under an ``accmag``/``broad`` start without a warm-up
+        (:func:`objectives.attitude.data.plausibility.motion_start`)."""
+        init = self.start_init()
+        if self.warmup_s > 0 or not (init is None or (isinstance(init, str) and init in ("accmag", "broad"))):
+            return []
+        why = motion_start(rec)
+        if not why:
+            return []
+        return [f"{rec.name}: starts in motion ({why}), so the {init or 'accmag'} start orientation is wrong; "
+                "for scoring set `init: truth` (objective.fixed) or skip the start with `objective.warmup_s` "
+                "(e.g. 2.0)"]
 
     # --- search space ------------------------------------------------------------------------
     def default_space(self) -> Space:
@@ -529,7 +527,10 @@ class FilterObjective:
 
     # --- cross-validation (tuner cv) -----------------------------------------------------------------
     def cv_folds(self, k: int | None = None) -> list[tuple[str, FilterObjective, FilterObjective]]:
-        """Folds over all the objective's recordings (train and test): ``(name, tune on, held out)``.
+        """Folds over the objective's tuning recordings: ``(name, tune on, held out)``.
+
+        ``test:`` recordings are never pooled into the folds: they keep their own held-out score, which
+        the engine reports next to the CV score (:func:`tuner.cv.cross_validate`).
 
         Without ``k``, recordings that are all BROAD trials (a ``trials.json`` beside them) are grouped by
         BROAD's level-2 motion/disturbance group and each group is held out once (leave-one-group-out);
@@ -540,12 +541,13 @@ class FilterObjective:
         """
         from objectives.attitude.objective_options import recording_groups
 
-        recs = list(self.recordings("train")) + (list(self.recordings("test")) if self.test_specs else [])
+        recs = list(self.recordings("train"))
         names = [r.name for r in recs]
         if len(set(names)) != len(names):
             raise ValueError("objective.data: recording names repeat; cross-validation needs unique names")
         if len(recs) < 2:
-            raise ValueError(f"objective.data: cross-validation needs >= 2 recordings, got {len(recs)}")
+            raise ValueError(f"objective.data{'.train' if self.test_specs else ''}: cross-validation needs >= 2 "
+                             f"tuning recordings, got {len(recs)} (test recordings are never pooled into folds)")
         groups: dict[str, str] | None = None
         if k is None:
             try:
@@ -560,7 +562,7 @@ class FilterObjective:
             if not 2 <= kk <= len(recs):
                 raise ValueError(f"cv: need 2 <= k <= {len(recs)} (recordings), got k={k}")
             parts = [(f"fold-{i}", [n for j, n in enumerate(names) if j % kk == i]) for i in range(kk)]
-        specs = list(self.train_specs) + list(self.test_specs)
+        specs = list(self.train_specs)
         plain = {k: v for k, v in self.metric_options.items() if k not in AGG_KEYS}
         by_name = dict(zip(names, recs))
         out = []

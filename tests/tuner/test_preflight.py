@@ -91,7 +91,7 @@ def test_gyro_in_deg_s_declared_rad_s_warns_and_runs(tmp_path):
     write_csv(tmp_path / "rec.csv", gyr_scale=180 / np.pi * 100)  # peaks ~ 2900 "rad/s"
     out = tuner("run", str(filter_job(tmp_path)))
     assert "warning: rec: gyr is declared rad/s" in out.stderr and "deg/s?" in out.stderr
-    write_csv(tmp_path / "rec.csv")
+    write_csv(tmp_path / "rec.csv", gyr_scale=0.1)  # 0.3 rad/s at the start would be a start in motion
     out = tuner("run", str(filter_job(tmp_path)))
     assert out.returncode == 0 and "warning" not in out.stderr, out.stderr
 

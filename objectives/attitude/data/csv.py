@@ -29,7 +29,7 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording, RecordingError
 
-__all__ = ["load_csv", "GYR_UNITS", "ACC_UNITS", "TIME_UNITS", "CSV_OPTIONS"]
+__all__ = ["load_csv", "GYR_UNITS", "ACC_UNITS", "TIME_UNITS", "CSV_OPTIONS", "RATE_RANGE_HZ", "csv_keys"]
 
 #: gyr unit -> factor to rad/s
 GYR_UNITS = {"rad/s": 1.0, "deg/s": np.pi / 180.0, "dps": np.pi / 180.0}
@@ -43,6 +43,34 @@ CSV_OPTIONS = (
     "gyr_unit", "acc_unit", "mag_unit", "time_unit", "rate_hz", "dt", "frame", "name",
     "quat_convention", "delimiter", "jitter_tol",
 )
+
+
+def csv_keys() -> list[dict[str, Any]]:
+    """Every key of a ``csv:`` data spec with its default and its allowed values (``tuner describe csv``)."""
+    def one_of(table: Mapping[str, Any]) -> str:
+        return "one of " + ", ".join(table)
+
+    return [
+        {"name": "path", "default": None, "doc": "the CSV file (header row of column names), relative to the config"},
+        {"name": "columns", "default": None,
+         "doc": "column map, inline or a YAML file: signal -> column name(s); signals "
+                + ", ".join(f"{k} ({n})" for k, n in _SIGNALS.items()) + "; gyr and acc required"},
+        {"name": "gyr_unit", "default": "rad/s", "doc": f"{one_of(GYR_UNITS)} (converted to rad/s)"},
+        {"name": "acc_unit", "default": "m/s^2", "doc": f"{one_of(ACC_UNITS)} (g = 9.80665 m/s^2)"},
+        {"name": "mag_unit", "default": "1", "doc": "any label (filters normalise mag; values not converted)"},
+        {"name": "time_unit", "default": "s",
+         "doc": f"{one_of(TIME_UNITS)}; the stamps must imply {RATE_RANGE_HZ[0]:g} Hz to "
+                f"{RATE_RANGE_HZ[1] / 1e3:g} kHz"},
+        {"name": "rate_hz", "default": None, "doc": "a number > 0 (Hz): without a time column (or checked against it)"},
+        {"name": "dt", "default": None, "doc": "a number > 0 (s): without a time column, instead of rate_hz"},
+        {"name": "frame", "default": "ENU", "doc": "earth frame of the truth: ENU or NED"},
+        {"name": "name", "default": None, "doc": "recording name (default: the file stem)"},
+        {"name": "quat_convention", "default": "sensor_to_earth",
+         "doc": "sensor_to_earth or earth_to_sensor (conjugated on load)"},
+        {"name": "delimiter", "default": ",", "doc": "field separator, e.g. ',' ';' or '\\t'"},
+        {"name": "jitter_tol", "default": 0.05, "doc": "a number > 0: allowed deviation of a time step from the "
+                                                        "mean, as a fraction of it"},
+    ]
 
 
 def _column_names(path: Path, signal: str, spec: Any, ncols: int) -> list[str]:
@@ -59,6 +87,29 @@ def _unit(path: Path, what: str, unit: str, table: Mapping[str, float]) -> float
         return table[str(unit).strip()]
     except KeyError:
         raise RecordingError(f"{path}: {what} {unit!r} is not one of {sorted(table)}") from None
+
+
+#: sampling rates (Hz) a time column may imply; outside them the time unit is wrong
+RATE_RANGE_HZ = (1.0, 100e3)
+
+
+def _check_time_rate(path: Path, column: str, t: np.ndarray, time_unit: str) -> None:
+    """``RecordingError`` naming ``time_unit`` when the median step of ``t`` (s) implies a rate outside
+    :data:`RATE_RANGE_HZ` (e.g. millisecond stamps read as seconds: 0.29 Hz instead of 286 Hz)."""
+    steps = np.diff(t)
+    steps = steps[steps > 0]
+    if steps.size == 0:
+        return  # non-increasing time: Recording.from_time says so
+    rate = 1.0 / float(np.median(steps))
+    lo, hi = RATE_RANGE_HZ
+    if lo <= rate <= hi:
+        return
+    fits = [u for u, f in TIME_UNITS.items() if lo <= rate * TIME_UNITS[time_unit] / f <= hi]
+    hint = (f"; with time_unit {fits[0]!r} it would be {rate * TIME_UNITS[time_unit] / TIME_UNITS[fits[0]]:.4g} Hz"
+            if fits else "")
+    raise RecordingError(f"{path}: time_unit: {time_unit!r} makes the time column {column!r} imply {rate:.4g} Hz, "
+                         f"outside {lo:g} Hz to {hi / 1e3:g} kHz; allowed time_unit values: "
+                         f"{', '.join(TIME_UNITS)} (the unit of the time stamps){hint}")
 
 
 def load_csv(
@@ -181,6 +232,7 @@ def load_csv(
                   frame=str(frame).upper(), units=units, source=str(path))
     if "time" in wanted:
         t = numeric("time", True) * time_f
+        _check_time_rate(path, wanted["time"][0], t, str(time_unit).strip())
         if dt is not None:
             raise RecordingError(f"{path}: give either a 'time' column or 'dt', not both")
         return Recording.from_time(t, jitter_tol=jitter_tol, rate_hz=rate_hz, **common)

@@ -235,7 +235,17 @@ class AttitudeFilter(Declared):
         from objectives.attitude.filters.stream import as_recording
 
         rec = as_recording(self.name, data, acc, mag, rate_hz, dt, frame)
-        return self.run_detailed(rec, q0, disturbances).quat
+        flt = self.imu_only() if not isinstance(data, Recording) and mag is None else self
+        return flt.run_detailed(rec, q0, disturbances).quat
+
+    def imu_only(self) -> AttitudeFilter:
+        """This filter without the magnetometer (``use_mag=False``): what ``run(gyr, acc, mag=None)`` and a
+        stream fed without ``mag`` use. ValueError for a filter that needs one (no ``use_mag`` option)."""
+        if not self.needs_mag or not self.values.get("use_mag", True):
+            return self
+        if "use_mag" not in self.values:
+            raise ValueError(f"{self.name}: needs a magnetometer (no IMU-only version): pass mag= as an (N, 3) array")
+        return type(self)(**{**self.values, "use_mag": False})
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None,
                frame: str = "ENU") -> Any:

@@ -65,9 +65,16 @@ def as_recording(owner: str, data: Any, acc: Any = None, mag: Any = None, rate_h
         return data
     if acc is None:
         raise ValueError(f"{owner}: run(gyr, acc, mag=None, rate_hz=...) needs acc, an (N, 3) array in m/s^2")
+    from objectives.attitude.data.plausibility import warn_units
+
     step = resolve_dt(owner, rate_hz, dt)
-    return Recording(name="arrays", gyr=data, acc=acc, mag=mag, dt=step, frame=frame,
-                     source=f"{owner}.run(arrays)")
+    rec = Recording(name="arrays", gyr=data, acc=acc, mag=mag, dt=step, frame=frame, source=f"{owner}.run(arrays)")
+    warn_units(f"{owner}.run", rec.gyr, rec.acc, stacklevel=4)
+    return rec
+
+
+#: a stream checks the units of its first sample and of its first this many samples
+UNIT_CHECK_SAMPLES = 100
 
 
 def _sample(owner: str, key: str, v: Any) -> np.ndarray:
@@ -93,19 +100,37 @@ class StreamBase:
         self.q0 = q0
         self.n = 0
         self.use_mag: bool | None = None
+        self._unit_rows: list[tuple[np.ndarray, np.ndarray]] | None = []  # None once checked or warned
 
     def _read(self, gyr: Any, acc: Any, mag: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         name = self.filter.name
         g, a = _sample(name, "gyr", gyr), _sample(name, "acc", acc)
         m = None if mag is None else _sample(name, "mag", mag)
+        if self._unit_rows is not None:
+            self._check_units(g, a)
         if self.use_mag is None:  # first sample: same decision as the batch run
             wants = bool(self.filter.values.get("use_mag", True))
-            if self.filter.needs_mag and wants and m is None:
-                raise ValueError(f"{name}: the first sample has no magnetometer; pass mag= or set use_mag=False")
+            if self.filter.needs_mag and wants and m is None:  # mag=None: the IMU-only version, where there is one
+                self.filter = self.filter.imu_only()
+                wants = False
             self.use_mag = wants and m is not None
         elif self.use_mag and m is None:
             raise ValueError(f"{name}: this stream uses the magnetometer; every update needs mag=")
         return g, a, (m if self.use_mag else None)
+
+    def _check_units(self, g: np.ndarray, a: np.ndarray) -> None:
+        """The array API's unit check (:func:`~objectives.attitude.data.plausibility.warn_units`) on the first
+        sample and on the first :data:`UNIT_CHECK_SAMPLES`; one warning at most per stream."""
+        from objectives.attitude.data.plausibility import warn_units
+
+        rows = self._unit_rows
+        assert rows is not None
+        rows.append((g.copy(), a.copy()))
+        if len(rows) in (1, UNIT_CHECK_SAMPLES):
+            warned = warn_units(f"{self.filter.name}.stream", np.array([r[0] for r in rows]),
+                                np.array([r[1] for r in rows]), stacklevel=5)
+            if warned or len(rows) == UNIT_CHECK_SAMPLES:
+                self._unit_rows = None
 
     def _initial_q(self, acc: np.ndarray, mag: np.ndarray | None) -> np.ndarray:
         """The initial quaternion in the working frame (as ``initial_quaternion`` does)."""

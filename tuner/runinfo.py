@@ -1,0 +1,68 @@
+"""What a run tuned and how it validated, for ``tuner show`` and ``tuner compare``.
+
+:func:`tuned_system` names the filter or controller and the settings the run held fixed: from the
+complete deployment record in ``best.yaml`` (``deployment:``, values whose source is ``fixed``) when the
+run has one, else from the run's resolved ``config.yaml`` (``objective.fixed`` and ``parameters: {x:
+{fixed: v}}`` or bare values). :func:`scores` gathers the held-out numbers ``best.yaml`` records: the CV
+score, the tuning score and their gap (``validation:``), the test score, and the defaults scored the
+same ways (:func:`tuner.validation.defaults_scores`).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from tuner.rundir import RunDir
+
+__all__ = ["tuned_system", "scores", "SCORE_KEYS"]
+
+#: the numbers of ``best.yaml``'s ``evaluation`` that show and compare print, in order
+SCORE_KEYS = ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "defaults_fitness",
+              "defaults_train_fitness", "defaults_test_fitness", "defaults_cv_fitness")
+#: objective keys that name what is tuned, by objective kind (first present wins)
+_NAME_KEYS = ("filter", "controller", "function", "callable")
+
+
+def tuned_system(run_dir: str | Path) -> dict[str, Any]:
+    """``{kind, name, searched: [names], fixed: {name: value}}`` of a run (see the module docstring).
+
+    ``searched`` are the names the run's search space searched; ``fixed`` every other value the run handed
+    to the objective (its space's fixed part: ``objective.fixed``, ``parameters: {x: {fixed: v}}`` and the
+    options the space holds at their declared values).
+    """
+    rd = RunDir(run_dir)
+    best = rd.best() if rd.has_best() else None
+    dep = getattr(best, "deployment", None) or {}
+    if isinstance(dep.get("values"), dict) and isinstance(dep.get("sources"), dict):
+        src = dep["sources"]
+        return {"kind": str(dep.get("kind", "")), "name": str(dep.get("name", "")),
+                "searched": [k for k in dep["values"] if src.get(k) == "searched"],
+                "fixed": {k: v for k, v in dep["values"].items() if src.get(k) == "fixed"}}
+    raw = rd.config()
+    obj = raw.get("objective") or {}
+    name = next((str(obj[k]) for k in _NAME_KEYS if obj.get(k) is not None), "")
+    params = raw.get("parameters") or {}
+    searched = [k for k, spec in params.items() if isinstance(spec, dict) and "low" in spec and "fixed" not in spec]
+    fixed = {k: v for k, v in (best.params if best else {}).items() if k not in searched}
+    for k, spec in params.items():
+        if k not in searched and k not in fixed:
+            fixed[k] = spec["fixed"] if isinstance(spec, dict) and "fixed" in spec else spec
+    fixed.update({k: v for k, v in (obj.get("fixed") or {}).items() if k not in searched})
+    return {"kind": str(obj.get("kind", "")), "name": name, "searched": searched, "fixed": fixed}
+
+
+def scores(evaluation: dict[str, Any]) -> dict[str, Any]:
+    """The :data:`SCORE_KEYS` present in ``evaluation`` (finite or not), plus ``cv_gap_large``."""
+    out = {k: evaluation[k] for k in SCORE_KEYS if isinstance(evaluation.get(k), (int, float))}
+    if "cv_gap" in out:
+        out["cv_gap_large"] = bool(evaluation.get("cv_gap_large"))
+    return out
+
+
+def fmt(v: Any) -> str:
+    """A value as show prints it (``.6g`` for floats)."""
+    if isinstance(v, float):
+        return "-" if math.isnan(v) else f"{v:.6g}"
+    return str(v)
