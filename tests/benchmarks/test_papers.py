@@ -90,7 +90,7 @@ def test_eq_14_weight_improves_on_the_ncf_at_the_ncfs_gains():
     """At the NCF's tuned gains (PSO 20 x 15, seed 1: Kp 0.222, Ki 0.0104) on the config's training
     recordings: eq. (14)'s alpha = 0.99 (PI gains alpha Kp, alpha Ki kept) lowers the error, the
     per-sample alpha = 0.99 (a 2 s time constant at 50 Hz) raises it (2.796 / 2.805 / 3.528 deg); the
-    per-sample reading at its own tuned point (alpha 0.9964, about 5 s; docs/papers.md) is below the NCF."""
+    per-sample reading at its own tuned point (alpha 0.9964, about 5 s) is below the NCF."""
     from tuner.config import load_config
     from tuner.run import _build
 
@@ -112,7 +112,7 @@ def test_eq_14_weight_improves_on_the_ncf_at_the_ncfs_gains():
 def test_tuned_ccf_is_no_worse_than_tuned_ncf_at_a_reduced_budget(tmp_path):
     """Narkhede 2021's claim at 120 evaluations of the configs' `auto` (300 in `make papers`): the CCF
     contains the NCF (alpha = 1), so its tuned training error is not above the NCF's, and on the held-out
-    pair it stays below too (docs/papers.md: 2.427 vs 2.436 at 300)."""
+    pair it stays below too (2.427 vs 2.436 at 300 evaluations, seed 1)."""
     serial = ("parallel.backend=serial",)
     ccf = papers.tuned("ccf_narkhede.yaml", None, None, tmp_path, serial, max_evals=120)
     ncf = papers.tuned("ncf_narkhede.yaml", None, None, tmp_path, serial, max_evals=120)
