@@ -43,7 +43,9 @@ and range, and a per-seed check of the direction the paper claims. The verdict i
 those numbers alone:
 
 1. **{REPRODUCED}**: the paper's interval, widened by the row's stated tolerance (zero unless
-   the row names one: {TIME_TOL_S} s for times on the 100 Hz sample grid), overlaps our range over seeds.
+   the row names one: {TIME_TOL_S} s for times on the 100 Hz sample grid), overlaps our range over seeds,
+   and the claimed direction, where the row has one, holds on every seed (a matching number with
+   the comparison the paper draws from it failing is not a reproduction).
 2. **{DIRECTION}**: otherwise, the claimed direction (the row's "direction" column) holds on
    every seed. For a tuned parameter value the direction is "within a factor {VALUE_FACTOR:g} of the
    paper's value"; where the paper prints no number (a missing figure) only this verdict is possible.
@@ -154,11 +156,12 @@ def verdict(row: Row) -> str:
     if row.kind == "untestable":
         return UNTESTABLE
     vals = [v for v in row.values if math.isfinite(v)]
-    if row.interval is not None and vals and len(vals) == len(row.values):
+    direction_ok = all(row.holds)  # True when the row has no direction
+    if row.interval is not None and vals and len(vals) == len(row.values) and direction_ok:
         lo, hi = row.interval[0] - row.tol, row.interval[1] + row.tol
         if min(vals) <= hi and max(vals) >= lo:
             return REPRODUCED
-    if row.holds and all(row.holds):
+    if row.holds and direction_ok:
         return DIRECTION
     return NOT_REPRODUCED
 

@@ -55,6 +55,13 @@ def test_reproduced_when_the_papers_number_lies_within_our_seed_range():
     assert row((7.0, 7.0), (7.5, 9.0), (True, True)).verdict == DIRECTION  # outside the range: direction only
     assert row((7.0, 7.0), (7.5, 9.0), (True, False)).verdict == NOT_REPRODUCED  # one seed against the claim
     assert row((7.0, 7.0), (7.5, 9.0)).verdict == NOT_REPRODUCED  # no direction to check
+    assert row((7.0, 7.0), (5.0, 9.0)).verdict == REPRODUCED
+
+
+def test_a_matching_number_does_not_rescue_a_failed_direction():
+    # the fuzzy scheme's peak current matches the thesis's while it is above the PID's on some seed
+    assert row(printed("0.32"), (0.18, 0.3195), (False, True)).verdict == NOT_REPRODUCED
+    assert row(printed("0.32"), (0.18, 0.3195), (True, True)).verdict == REPRODUCED
 
 
 def test_the_papers_interval_and_a_stated_tolerance_widen_the_match():
@@ -67,6 +74,7 @@ def test_the_papers_interval_and_a_stated_tolerance_widen_the_match():
 def test_a_diverged_seed_is_never_reproduced_in_number():
     assert row((1.0, 2.0), (1.5, math.nan), (True, False)).verdict == NOT_REPRODUCED
     assert row((1.0, 2.0), (1.5, math.nan), (True, True)).verdict == DIRECTION
+    assert row((1.0, 2.0), (1.5, math.nan)).verdict == NOT_REPRODUCED
 
 
 def test_no_paper_number_allows_direction_only():
