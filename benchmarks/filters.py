@@ -221,5 +221,22 @@ def run(smoke: bool = False, **_: Any) -> dict[str, Any]:
         lines.append(md_table(["filter", "compile s"], [[k, v] for k, v in compile_s.items()]))
     if missing:
         lines.append(f"\nMissing peers (not installed): {', '.join(missing)}")
-    return {"results": {"datasets": datasets, "compile_s": compile_s, "missing_peers": missing, "wall_s": wall},
+    c_res = _c_rows(smoke)
+    if c_res is not None:  # the exported C filters next to the numba kernels (benchmarks/c_filters.py)
+        lines.append("\nExported C filters (`tuner export --format c-filter`), next to the numba kernels:\n")
+        lines.append(c_res["markdown"])
+        targets += c_res["targets"]
+    return {"results": {"datasets": datasets, "compile_s": compile_s, "missing_peers": missing, "wall_s": wall,
+                        "c_filters": None if c_res is None else c_res["results"]},
             "markdown": "\n".join(lines), "targets": targets}
+
+
+def _c_rows(smoke: bool) -> dict[str, Any] | None:
+    """:func:`benchmarks.c_filters.run`, or None without a C compiler."""
+    from objectives.attitude.cexport.build import find_compiler
+
+    if find_compiler() is None:
+        return None
+    from benchmarks import c_filters
+
+    return c_filters.run(smoke=smoke)

@@ -22,8 +22,11 @@ EPILOG = """examples:
   tuner resume runs/20261122T101500Z-demo-a1b2c3   continue an interrupted run
   tuner show runs/20261122T101500Z-demo-a1b2c3     summary of a run (or a sweep directory)
   tuner export RUN_DIR --format c > tuned.h        best parameters as a C header
+  tuner export RUN_DIR --format c-filter --out fw  the tuned filter itself as C99 (fw/<prefix>.h, .c)
+  tuner verify-c RUN_DIR                           that C compiled and scored next to the Python model
   tuner evaluate RUN_DIR --data other.yaml --json  score the best parameters on other data
   tuner sweep configs/thesis_tilt_sweep.yaml       many runs and one report
+  tuner dashboard runs                             runs/index.html: every run and sweep, sortable, compared
   tuner list                                       optimizers, objectives, filters, controllers, metrics, data
   tuner describe ekf                               parameters, bounds, units and equations of one name
   tuner init madgwick                              write madgwick.yaml, a commented starter job
@@ -82,10 +85,19 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("export", help="best parameters as yaml, json, python or a C header")
     p.add_argument("run_dir")
-    p.add_argument("--format", default="yaml", choices=["yaml", "json", "python", "c"])
+    p.add_argument("--format", default="yaml", choices=["yaml", "json", "python", "c", "c-filter"],
+                   help="c-filter: C99 header + source of the tuned filter itself (see --precision, --out)")
+    p.add_argument("--precision", default="double", choices=["double", "float"], help="c-filter: arithmetic")
+    p.add_argument("--out", default=".", help="c-filter: directory for <prefix>.h and <prefix>.c (default: .)")
     p.add_argument("-o", "--output", help="write to this file instead of standard output")
     p.add_argument("--prefix", help="C identifier prefix, e.g. EKF1 (default: from the run's name); lets two "
                                     "headers be included in one file")
+
+    p = sub.add_parser("verify-c", help="compile a run's exported C filter, score it next to the model")
+    p.add_argument("run_dir")
+    p.add_argument("--data", help="YAML file with a `data` list replacing the run's data")
+    p.add_argument("--precision", default="double", choices=["double", "float"])
+    p.add_argument("--fast-math", action="store_true", help="compile with -O2 -ffast-math (default: -O2)")
 
     p = sub.add_parser("evaluate", help="score parameters without tuning (default: a run's best)")
     p.add_argument("target", help="a run directory or a config file")
@@ -109,8 +121,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, help="concurrent jobs (default: from the sweep file, else 1)")
     p.add_argument("-q", "--quiet", action="store_true")
 
-    p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory")
+    p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory, or the "
+                                      "dashboard (index.html) of a folder of runs")
     p.add_argument("path")
+    p = sub.add_parser("dashboard", help="write DIR/index.html: every run and sweep under DIR, sortable, filterable, "
+                                         "compared side by side")
+    p.add_argument("path", nargs="?", default="runs", help="folder of runs (default: runs)")
 
     p = sub.add_parser("init", help="write a commented starter job for a filter or controller")
     p.add_argument("name", help="a filter or controller `tuner list` prints, e.g. madgwick, pid")
@@ -319,8 +335,18 @@ def _cmd_export(a) -> int:
     run_dir = Path(a.run_dir)
     if not (run_dir / "best.yaml").exists():
         raise UsageError(f"{run_dir}: no best.yaml (not a run directory, or nothing evaluated yet)")
-    if a.prefix is not None and (a.format != "c" or not a.prefix.isidentifier() or not a.prefix.isascii()):
+    if a.prefix is not None and (a.format not in ("c", "c-filter") or not a.prefix.isidentifier()
+                                 or not a.prefix.isascii()):
         raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c")
+    if a.format == "c-filter":
+        from tuner.export import export_c_filter
+
+        files = export_c_filter(run_dir, a.precision, a.prefix)
+        Path(a.out).mkdir(parents=True, exist_ok=True)
+        for name, text in files.items():
+            (Path(a.out) / name).write_text(text)
+            print(f"wrote {Path(a.out) / name}", file=sys.stderr)
+        return 0
     text = export(run_dir, a.format, prefix=a.prefix)
     if a.output:
         Path(a.output).write_text(text)
@@ -328,6 +354,24 @@ def _cmd_export(a) -> int:
     else:
         sys.stdout.write(text)
     return 0
+
+
+def _cmd_verify_c(a) -> int:
+    from tuner.export import verify_c
+
+    try:
+        out = verify_c(a.run_dir, a.data, a.precision, ("-O2", "-ffast-math") if a.fast_math else ("-O2",))
+    except FileNotFoundError as exc:
+        raise UsageError(str(exc)) from None
+    py, c = out["python"], out["c"]
+    print(f"{out['filter']} in C ({out['precision']}, {' '.join(out['flags'])}) vs the model: "
+          f"fitness {py.fitness:.6g} / {c.fitness:.6g} (difference {c.fitness - py.fitness:.3g}); "
+          f"{out['seconds']['python']:.2f} s / {out['seconds']['c']:.2f} s")
+    for rec, m in py.recordings.items():
+        vals = "  ".join(f"{k}={v:.6g}/{c.recordings[rec][k]:.6g} ({c.recordings[rec][k] - v:+.2g})"
+                         for k, v in m.items() if isinstance(v, (int, float)) and k.endswith("deg"))
+        print(f"  {rec}: max angle {out['max_angle_rad'][rec]:.3g} rad  {vals}")
+    return 0 if not (py.failed or c.failed) else 1
 
 
 def _cmd_evaluate(a) -> int:
@@ -403,8 +447,22 @@ def _cmd_report(a) -> int:
         from tuner.report import write_run_report
 
         print(write_run_report(path))  # RunError naming the file if one is corrupt
+    elif path.is_dir():
+        return _cmd_dashboard(a)
     else:
-        raise UsageError(f"{path}: not a run or sweep directory")
+        raise UsageError(f"{path}: not a run or sweep directory, nor a folder of runs")
+    return 0
+
+
+def _cmd_dashboard(a) -> int:
+    from tuner.dashboard import collect_runs, write_dashboard
+
+    path = Path(a.path)
+    if not path.is_dir():
+        raise UsageError(f"{path}: not a folder (expected a folder of run directories, e.g. runs)")
+    if not collect_runs(path):
+        raise UsageError(f"{path}: no run or sweep directory in it (nor up to 4 levels down)")
+    print(write_dashboard(path))
     return 0
 
 
@@ -437,7 +495,8 @@ def _cmd_demo(a) -> int:
 
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
             "list": _cmd_list, "describe": _cmd_describe, "export": _cmd_export, "evaluate": _cmd_evaluate,
-            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report, "init": _cmd_init, "demo": _cmd_demo}
+            "cv": _cmd_cv, "sweep": _cmd_sweep, "report": _cmd_report, "init": _cmd_init, "demo": _cmd_demo,
+            "dashboard": _cmd_dashboard, "verify-c": _cmd_verify_c}
 
 
 def main(argv: list[str] | None = None) -> int:

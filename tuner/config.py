@@ -150,13 +150,25 @@ class RunConfig:
     validation: ValidationConfig = field(default_factory=ValidationConfig)
 
     def space(self, objective: Any = None) -> Space:
-        """The search space: ``parameters`` if given, else the objective's ``default_space()``."""
+        """The search space: ``parameters`` if given, else the objective's ``default_space()``.
+
+        A parameter written without ``unit`` or ``doc`` takes them from the objective's declaration (so
+        that reports and exports show the unit however the bounds were written).
+        """
+        default_space = hook(objective, "default_space") if objective is not None else None
         if self.parameters is not None:
             try:
-                return Space.from_dict(self.parameters)
+                space = Space.from_dict(self.parameters)
             except SpaceError as exc:
                 raise ConfigError(self.source, "parameters", str(exc)) from None
-        default_space = hook(objective, "default_space") if objective is not None else None
+            declared = default_space() if default_space is not None else None
+            if declared is None:
+                return space
+            import dataclasses
+
+            return Space([dataclasses.replace(p, unit=p.unit or declared[p.name].unit,
+                                              doc=p.doc or declared[p.name].doc)
+                          if p.name in declared else p for p in space.params])
         if default_space is not None:
             return default_space()
         raise ConfigError(self.source, "parameters", "missing: this objective has no default search space")

@@ -25,7 +25,7 @@ from typing import Any
 from tuner.export_formats import FORMATS, c_prefix, to_c, to_json, to_python, to_yaml
 from tuner.objective import hook
 
-__all__ = ["export", "FORMATS", "provenance"]
+__all__ = ["export", "FORMATS", "provenance", "export_c_filter", "verify_c"]
 
 
 def _build(run_dir: Path) -> Any:
@@ -136,3 +136,66 @@ def _sample_rate(obj: Any) -> dict[str, Any]:
         return {"sample_rate_hz": None, "sample_rate_note": "the objective gives no sample rate"}
     hz, note = fn()
     return {"sample_rate_hz": hz, "sample_rate_note": note}
+
+
+def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, dict[str, Any]]:
+    """The run's objective (on ``data_file``'s data when given) and the complete deployed values."""
+    from tuner.config import ConfigError, read_yaml
+    from tuner.deployment import load_deployment
+
+    objective = _build(run_dir)
+    if objective is None:
+        raise ConfigError(run_dir / "config.yaml", "objective", "does not build any more (data moved?)")
+    if data_file:
+        doc = read_yaml(data_file, "--data")
+        data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
+        with_data = hook(objective, "with_data")
+        if with_data is None:
+            raise ConfigError(data_file, "data", "this objective does not take other data")
+        try:
+            objective = with_data(data)
+            fn = hook(objective, "preflight")
+            if fn is not None:
+                fn()
+        except ValueError as exc:
+            raise ConfigError(data_file, "data", str(exc)) from None
+    return objective, dict(load_deployment(run_dir).values)
+
+
+def export_c_filter(run_dir: str | Path, precision: str = "double", prefix: str | None = None) -> dict[str, str]:
+    """``{filename: text}``: the C source of the run's deployed filter (the objective's ``export_c_filter``
+    hook), its header led by the run's provenance (run, fitness, optimiser, data, commit)."""
+    from tuner.config import ConfigError
+    from tuner.rundir import RunDir
+
+    run_dir = Path(run_dir)
+    objective, values = _deployed_objective(run_dir)
+    fn = hook(objective, "export_c_filter")
+    if fn is None:
+        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C filter export")
+    doc = provenance(run_dir, objective)
+    if prefix is None:
+        prefix = c_prefix(RunDir(run_dir).meta().name or run_dir.name)
+    lines = [f"run: {doc['run']}", f"fitness: {doc['fitness']!r} ({(doc['objective'] or {}).get('metric', '')})",
+             f"optimizer: {doc['optimizer']}, seed {doc['seed']}, {doc['n_evals']} evaluations",
+             f"data: {doc['data']}", f"git commit: {doc['git_commit']}", f"exported: {doc['exported']}"]
+    try:
+        return dict(fn(values, precision, c_prefix(prefix), "\n".join(lines)))
+    except ValueError as exc:
+        raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
+
+
+def verify_c(run_dir: str | Path, data_file: str | Path | None = None, precision: str = "double",
+             opt: tuple[str, ...] = ("-O2",)) -> dict[str, Any]:
+    """The run's exported C compiled and scored next to the model (the objective's ``verify_c_filter``)."""
+    from tuner.config import ConfigError
+
+    run_dir = Path(run_dir)
+    objective, values = _deployed_objective(run_dir, data_file)
+    fn = hook(objective, "verify_c_filter")
+    if fn is None:
+        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C filter to verify")
+    try:
+        return dict(fn(values, precision, tuple(opt)))
+    except ValueError as exc:
+        raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None

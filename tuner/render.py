@@ -18,6 +18,16 @@ Safety rules of the rendered page:
 - relative links to ``*.md`` reports point to the ``*.html`` page written beside them;
 - a Content-Security-Policy allows no script, no remote resource, images only as ``data:``.
 
+An interactive page (:mod:`tuner.interactive`, when plotly is installed) differs in three ways only:
+its policy allows scripts from the page's own folder (``script-src 'self'``: ``plotly.min.js`` and
+``tuner_report.js`` beside the page; still no inline script, no remote resource), its data is one
+``<script type="application/json">`` block (JSON with ``<``, ``>`` and ``&`` written as JSON unicode
+escapes, so no text in it can close the block), and a Markdown source line that is exactly
+``{{plot:NAME}}`` (``NAME`` of letters, digits and ``-``) outside a code block becomes an empty
+``<div class="tuner-plot" data-plot="NAME">`` the script fills. The line is swapped for a random token
+before rendering, so text escaped with :func:`md_escape` (a backslash before each brace, shown as
+``{{plot:x}}``) never becomes a slot.
+
 Names, descriptions and string values that go into the Markdown are escaped with :func:`md_escape`
 so that they are shown literally in both the Markdown and the HTML.
 """
@@ -32,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["markdown_to_html", "render_page", "write_html", "md_escape", "md_table", "md_path", "fmt_num",
-           "write_text_atomic", "PAGE"]
+           "write_text_atomic", "PAGE", "json_for_html"]
 
 _IMAGE_TYPES = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg", ".svg": "image/svg+xml",
                 ".gif": "image/gif", ".webp": "image/webp"}
@@ -61,6 +71,16 @@ th { white-space: nowrap; }
 th { background: var(--head); position: sticky; top: 0; }
 td:first-child, th:first-child { text-align: left; white-space: nowrap; }
 tbody tr:hover { background: #f0f6ff; }
+th.sortable { cursor: pointer; }
+th[aria-sort=ascending]::after { content: " \25B2"; font-size: .7em; }
+th[aria-sort=descending]::after { content: " \25BC"; font-size: .7em; }
+.tuner-plot { width: 100%; min-height: 120px; margin: .6em 0; }
+.tuner-plot .slice { display: inline-block; width: 33%; min-width: 300px; max-width: 100%; vertical-align: top; }
+@media (max-width: 700px) { .tuner-plot .slice { width: 100%; min-width: 0; } }
+.controls { margin: .5em 0; }
+.controls select, .controls input { font: inherit; max-width: 100%; }
+.muted { color: var(--muted); }
+td.txt, th.txt { text-align: left; white-space: nowrap; }
 img { max-width: 100%; height: auto; display: block; margin: .8em auto; }
 .missing-image { color: var(--muted); font-style: italic; }
 .status { display: inline-block; padding: .15em .7em; border-radius: 1em; font-weight: 600;
@@ -77,10 +97,10 @@ PAGE = """<!DOCTYPE html>
 <head>
 <meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
-<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src data:; style-src 'unsafe-inline'">
+<meta http-equiv="Content-Security-Policy" content="{csp}">
 {refresh}<title>{title}</title>
 <style>{css}</style>
-</head>
+{scripts}</head>
 <body>
 <main>
 {body}
@@ -245,25 +265,67 @@ def markdown_to_html(markdown: str, base_dir: str | Path | None = None) -> str:
     return _parser(Path(base_dir) if base_dir is not None else None).render(markdown)
 
 
+_SCRIPT_NAME = re.compile(r"^[A-Za-z0-9_.-]+\.js$")
+_PLOT_SLOT = re.compile(r"^\{\{plot:([A-Za-z0-9-]+)\}\}$", re.M)
+
+
+def json_for_html(data: Any) -> str:
+    """``data`` as JSON safe inside ``<script type="application/json">`` (NaN and infinities as null)."""
+    import json
+
+    def clean(v):
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        if isinstance(v, dict):
+            return {str(k): clean(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        return v
+
+    text = json.dumps(clean(data), allow_nan=False, separators=(",", ":"))
+    return text.replace("&", "\\u0026").replace("<", "\\u003c").replace(">", "\\u003e")
+
+
 def render_page(markdown: str, base_dir: str | Path | None, title: str, refresh_s: float | None = None,
-                footer: str = "") -> str:
+                footer: str = "", scripts: tuple[str, ...] = (), data: Any = None) -> str:
     """A complete, self-contained HTML page of ``markdown``.
 
     ``refresh_s`` adds ``<meta http-equiv="refresh">`` so that a browser reloads the page (the live
-    view of a running run); ``None`` for a final report.
+    view of a running run); ``None`` for a final report. ``scripts`` (file names beside the page) and
+    ``data`` make an interactive page (module docstring); without them the page has no script at all.
     """
     refresh = ""
     if refresh_s is not None:
         if not (math.isfinite(refresh_s) and refresh_s > 0):
             raise ValueError(f"refresh_s: expected a positive number of seconds, got {refresh_s!r}")
         refresh = f'<meta http-equiv="refresh" content="{int(math.ceil(refresh_s))}">\n'
-    return PAGE.format(refresh=refresh, title=html.escape(title), css=CSS, body=markdown_to_html(markdown, base_dir),
-                       footer=html.escape(footer))
+    token = ""
+    if scripts:
+        import secrets
+
+        token = f"tunerslot{secrets.token_hex(8)}x"
+        markdown = _PLOT_SLOT.sub(lambda m: token + m.group(1), markdown)
+    body = markdown_to_html(markdown, base_dir)
+    script_src, tags = "", ""
+    if scripts:
+        bad = [s for s in scripts if not _SCRIPT_NAME.match(s)]
+        if bad:
+            raise ValueError(f"scripts: expected plain .js file names beside the page, got {bad}")
+        script_src = " script-src 'self';"
+        if data is not None:
+            tags += f'<script type="application/json" id="tuner-data">{json_for_html(data)}</script>\n'
+        tags += "".join(f'<script src="{s}" defer></script>\n' for s in scripts)
+        body = re.sub(f"<p>{token}([A-Za-z0-9-]+)</p>", lambda m: f'<div class="tuner-plot" id="plot-{m.group(1)}" '
+                      f'data-plot="{m.group(1)}"></div>', body)
+        body = re.sub(f"{token}([A-Za-z0-9-]+)", r"{{plot:\1}}", body)  # a slot line in a code block stays text
+    return PAGE.format(refresh=refresh, title=html.escape(title), css=CSS, body=body, footer=html.escape(footer),
+                       csp=f"default-src 'none';{script_src} img-src data:; style-src 'unsafe-inline'", scripts=tags)
 
 
 def write_html(path: str | Path, markdown: str, base_dir: str | Path, title: str | None = None,
-               refresh_s: float | None = None, footer: str = "written by tuner") -> Path:
+               refresh_s: float | None = None, footer: str = "written by tuner", scripts: tuple[str, ...] = (),
+               data: Any = None) -> Path:
     """Write :func:`render_page` of ``markdown`` to ``path`` atomically (a watching browser never sees half)."""
     path = Path(path)
-    page = render_page(markdown, base_dir, title or f"{path.parent.name} report", refresh_s, footer)
+    page = render_page(markdown, base_dir, title or f"{path.parent.name} report", refresh_s, footer, scripts, data)
     return write_text_atomic(path, page)

@@ -24,6 +24,7 @@ from typing import Any
 
 import pandas as pd
 
+from tuner import interactive
 from tuner.deployment import DEFAULTS_MEANING
 from tuner.figures import (
     convergence_table,
@@ -53,9 +54,9 @@ _OWN_FIGURES = ("convergence.png", "fitness_vs_params.png", "parallel_coordinate
 
 
 def write_html(path: Path, markdown: str, base_dir: Path, title: str | None = None,
-               refresh_s: float | None = None) -> Path:
+               refresh_s: float | None = None, scripts: tuple[str, ...] = (), data: Any = None) -> Path:
     """Self-contained HTML page of a Markdown report (see :func:`tuner.render.write_html`)."""
-    return _write_html(path, markdown, base_dir, title=title, refresh_s=refresh_s)
+    return _write_html(path, markdown, base_dir, title=title, refresh_s=refresh_s, scripts=scripts, data=data)
 
 
 def run_summary(run_dir: Path, meta: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -155,9 +156,8 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
     status = f"{s['status']}" + (f" ({s['stop_reason']})" if s["stop_reason"] else "")
     rows: list[list[Any]] = [["status", status], ["best fitness", s["best_fitness"] if s["best_fitness"] is not None
                                                   else "-"]]
-    for key in ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "initial_fitness",
-                "improvement_pct"):
-        if isinstance(ev.get(key), (int, float)):
+    for key in _CARD_KEYS:
+        if isinstance(ev.get(key), (int, float)) and not (key in _SAME_AS_BEST and _same(ev[key], s["best_fitness"])):
             rows.append([key.replace("_", " "), ev[key]])
     rows += [["evaluations / budget", f"{n} / {_budget(cfg)}"],
              ["failed evaluations", f"{nf} ({nf / n:.1%})" if n else str(nf)],
@@ -172,6 +172,20 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
         rows.append(["best found at", f"stage {f.get('stage')}, generation {f.get('generation')}, "
                                       f"evaluation {f.get('eval')}"])
     return rows
+
+
+#: results the summary card shows (the "Other results" table leaves them out: no number printed twice)
+_CARD_KEYS = ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "initial_fitness",
+              "improvement_pct")
+#: results left out of the card when they equal the best fitness (the tuning data's score is the best fitness)
+_SAME_AS_BEST = ("train_fitness", "best_fitness")
+#: multi-line results that repeat a table of the report (the terminal summary of the per-recording scores)
+_REPEATS = ("summary_table", "tables_md")
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equal numbers (a result the report already shows under another name; NaN is never the same)."""
+    return isinstance(b, (int, float)) and math.isclose(float(a), float(b), rel_tol=1e-12, abs_tol=0.0)
 
 
 def _validation(run_dir: Path) -> dict[str, Any]:
@@ -294,7 +308,9 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
                _rows_table(_params_rows(s["params"], space), ["parameter", "value", "bounds", "scale",
                                                               "position in bounds", "unit"], 6), ""]
     md += _results_md(s)
+    at_figures = len(md)
     md += _figures_md(run_dir, s, space, live)
+    after_figures = len(md)
     files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
              ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
              ("scores.csv", "scores per recording"), ("cv.md", "cross-validation tables"),
@@ -304,8 +320,39 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     text = "\n".join(md)
     path = run_dir / "report.md"
     write_text_atomic(path, text)
-    write_html(run_dir / "report.html", text, run_dir, title=title, refresh_s=refresh_s if running else None)
+    fig_md, data = _interactive(run_dir, s, space, live)
+    html_md = text if data is None else "\n".join(md[:at_figures] + fig_md + md[after_figures:])
+    write_html(run_dir / "report.html", html_md, run_dir, title=title, refresh_s=refresh_s if running else None,
+               scripts=interactive.SCRIPTS if data is not None else (), data=data)
+    _refresh_dashboard(run_dir)
     return path
+
+
+def _refresh_dashboard(run_dir: Path) -> None:
+    """Rewrite the runs dashboard above ``run_dir`` (:mod:`tuner.dashboard`), if there is one.
+
+    Live reports are throttled (:func:`write_live_report`) and their cost includes this rewrite, so a
+    dashboard over many runs makes the live view of each run less frequent, not the run slower.
+    """
+    from tuner.dashboard import find_dashboard, write_dashboard
+
+    root = find_dashboard(run_dir)
+    if root is not None:
+        write_dashboard(root, LIVE_REFRESH_S)
+
+
+def _interactive(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[str], dict[str, Any] | None]:
+    """The interactive figures section and page data (:mod:`tuner.interactive`), or ``([], None)``."""
+    if not interactive.available() or not (run_dir / "history.csv").exists():
+        return [], None
+    hist = load_history(run_dir)
+    if not len(hist):
+        return [], None
+    pngs = [] if live and s["status"] == "running" else \
+        [p for p in sorted((run_dir / "figures").glob("*.png")) if p.name not in _OWN_FIGURES]
+    fig_md, data = interactive.run_figures(run_dir, hist, space, s["params"], pngs, live)
+    interactive.install_assets(run_dir)
+    return fig_md, data
 
 
 def write_live_report(run_dir: Path, meta: dict[str, Any], final: bool = False, min_interval_s: float | None = None,
@@ -362,7 +409,7 @@ def _results_md(s: dict[str, Any]) -> list[str]:
     ev = s["evaluation"]
     md: list[str] = []
     split_df = _split_tables(ev) if ev else None
-    blocks = {k: v for k, v in ev.items() if isinstance(v, str) and "\n" in v and k != "tables_md"}
+    blocks = {k: v for k, v in ev.items() if isinstance(v, str) and "\n" in v and k not in _REPEATS}
     if split_df is not None or s["metrics"]:
         one_row = split_df is None and len(pivot_metrics(s["metrics"])) == 1
         md += ["## Metrics of the best candidate" if one_row else "## Scores per recording", ""]
@@ -379,9 +426,11 @@ def _results_md(s: dict[str, Any]) -> list[str]:
             elif len(piv):
                 md += ["Metrics of the best candidate on each recording.", "",
                        _frame_md(piv.reset_index()), ""]
-    scalars = [[k, v] for k, v in ev.items() if not isinstance(v, (dict, list)) and k != "tables_md"
-               and not (isinstance(v, str) and "\n" in v)
-               and k not in ("train_fitness", "test_fitness", "cv_fitness")]
+    shown = {str(k).rsplit("/", 1)[-1].rsplit(".", 1)[-1]: v for k, v in s["metrics"].items()}
+    scalars = [[k, v] for k, v in ev.items() if not isinstance(v, (dict, list)) and k not in _REPEATS
+               and not (isinstance(v, str) and "\n" in v) and k not in _CARD_KEYS
+               and not (k in _SAME_AS_BEST and _same(v, s["best_fitness"]))
+               and not (k.startswith("best_") and isinstance(v, (int, float)) and _same(v, shown.get(k[5:])))]
     nested = {k: v for k, v in ev.items() if k not in ("train", "test", "cv") and isinstance(v, dict) and v
               and all(isinstance(x, dict) for x in v.values())}
     if scalars or nested:

@@ -402,8 +402,16 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     (sweep_dir / "report.md").write_text(text)
     if running:
         text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
+    from tuner import interactive
+
+    scripts, data = (), None
+    if interactive.available():  # sortable tables and a zoomable convergence plot (tuner.interactive)
+        fig_md, data = interactive.sweep_figures(sweep_dir, [j["id"] for j in sw["jobs"]])
+        text = text.replace("## Figures\n", "\n".join(fig_md) + "\n## Figures\n", 1)
+        interactive.install_assets(sweep_dir)
+        scripts = interactive.SCRIPTS
     write_html(sweep_dir / "report.html", text, sweep_dir, title=f"Sweep {sw['name']}",
-               refresh_s=LIVE_REFRESH_S if running else None)
+               refresh_s=LIVE_REFRESH_S if running else None, scripts=scripts, data=data)
     return sweep_dir / "report.md"
 
 

@@ -52,6 +52,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude import deployment as _deployment
+from objectives.attitude.cexport import hooks as _c_hooks
 from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.divergence import unbounded_growth
@@ -397,17 +398,17 @@ class FilterObjective:
         return mask
 
     def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False,
-              outputs_limit: int | None = None) -> Score:
+              outputs_limit: int | None = None, filter_override: Any = None) -> Score:
         """Fitness and per-recording metrics of ``params`` on the train or test recordings.
 
         ``Score.recordings`` is ``{name: {metric: value}}``; with ``keep_outputs`` ``Score.outputs`` is
-        ``{name: FilterResult}``, for the first ``outputs_limit`` recordings only when it is given (a report
-        that draws one recording need not hold the estimates of all sixteen BROAD trials).
+        ``{name: FilterResult}``, for the first ``outputs_limit`` recordings only when it is given (a report that
+        draws one recording need not hold all sixteen BROAD trials); ``filter_override``: a filter scored instead.
         """
         recs = self.recordings(which)
         if not recs:
             return Score(math.nan)
-        flt = self.make_filter(params)
+        flt = self.make_filter(params) if filter_override is None else filter_override
         per: dict[str, dict[str, float]] = {}
         outputs: dict[str, Any] = {}
         sums: list[Any] = []
@@ -585,6 +586,9 @@ class FilterObjective:
     def build(self, params: Mapping[str, Any]):
         """The deployed filter instance of ``params`` (``.run(gyr, acc, mag, rate_hz=...)``, ``.stream()``)."""
         return _deployment.filter_build(self, params)
+
+    export_c_filter = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-filter)
+    verify_c_filter = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:

@@ -1,9 +1,9 @@
 """Report of a filter run: train/test scores side by side and figures of the best candidate.
 
-Figures (``figures/``):
+Figures (``figures/``), and ``traces.json`` (every recording, worst first, for the interactive report):
 
-``euler_<rec>.png``        truth vs estimate roll/pitch/yaw on one held-out recording (or a train one)
-``errors_<rec>.png``       Euler error traces (deg)
+``euler_<rec>.png``        truth vs estimate roll/pitch/yaw on the worst recording (train or test)
+``errors_<rec>.png``       heading and inclination error (deg) on it (:mod:`objectives.attitude.traces`)
 ``adaptation_<rec>.png``   disturbance measures and the fuzzy scaling factor over time (adaptive
                            filters, like Figs. 8-11 of the FAEKF paper)
 ``fuzzy_surface.png``      the tuned fuzzy scaling as a surface over two inputs (FAEKF)
@@ -11,6 +11,7 @@ Figures (``figures/``):
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
@@ -70,9 +71,10 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
 
     figs = run_dir / "figures"
     figs.mkdir(parents=True, exist_ok=True)
-    # the figures draw one recording (the first test one, else the first train one): only its estimates are kept
-    test = obj.score(best, "test", keep_outputs=True, outputs_limit=1) if obj.test_specs else None
-    train = obj.score(best, "train", keep_outputs=True, outputs_limit=0 if test and test.outputs else 1)
+    # the figures show every recording (worst first): their estimates are kept unless traces are off
+    limit = None if obj.report.get("traces", True) else 0
+    test = obj.score(best, "test", keep_outputs=True, outputs_limit=limit) if obj.test_specs else None
+    train = obj.score(best, "train", keep_outputs=True, outputs_limit=limit)
     out: dict[str, Any] = {
         "train_fitness": train.fitness,
         "test_fitness": test.fitness if test else None,
@@ -96,14 +98,19 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
                "own optimum (a small PSO per recording):", "", _per_trial_md(po)]
     out["tables_md"] = "\n".join(md)
 
-    # figures on one recording: the first test recording, else the first train one
-    source = test if test and test.outputs else train
-    if obj.report.get("traces", True) and source.outputs:
-        name, res = next(iter(source.outputs.items()))
-        rec = next(r for r in obj.recordings("test" if source is test else "train") if r.name == name)
-        _plot_traces(rec, res, figs, name)
+    # static figures of the worst recording; traces.json holds every recording for the interactive page
+    items = [(split, rec, sc.outputs[rec.name], sc.recordings.get(rec.name, {}))
+             for split, sc in (("train", train), ("test", test)) if sc is not None
+             for rec in obj.recordings(split) if rec.name in sc.outputs]
+    if obj.report.get("traces", True) and items:
+        from objectives.attitude.traces import traces_doc, worst_first
+
+        _, rec, res, _ = items[worst_first([(s, r.name, m) for s, r, _, m in items], obj.metric)[0]]
+        _plot_traces(rec, res, figs, rec.name)
         if "K" in res.diagnostics:
-            _plot_adaptation(rec, res, figs, name)
+            _plot_adaptation(rec, res, figs, rec.name)
+        doc = traces_doc(items, obj.metric, [f"euler_{_safe(rec.name)}.png", f"errors_{_safe(rec.name)}.png"])
+        (run_dir / "traces.json").write_text(json.dumps(doc, separators=(",", ":"), allow_nan=False))
     fs = getattr(obj.make_filter(best), "membership_table", None)
     if callable(fs):
         try:
@@ -120,7 +127,7 @@ def _euler_deg(q: np.ndarray) -> np.ndarray:
 
 
 def _plot_traces(rec, res, figs: Path, name: str) -> None:
-    from objectives.attitude.metrics import euler_errors
+    from objectives.attitude.traces import error_angles_deg
 
     plt = pyplot()
     t = rec.time
@@ -142,13 +149,13 @@ def _plot_traces(rec, res, figs: Path, name: str) -> None:
     plt.close(fig)
     if rec.quat is None:
         return
-    err = np.degrees(euler_errors(res.quat[::step], rec.quat[::step]))
+    head, incl = error_angles_deg(res.quat[::step], rec.quat[::step])
     fig, ax = plt.subplots(figsize=(8, 3.2), dpi=100)
-    for j in range(3):
-        ax.plot(t[::step], err[:, j], lw=0.8, label=_AX[j])
+    ax.plot(t[::step], head, lw=0.8, label="heading error")
+    ax.plot(t[::step], incl, lw=0.8, label="inclination error")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("error (deg)")
-    ax.set_title(f"{name}: Euler angle errors", fontsize=9)
+    ax.set_title(f"{name} (worst recording): heading and inclination error", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -47,6 +47,7 @@ current (A), and ``status_code`` (0 ok, 1 fell, 2 diverged). A fall or divergenc
 
 from __future__ import annotations
 
+import json
 import math
 import pathlib
 from collections.abc import Mapping
@@ -481,6 +482,9 @@ class ClosedLoopObjective:
         }
         self.plot_response(init, best, fig_dir / "response.png")
         self.save_response(best, run_dir / "response_best.npz")
+        from objectives.control.report import traces_doc
+
+        (run_dir / "traces.json").write_text(json.dumps(traces_doc(self, init, best), separators=(",", ":")))
         if run_dir.parent.name == "jobs":  # a sweep job: every finished sibling's response on one figure
             from objectives.control.compare import collect_runs, plot_responses
 

@@ -1,4 +1,5 @@
-"""Report figures of the closed-loop objective: fuzzy action surfaces (thesis Figs. 2.19-2.20)."""
+"""Report figures of the closed-loop objective: fuzzy action surfaces (thesis Figs. 2.19-2.20) and the
+step responses before and after tuning as ``traces.json`` (the interactive report, :mod:`tuner.interactive`)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,48 @@ import pathlib
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["plot_surfaces"]
+__all__ = ["plot_surfaces", "traces_doc"]
+
+#: samples per plotted series
+POINTS = 2000
+
+
+def traces_doc(obj: Any, before: Mapping[str, Any], after: Mapping[str, Any]) -> dict[str, Any]:
+    """Speed, yaw rate, IB angle and current of the initial and the tuned controller against the references.
+
+    ``obj.traces(params)`` gives ``{panel title (unit): {"t", "y", "ref"}}``; a failed simulation (the
+    robot fell) is shown for as long as it ran.
+    """
+    import math
+    import re
+
+    import numpy as np
+
+    def col(a, step):
+        v = np.round(np.asarray(a, float)[::step], 5)
+        return [None if not np.isfinite(x) else float(x) for x in v]
+
+    tr0, tr1 = obj.traces(dict(before)), obj.traces(dict(after))
+    t = np.asarray(next(iter(tr1.values()))["t"], float)
+    step = max(1, math.ceil(len(t) / POINTS))
+    panels = []
+    for key, v1 in tr1.items():
+        m = re.match(r"^(.*?)\s*\(([^)]*)\)$", key)
+        title, unit = (m.group(1), m.group(2)) if m else (key, "")
+        series = []
+        if v1.get("ref") is not None:
+            series.append({"name": "reference", "y": col(v1["ref"], step), "dash": True, "color": "#222"})
+        v0 = tr0.get(key)
+        if v0 is not None and len(v0["y"]) == len(v1["y"]):
+            series.append({"name": "initial", "y": col(v0["y"], step), "color": "#1f77b4"})
+        series.append({"name": "tuned", "y": col(v1["y"], step), "color": "#d62728"})
+        panels.append({"title": title, "unit": unit, "series": series})
+    name = obj.profile if isinstance(obj.profile, str) else "profile"
+    return {"title": "Step responses: initial vs tuned controller", "x_label": "time (s)", "select_label": "profile",
+            "note": f"The closed loop of the {obj.controller} controller on the reference profile, with the initial "
+                    "parameters and the tuned ones (thesis Figs. 2.16-2.18).",
+            "replaces": ["response.png"],
+            "items": [{"name": name, "label": f"profile {name}", "x": col(t, step), "panels": panels}]}
 
 
 def plot_surfaces(

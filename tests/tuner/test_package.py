@@ -113,6 +113,7 @@ def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
 
     names = zipfile.ZipFile(wheels[0]).namelist()
     assert "tuner/data/configs/demo.yaml" in names and "objectives/starters.py" in names
+    assert "tuner/static/tuner_report.js" in names  # the interactive report pages
     assert not any(n.startswith(("tests/", "configs/", "benchmarks/")) for n in names)
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)

@@ -1,5 +1,9 @@
-"""Run and sweep reports: content, hostile names neutralised, the live view, and a real headless browser
-at 1200 px (no horizontal overflow, every image decodes, no console or CSP error)."""
+"""Run and sweep reports and the runs dashboard: content, hostile names neutralised, the live view, and
+real headless Chromium at 1200 px and 390 px (no horizontal overflow, every image decodes, every plot
+draws, sorting a table reorders it, no console or CSP error; screenshots in the test output folder).
+
+Screenshots go to ``$TUNER_TEST_OUTPUT/browser/`` (default ``test-output/browser/`` in the repository).
+"""
 
 import json
 import math
@@ -10,13 +14,43 @@ import subprocess
 import pytest
 import yaml
 
-from tests.tuner.test_render import _assert_inert
+from tests.tuner.browser import chromium, measure, screenshot
+from tests.tuner.test_render import _assert_inert, _parse
 from tuner.config import config_from_dict
 from tuner.run import run
 
 EVIL_METRIC = "<script>alert('m')</script>"
 EVIL_REC = "[x](javascript:alert('r'))"
 EVIL_TEXT = "<img src=x onerror=alert('d')> [y](javascript:alert('d')) <script>alert('d')</script>"
+
+
+def _assert_safe(page: str) -> None:
+    """A static page is inert (no script at all); an interactive one loads only its two local scripts and
+    holds its data in one JSON block that no text in it can close."""
+    from tuner.interactive import SCRIPTS
+
+    if "<script" not in page:
+        _assert_inert(page)
+        return
+    t = _parse(page)
+    srcs = [v for tag, k, v in t.attrs if tag == "script" and k == "src"]
+    types = [v for tag, k, v in t.attrs if tag == "script" and k == "type"]
+    assert sorted(srcs) == sorted(SCRIPTS) and types == ["application/json"], (srcs, types)
+    assert t.tags.count("script") == 3
+    assert "script-src 'self';" in page and "unsafe-eval" not in page and "unsafe-inline'; " not in page
+    block = page.split('<script type="application/json" id="tuner-data">', 1)[1].split("</script>", 1)[0]
+    assert "<" not in block and ">" not in block
+    json.loads(block)
+    for tag, k, v in t.attrs:
+        assert not k.startswith("on"), (tag, k, v)
+        if k in ("href", "src"):
+            scheme = re.sub(r"[\x00-\x20]", "", v).lower()
+            assert not scheme.startswith(("javascript:", "vbscript:")), (tag, k, v)
+            assert not scheme.startswith("data:") or scheme.startswith("data:image/png;base64,"), (tag, k, v)
+
+
+def _page_data(page: str) -> dict:
+    return json.loads(page.split('id="tuner-data">', 1)[1].split("</script>", 1)[0])
 
 
 def evil_objective(params, run_dir=None, log=None):
@@ -75,11 +109,44 @@ def test_run_report_content(evil_run):
         assert (evil_run / "figures" / f"{png}.png").exists()
 
 
-def test_hostile_names_are_neutralised(evil_run):
+def test_hostile_names_are_neutralised(evil_run, monkeypatch):
+    from tuner import interactive
+    from tuner.report import write_run_report
+
     page = (evil_run / "report.html").read_text()
-    _assert_inert(page)
+    _assert_safe(page)
     assert "&lt;img src=x onerror=alert('d')&gt;" in page  # description and string parameter shown as text
     assert "[x](javascript:alert('r'))" in page  # recording name shown literally, not as a link
+    # without plotly: today's static page, no script at all
+    monkeypatch.setattr(interactive, "available", lambda: False)
+    write_run_report(evil_run)
+    static = (evil_run / "report.html").read_text()
+    _assert_inert(static)
+    assert "<img src=\"data:image/png;base64," in static and "data-plot=" not in static
+    monkeypatch.undo()
+    write_run_report(evil_run)  # back to the interactive page for the other tests
+    assert ("data-plot=" in (evil_run / "report.html").read_text()) == interactive.available()
+
+
+@pytest.mark.skipif(not __import__("tuner.interactive").interactive.available(), reason="plotly not installed")
+def test_interactive_run_page_holds_its_data_and_assets(evil_run):
+    from tuner.interactive import SCRIPTS
+
+    page = (evil_run / "report.html").read_text()
+    data = _page_data(page)
+    assert all((evil_run / s).is_file() for s in SCRIPTS)
+    slots = re.findall(r'data-plot="([a-z]+)"', page)
+    assert slots == ["convergence", "importance", "slices", "parcoords", "contour"]
+    assert [p["name"] for p in data["params"]] == ["x", "y"] and data["params"][0]["unit"] == "rad/s"
+    hist = __import__("pandas").read_csv(evil_run / "history.csv")
+    ok = hist[hist["status"] == "ok"]
+    assert len(data["points"]["fitness"]) == len(ok) and min(data["points"]["fitness"]) == ok["fitness"].min()
+    # x is the parameter that matters (its log10 distance to 2.9 dominates the fitness)
+    assert data["importance"]["names"][0] == "x" and sum(data["importance"]["share"]) == pytest.approx(1.0)
+    assert "functional ANOVA" in page and "matters most" in page
+    assert data["contour"]["xp"]["name"] == "x" and data["contour"]["xp"]["scale"] == "log"
+    md = (evil_run / "report.md").read_text()
+    assert "tuner-plot" not in md and "{{plot:" not in md and "![Convergence](figures/convergence.png)" in md
 
 
 def test_multiline_values_stay_out_of_tables(tmp_path):
@@ -90,7 +157,7 @@ def test_multiline_values_stay_out_of_tables(tmp_path):
            "optimizer": {"method": "random", "population": 4, "generations": 1}, "parallel": {"backend": "serial"}}
     d = run(config_from_dict(raw, base_dir=tmp_path), run_dir=src, quiet=True).run_dir
     best = yaml.safe_load((d / "best.yaml").read_text())
-    best["evaluation"] = {"summary_table": "a | b\n--- | ---\n1 | 2", "test_fitness": 4.5e-9,
+    best["evaluation"] = {"notes_table": "a | b\n--- | ---\n1 | 2", "test_fitness": 4.5e-9,
                           "per_trial": {"t1": {"agnostic": 1.0, "own": 0.5}}}
     (d / "best.yaml").write_text(yaml.safe_dump(best))
     write_run_report(d)
@@ -166,7 +233,7 @@ def sweep_dir(tmp_path_factory, evil_run):
 
 def test_sweep_report_links_html_and_is_inert(sweep_dir):
     page = (sweep_dir / "report.html").read_text()
-    _assert_inert(page)
+    _assert_safe(page)
     assert 'href="jobs/pso__seed-1/report.html"' in page and ".md\"" not in page
     assert "## Warnings" in (sweep_dir / "report.md").read_text()
     assert (sweep_dir / "figures" / "best_parameters.png").exists()
@@ -189,110 +256,213 @@ def test_sweep_live_report_reloads_until_every_job_finished(sweep_dir, tmp_path)
     assert 'http-equiv="refresh"' not in (copy / "report.html").read_text()
 
 
+
+
 # --- a real browser ------------------------------------------------------------------------------
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
-        if shutil.which(name):
-            return shutil.which(name)
-    return None
+BROAD = __import__("pathlib").Path(__file__).resolve().parents[3] / "shared" / "data" / "broad"
+needs_chromium = pytest.mark.skipif(chromium() is None, reason="Chromium not installed (.ci/run installs it)")
 
 
-MEASURE = """<script nonce="measure">
-window.__errors = [];
-window.addEventListener('error', function (e) {
-  var t = e.target && e.target !== window ? ' ' + e.target.tagName : '';
-  window.__errors.push('error' + t + ': ' + (e.message || ''));
-}, true);
-document.addEventListener('securitypolicyviolation', function (e) {
-  window.__errors.push('csp: ' + e.violatedDirective + ' ' + e.blockedURI);
-});
-['error', 'warn'].forEach(function (k) {
-  var orig = console[k];
-  console[k] = function () {
-    window.__errors.push('console.' + k + ': ' + [].join.call(arguments, ' '));
-    orig.apply(console, arguments);
-  };
-});
-window.addEventListener('load', function () {
-  var imgs = [].slice.call(document.images);
-  var wide = [].slice.call(document.querySelectorAll('body *')).filter(function (el) {
-    return el.getBoundingClientRect().right > window.innerWidth + 0.5 && !el.closest('.table-scroll, pre');
-  }).map(function (el) { return el.tagName + '.' + el.className; });
-  var res = {scrollWidth: document.documentElement.scrollWidth, innerWidth: window.innerWidth,
-             images: imgs.length, broken: imgs.filter(function (i) { return !(i.complete && i.naturalWidth > 0); })
-             .map(function (i) { return i.alt; }), errors: window.__errors, wide: wide.slice(0, 10)};
-  var pre = document.createElement('pre');
-  pre.id = 'measure';
-  pre.textContent = JSON.stringify(res);
-  document.body.appendChild(pre);
-});
-</script>
-"""
+def _output_dir():
+    import os
+    from pathlib import Path
+
+    root = Path(os.environ.get("TUNER_TEST_OUTPUT", Path(__file__).resolve().parents[2] / "test-output"))
+    out = root / "browser"
+    out.mkdir(parents=True, exist_ok=True)
+    return out
 
 
-def _measure(page_path, tmp_path, width=1200):
-    """Open a copy of the page with a measuring script (allowed by nonce) in headless Chromium."""
-    html = page_path.read_text()
-    assert "default-src 'none';" in html
-    html = html.replace("default-src 'none';", "default-src 'none'; script-src 'nonce-measure';", 1)
-    html = html.replace("<head>\n", "<head>\n" + MEASURE, 1)
-    probe = page_path.parent / "_measure.html"  # beside the report: same relative paths
-    probe.write_text(html)
+@pytest.fixture(scope="module")
+def filter_run(tmp_path_factory):
+    """Madgwick on two BROAD trials, scored on a third: the time series with a recording selector."""
+    if not BROAD.is_dir():
+        pytest.skip("needs ../shared/data/broad")
+    tmp = tmp_path_factory.mktemp("filter")
+    spec = {"dir": str(BROAD), "stop_s": 60}
+    raw = {"name": "madgwick", "seed": 1,
+           "objective": {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
+                         "fixed": {"init": "broad"},
+                         "data": {"train": [{"broad": {**spec, "trials": ["01_undisturbed_slow_rotation_A",
+                                                                          "07_undisturbed_fast_rotation_B"]}}],
+                                  "test": [{"broad": {**spec, "trial": "28_disturbed_stationary_magnet_A"}}]}},
+           "parameters": {"beta": {"low": 0.005, "high": 0.5, "scale": "log"}, "zeta": {"low": 0.0, "high": 0.05}},
+           "optimizer": {"method": "pso", "population": 6, "generations": 2}, "parallel": {"backend": "serial"}}
+    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True).run_dir
+
+
+def test_filter_report_shows_the_worst_recording_first(filter_run):
+    from tuner.interactive import read_traces
+
+    scores = __import__("pandas").read_csv(filter_run / "scores.csv")
+    worst = scores.sort_values("total_rmse_deg", ascending=False)["recording"].tolist()
+    traces = read_traces(filter_run)
+    assert [it["name"] for it in traces["items"]] == worst  # every recording, worst first
+    assert {p["title"] for p in traces["items"][0]["panels"]} >= {"heading error", "inclination error"}
+    assert (filter_run / "figures" / f"errors_{worst[0]}.png").exists()
+    md = (filter_run / "report.md").read_text()
+    assert f"(figures/errors_{worst[0]}.png)" in md and "summary table" not in md  # the terminal table is not repeated
+    assert "| train fitness |" not in md and "| best fitness |" in md  # the best fitness is the train fitness
+    assert "| beta | " in md and "rad/s |" in md  # units in the best-parameters table
+
+
+@pytest.fixture(scope="module")
+def dashboard_dir(tmp_path_factory, evil_run, sweep_dir, filter_run):
+    import sys
+
+    root = tmp_path_factory.mktemp("dash") / "runs"
+    root.mkdir()
+    shutil.copytree(evil_run, root / "evil")
+    shutil.copytree(filter_run, root / "madgwick")
+    shutil.copytree(sweep_dir, root / "sweeps" / "hostile")
+    out = subprocess.run([sys.executable, "-m", "tuner", "report", str(root)], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
+    return root
+
+
+def test_dashboard_lists_every_run_and_sweep(dashboard_dir):
+    from tuner.dashboard import collect_runs
+
+    rows = {r["id"]: r for r in collect_runs(dashboard_dir)}
+    assert set(rows) == {"evil", "madgwick", "sweeps/hostile"} | {f"sweeps/hostile/jobs/{m}__seed-{s}"
+                                                                   for m in ("pso", "de") for s in (1, 2)}
+    m = rows["madgwick"]
+    best = yaml.safe_load((dashboard_dir / "madgwick" / "best.yaml").read_text())
+    assert m["target"] == "madgwick" and m["status"] == "finished" and m["best"] == best["fitness"]
+    assert m["href"] == "madgwick/report.html" and m["conv"]["y"][-1] == best["fitness"]
+    sw = rows["sweeps/hostile"]
+    assert sw["kind"] == "sweep" and sw["n_evals"] == sum(rows[k]["n_evals"] for k in rows if "/jobs/" in k)
+    page = (dashboard_dir / "index.html").read_text()
+    _assert_safe(page)
+    assert "http-equiv=\"refresh\"" not in page  # nothing running
+
+
+def test_dashboard_without_plotly_is_a_static_table(dashboard_dir, tmp_path, monkeypatch):
+    from tuner import interactive
+    from tuner.dashboard import write_dashboard
+
+    root = tmp_path / "runs"
+    shutil.copytree(dashboard_dir, root)
+    monkeypatch.setattr(interactive, "available", lambda: False)
+    page = write_dashboard(root).read_text()
+    _assert_inert(page)
+    assert 'href="madgwick/report.html"' in page and 'href="sweeps/hostile/report.html"' in page
+    assert page.count("<tr>") == 1 + 7 and "madgwick</td>" in page
+
+
+def test_dashboard_refreshes_while_a_run_is_going(dashboard_dir, tmp_path):
+    from tuner.report import write_live_report
+
+    root = tmp_path / "runs"
+    shutil.copytree(dashboard_dir, root)
+    d = root / "evil"
+    meta = json.loads((d / "meta.json").read_text())
+    running = {**meta, "status": "running"}
+    (d / "meta.json").write_text(json.dumps(running))
+    write_live_report(d, running, min_interval_s=0.0)  # the run's live view rewrites the dashboard above it
+    assert 'http-equiv="refresh"' in (root / "index.html").read_text()
+    (d / "meta.json").write_text(json.dumps(meta))
+    write_live_report(d, {**meta, "status": "interrupted"}, final=True)
+    assert 'http-equiv="refresh"' not in (root / "index.html").read_text()
+
+
+def test_dashboard_of_a_folder_without_runs_is_an_error(tmp_path):
+    import sys
+
+    out = subprocess.run([sys.executable, "-m", "tuner", "dashboard", str(tmp_path)], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 2 and out.stderr.startswith("error: ") and "no run or sweep" in out.stderr
+
+
+def _num(x):
     try:
-        out = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-                              "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                              "--hide-scrollbars", f"--user-data-dir={tmp_path / 'profile'}",
-                              f"--window-size={width},900", "--virtual-time-budget=10000", "--dump-dom",
-                              f"file://{probe}"], capture_output=True, text=True, timeout=180)
-    finally:
-        probe.unlink()
-    m = re.search(r'<pre id="measure">(.*?)</pre>', out.stdout, re.S)
-    assert m, f"no measurement in the DOM; stderr: {out.stderr[-2000:]}"
-    import html as _h
-
-    return json.loads(_h.unescape(m.group(1)))
+        return float(x.rstrip("%").replace(",", ""))
+    except ValueError:
+        return None
 
 
-def _screenshot(page_path, tmp_path, width=1200):
-    shot = tmp_path / f"{page_path.parent.name}.png"
-    subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--hide-scrollbars",
-                    f"--user-data-dir={tmp_path / 'profile2'}", f"--screenshot={shot}", f"--window-size={width},3000",
-                    f"file://{page_path}"], capture_output=True, timeout=180)
-    return shot
+def _check_sorted(sorts):
+    assert sorts, "no sortable table"
+    for s in sorts:
+        nums = [_num(x) for x in s["after"]]
+        first_text = next((i for i, v in enumerate(nums) if v is None), len(nums))
+        assert all(v is None for v in nums[first_text:]), s  # numbers first, then text
+        assert nums[:first_text] == sorted(nums[:first_text]), s
+        assert s["aria"] == "ascending" and sorted(s["after"]) == sorted(s["before"]), s
+    assert any(s["before"] != s["after"] for s in sorts), "no click reordered a table"
 
 
-@pytest.mark.skipif(_chromium() is None, reason="Chromium not installed (.ci/run installs it)")
-@pytest.mark.parametrize("which", ["run", "sweep"])
-def test_report_in_a_browser_at_1200px(which, evil_run, sweep_dir, tmp_path):
+@needs_chromium
+@pytest.mark.parametrize("width", [1200, 390])
+@pytest.mark.parametrize("which", ["run", "filter_run", "sweep", "dashboard"])
+def test_pages_in_a_browser(which, width, request, tmp_path):
     import numpy as np
     from PIL import Image
 
-    page = (evil_run if which == "run" else sweep_dir) / "report.html"
-    res = _measure(page, tmp_path)
-    assert res["innerWidth"] == 1200
+    from tuner import interactive
+
+    folder = request.getfixturevalue({"run": "evil_run", "filter_run": "filter_run", "sweep": "sweep_dir",
+                                      "dashboard": "dashboard_dir"}[which])
+    page = folder / ("index.html" if which == "dashboard" else "report.html")
+    res = measure(page, tmp_path, width)
+    assert res["innerWidth"] == width
     assert res["scrollWidth"] <= res["innerWidth"], res  # no horizontal overflow of the page
     assert res["wide"] == [], res  # nothing sticks out except inside scroll containers
-    assert res["images"] >= 3 and res["broken"] == [], res  # every figure decodes
+    assert res["broken"] == [], res  # every figure decodes
     assert res["errors"] == [], res  # no console error, no CSP violation
-    shot = _screenshot(page, tmp_path)
+    if interactive.available():
+        _check_sorted(res["sorts"])
+        want = {"run": 5, "filter_run": 6, "sweep": 1, "dashboard": 2}[which]
+        assert len(res["plots"]) == want, res["plots"]
+        for p in res["plots"]:  # every plot drawn, with data, within the page
+            assert p["rendered"] and p["drawn"] > 0 and 0 < p["width"] <= width and p["height"] > 100, p
+        if which == "filter_run":  # the recording selector redraws the time series
+            assert res["selector"]["options"] == 3 and res["selector"]["changed"] is True, res["selector"]
+        if which == "dashboard":
+            d = res["dashboard"]
+            assert d["rows"] == 7 and 1 <= d["shown"] < d["rows"], d  # the filter hides rows
+            assert res["plots"][1]["name"] == "compare-convergence" and res["plots"][1]["traces"] == 2
+    else:
+        assert res["images"] >= 3
+    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", tmp_path, width, 7000 if width < 500 else 5000,
+                      "#compare=evil,madgwick" if which == "dashboard" else "")
     arr = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert arr.std() > 5 and (arr < 128).mean() > 0.005, "blank screenshot"
 
 
-@pytest.mark.skipif(_chromium() is None, reason="Chromium not installed (.ci/run installs it)")
-def test_browser_measurement_catches_overflow_and_broken_images(evil_run, tmp_path):
-    """Negative control: the same measurement on a page that does overflow and has a broken image."""
+@needs_chromium
+def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evil_run, tmp_path):
+    """Negative control: the same measurement on pages that overflow, hold a broken image, a plot whose data
+    is damaged and a plot whose script did not load."""
+    from tuner import interactive
+
     bad = tmp_path / "bad"
-    bad.mkdir()
+    shutil.copytree(evil_run, bad)
     page = (evil_run / "report.html").read_text()
     page = page.replace("<main>", '<main><div style="width:2500px">wide</div>'
                                   '<img src="data:image/png;base64,AAAA" alt="broken">', 1)
     (bad / "report.html").write_text(page)
-    res = _measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", tmp_path)
     assert res["scrollWidth"] > 2000 and res["wide"] and res["broken"] == ["broken"] and res["errors"]
+    if not interactive.available():
+        return
+    good = (evil_run / "report.html").read_text()
+    (bad / "report.html").write_text(good.replace('"best":[', '"best":[],"best_damaged":[', 1)
+                                     .replace('"gen_median":[', '"gen_median":[],"gen_median_damaged":[', 1))
+    conv = next(p for p in measure(bad / "report.html", tmp_path)["plots"] if p["name"] == "convergence")
+    assert conv["rendered"] and conv["drawn"] == 0, conv  # the axes are there, the data is not: caught
+    (bad / "report.html").write_text(good.replace('"convergence":{', '"convergence_damaged":{', 1))
+    res = measure(bad / "report.html", tmp_path)
+    conv = next(p for p in res["plots"] if p["name"] == "convergence")
+    assert not conv["rendered"] and conv["drawn"] == 0 and any("convergence" in e for e in res["errors"]), res
+    (bad / "report.html").write_text((evil_run / "report.html").read_text())
+    (bad / "plotly.min.js").unlink()
+    res = measure(bad / "report.html", tmp_path)
+    assert res["errors"] and not any(p["rendered"] for p in res["plots"]), res
 
 
-@pytest.mark.skipif(_chromium() is None, reason="Chromium not installed (.ci/run installs it)")
+@needs_chromium
 def test_report_with_cross_validation_in_a_browser(tmp_path):
     # the Generalisation section (validation: cv) adds a table and a warning: it must fit the page too
     from tests.tuner.test_validation import _raw as _val_raw
@@ -300,6 +470,6 @@ def test_report_with_cross_validation_in_a_browser(tmp_path):
     cfg = config_from_dict(_val_raw(tmp_path, {"cv": "kfold", "folds": 2, "budget_fraction": 0.5, "gap_warn_rel": 0.0}))
     page = run(cfg, quiet=True).run_dir / "report.html"
     assert "Generalisation" in page.read_text()
-    res = _measure(page, tmp_path)
+    res = measure(page, tmp_path, 390)
     assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
     assert res["broken"] == [] and res["errors"] == [], res
