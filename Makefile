@@ -5,7 +5,7 @@ BIN     := $(VENV)/bin
 STAMP   := $(VENV)/.installed
 EXTRAS  ?= dev,cluster
 
-.PHONY: setup demo test bench bench-smoke lint clean papers papers-full package-configs
+.PHONY: setup demo test test-fast bench bench-smoke lint clean papers papers-full package-configs
 
 setup: $(STAMP)
 
@@ -24,6 +24,10 @@ demo: setup
 
 test: setup
 	$(BIN)/python -m pytest
+
+# everything but the tests marked slow (tunings, subprocess runs, whole BROAD trials): under 2 min
+test-fast: setup
+	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m pytest -m "not slow"
 
 bench: setup
 	$(BIN)/python -m pip install --quiet -e ".[$(EXTRAS),bench]"   # the peers measured side by side

@@ -4,8 +4,10 @@ Benchmarks (one module each): ``filters`` (filter throughput against ahrs, imufu
 ``closed_loop`` (WMP simulations per second, thesis-size PSO run), ``parallel`` (speed-up on 2
 workers, engine overhead, peak memory) and ``optimizers`` (quality per evaluation against pyswarms,
 Optuna, scipy DE, random search) and ``broad_cv`` (leave-one-group-out CV of every ``configs/broad_*.yaml``
-on the shared BROAD trials, skipped without the data). Each writes ``<out>/<name>.json`` with the machine facts; the run
-writes ``<out>/SUMMARY.md`` with a table per benchmark, targets marked pass/FAIL, and curves as PNG.
+on the shared BROAD trials, skipped without the data) and ``pid_benchmark`` (PID tuned by tuner against the
+AMIGO and SIMC rules on Åström and Hägglund's benchmark plants; also ``benchmarks/results/pid_benchmark.md``).
+Each writes ``<out>/<name>.json`` with the machine facts; the run writes ``<out>/SUMMARY.md`` with a table
+per benchmark, targets marked pass/FAIL, and curves as PNG.
 
 ``--full`` writes to ``benchmarks/results/`` (committed); ``--smoke`` uses tiny sizes and writes to
 a temporary directory unless ``--out`` is given. Peer libraries are not dependencies of the project:
@@ -28,7 +30,7 @@ from pathlib import Path
 
 from benchmarks.common import PEERS, RESULTS_DIR, fmt, machine_facts, md_table, peer, write_result
 
-BENCHMARKS = ["filters", "closed_loop", "parallel", "optimizers", "broad_cv"]
+BENCHMARKS = ["filters", "closed_loop", "parallel", "optimizers", "broad_cv", "pid_benchmark"]
 INSTALL_HINT = "pip install ahrs imufusion vqf pyswarms optuna cmaes"
 
 

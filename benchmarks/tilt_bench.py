@@ -194,13 +194,13 @@ def errors_markdown(runs: Path, seeds: list[int]) -> str:
 
 def _objective(run_dir: Path):
     """The objective of a run directory's ``config.yaml`` (as ``tuner.run.resume`` reads it), serial."""
-    from tuner.config import config_from_dict
-    from tuner.run import _build
+    from tuner.rundir import RunDir
+    from tuner.setup import build, run_config
 
-    raw = yaml.safe_load((run_dir / "config.yaml").read_text())
-    source, base_dir = raw.pop("source", str(run_dir / "config.yaml")), Path(raw.pop("base_dir", run_dir))
+    rd = RunDir(run_dir)
+    raw = rd.config()
     raw.setdefault("parallel", {})["n_jobs"] = 1
-    return _build(config_from_dict(raw, source=source, base_dir=base_dir))[0]
+    return build(run_config(rd, raw))[0]
 
 
 def start_errors(run_dir: Path, p0_bias: float = 1e-4, head_s: float = 60.0) -> dict:

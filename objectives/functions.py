@@ -84,8 +84,8 @@ class FunctionObjective:
         if fn not in FUNCTIONS:
             raise ValueError(f"objective.function: unknown function {fn!r}; allowed: {sorted(FUNCTIONS)}")
         dim = section.get("dim", 2)
-        if isinstance(dim, bool) or not isinstance(dim, int) or dim < 1:
-            raise ValueError(f"objective.dim: expected an integer >= 1, got {dim!r}")
+        if isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= 10_000:
+            raise ValueError(f"objective.dim: expected an integer in [1, 10000], got {dim!r}")
         return cls(fn, dim, float(section.get("sleep_s", 0.0)), float(section.get("busy_s", 0.0)),
                    int(section.get("fail_every", 0)), int(section.get("nan_every", 0)))
 

@@ -79,7 +79,8 @@ def filter_starter(name: str) -> str | None:
                 "      - synthetic: {generator: bench6dof, duration_s: 30, rate_hz: 200, seed: 101}\n")
         metric = ("  metric: euler_rmse_mean        # `tuner list metrics` lists the others\n"
                   "  warmup_s: 2.0                  # seconds at the start of each recording not scored\n")
-    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
+        fixed)
     return (f"# Starter job: tune the {name} filter ({d.get('summary', '')})\n"
             f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
             f"# `tuner describe {name}` lists every parameter with its unit, bounds and equation.\n"
@@ -92,12 +93,16 @@ def filter_starter(name: str) -> str | None:
 def closed_loop_starter(name: str) -> str | None:
     """A job tuning controller ``name`` on the wheeled mobile pendulum (None when no such controller)."""
     from objectives.control.controllers import CONTROLLERS, get_controller
+    from objectives.control.plants.controllers import LOOP_CONTROLLERS
 
+    if name in LOOP_CONTROLLERS:
+        return _loop_starter(name)
     if name not in CONTROLLERS:
         return None
     d = get_controller(name).describe()
     searched, fixed = _blocks(d["params"])
-    fixed_block = "  fixed: {}                      # values not searched; uncomment to set one\n" + "\n".join(fixed)
+    fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
+        fixed)
     return (f"# Starter job: tune the {name} controller ({d.get('summary', '')})\n"
             f"# on the wheeled mobile pendulum of Odry's thesis (chapter 2), cost eq. 2.39.\n"
             f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
@@ -109,5 +114,46 @@ def closed_loop_starter(name: str) -> str | None:
             "  duration_s: 8.0\n"
             "  cost: {alpha1: 1.4, alpha2: 0.85, beta: 1.6, gamma: 0.4}   # eq. 2.39 weights\n"
             "  requirements: thesis           # the thesis's tracking requirements (a failed one fails)\n"
+            "parameters:                      # searched: {low, high, scale: linear|log} or {fixed: value}\n"
+            + "\n".join(searched) + "\n" + _TAIL.format(evals=200))
+
+
+#: the plant of a loop controller's starter: a DC motor's speed (tf), the same motor's position over its
+#: speed (ss, two outputs) for the cascade, a mass on a spring (ss) for state feedback
+_LOOP_PLANTS = {
+    "tf": ("{tf: {num: [0.01], den: [0.005, 0.06, 0.1001]}}   # DC motor speed (rad/s) per volt",
+           {"tf": {"num": [0.01], "den": [0.005, 0.06, 0.1001]}}),
+    "cascade": ("{ss: {A: [[0, 1], [0, -10]], B: [[0], [2]], C: [[1, 0], [0, 1]]}, output: 0, inner_output: 1}"
+                "   # motor position over speed", {"ss": {"A": [[0, 1], [0, -10]], "B": [[0], [2]],
+                                                         "C": [[1, 0], [0, 1]]}, "output": 0, "inner_output": 1}),
+    "ss": ("{ss: {A: [[0, 1], [-2, -0.5]], B: [[0], [1]], C: [[1, 0]]}}   # mass on a spring-damper",
+           {"ss": {"A": [[0, 1], [-2, -0.5]], "B": [[0], [1]], "C": [[1, 0]]}}),
+}
+
+
+def _loop_starter(name: str) -> str | None:
+    """A job tuning loop controller ``name`` on a small example plant (README: closed loop, your own plant)."""
+    from objectives.control.plants.objective import LoopObjective
+
+    if name == "open_loop":
+        return None
+    key = "cascade" if name == "pid_cascade" else "ss" if name == "lqr_sf" else "tf"
+    text, plant = _LOOP_PLANTS[key]
+    scenario = {"duration_s": 3.0, "reference": [{"t": 0.1, "value": 1.0}], "load": [{"t": 2.0, "value": 0.5}]}
+    obj = LoopObjective(plant=plant, controller=name, period_s=0.01, scenario=scenario)
+    searched, fixed = _blocks(obj._decl.describe())
+    summary = (obj._ctrl.__doc__ or "").strip().splitlines()[0]
+    fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
+        fixed)
+    return (f"# Starter job: tune the {name} controller ({summary})\n"
+            "# on an example plant: replace objective.plant with yours (`tuner describe plant`).\n"
+            f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
+            f"# `tuner describe {name}` lists every parameter with its unit and bounds.\n"
+            f"name: {name}\nseed: 1\nobjective:\n  kind: closed_loop\n  plant: {text}\n  controller: {name}\n"
+            f"{fixed_block}\n"
+            "  period_s: 0.01                 # controller period (s)\n"
+            "  scenario: {duration_s: 3.0, reference: [{t: 0.1, value: 1.0}], load: [{t: 2.0, value: 0.5}]}\n"
+            "  cost: {iae: 1.0}               # iae, ise, itae, itse, effort, tv, or {mae_product: {e: 1.4, u: 0.4}}\n"
+            "  requirements: {}               # e.g. {max_overshoot_pct: 10, max_ms: 1.6} (a failed one fails)\n"
             "parameters:                      # searched: {low, high, scale: linear|log} or {fixed: value}\n"
             + "\n".join(searched) + "\n" + _TAIL.format(evals=200))

@@ -150,21 +150,16 @@ class Result:
 
 def _objective_of(run_dir: Path) -> tuple[Any, Any]:
     """The objective and search space of a run, re-created from its ``config.yaml`` (no data loaded)."""
-    from tuner.registry import build_objective
+    from tuner.setup import run_objective
 
-    raw = dict(RunDir(run_dir).config())
-    source, base_dir = raw.pop("source", str(Path(run_dir) / "config.yaml")), Path(raw.pop("base_dir", run_dir))
-    cfg = config_from_dict(raw, source=source, base_dir=base_dir)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except ValueError as exc:
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
-    return objective, cfg.space(objective)
+    _, objective, space = run_objective(RunDir(run_dir))
+    return objective, space
 
 
 def _config(config: str | Path | Mapping[str, Any] | RunConfig, overrides: list[str] | None, seed: int | None,
             n_jobs: int | None) -> RunConfig:
     """``config`` as a validated :class:`RunConfig` with ``overrides``, ``seed`` and ``n_jobs`` applied."""
+    overrides = _check_kwargs(overrides, seed, n_jobs)
     if isinstance(config, (str, Path)):
         from tuner.sweep import is_sweep_file
 
@@ -179,12 +174,26 @@ def _config(config: str | Path | Mapping[str, Any] | RunConfig, overrides: list[
         raw.setdefault("name", "job")
     else:
         raise TypeError(f"config: expected a path, a dict or a RunConfig, got {type(config).__name__}")
-    raw = apply_overrides(raw, list(overrides or []), source)
+    raw = apply_overrides(raw, overrides, source)
     if seed is not None:
-        raw["seed"] = int(seed)
+        raw["seed"] = seed
     if n_jobs is not None:
-        raw["parallel"] = {**(raw.get("parallel") or {}), "n_jobs": int(n_jobs)}
+        raw["parallel"] = {**(raw.get("parallel") or {}), "n_jobs": n_jobs}
     return config_from_dict(raw, source=source, base_dir=base_dir)
+
+
+def _check_kwargs(overrides: Any, seed: Any, n_jobs: Any) -> list[str]:
+    """``overrides`` as a list of strings; ``seed`` and ``n_jobs`` integers (or None): else a ConfigError."""
+    for key, value in (("seed", seed), ("parallel.n_jobs", n_jobs)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+            raise ConfigError("tune()", key, f"expected an int, got {type(value).__name__} {value!r}")
+    if overrides is None:
+        return []
+    if isinstance(overrides, str):
+        overrides = [overrides]
+    if not isinstance(overrides, (list, tuple)) or not all(isinstance(o, str) for o in overrides):
+        raise ConfigError("tune()", "overrides", f"expected a list of 'key.path=value' strings, got {overrides!r}")
+    return list(overrides)
 
 
 def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None = None, n_jobs: int | None = None,
@@ -210,7 +219,7 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
         to the run directory. An exception it raises stops the run there (status ``running`` on disk;
         ``tuner resume`` continues it) and propagates.
     overrides : list of str, optional
-        ``key.path=value`` strings, as ``--set``.
+        ``key.path=value`` strings, as ``--set`` (one string is one override).
 
     Raises
     ------

@@ -209,7 +209,10 @@ def _cmd_show(a) -> int:
     from dataclasses import asdict
 
     from tuner.bounds import run_warnings
+    from tuner.replay import verify_history
+    from tuner.rundir import RunDir
 
+    note = verify_history(RunDir(path))  # RunError naming an edited row
     s = run_summary(path)  # RunError naming the file if meta.json/best.yaml is corrupt
     warnings = run_warnings(path)
     if a.json:
@@ -225,6 +228,8 @@ def _cmd_show(a) -> int:
         print(s["evaluation"]["summary_table"])
     for w in warnings:
         print(f"warning: {w.message}")
+    if note:
+        print(f"note: {note}")
     return 0
 
 
@@ -252,6 +257,8 @@ def _show_scores(path: Path, fit: float | None, evaluation: dict, params: dict) 
             print(title)
         for k, v in items:
             print(f"  {k:24s} {fmt(v)}")
+    for note in t.get("notes", []):  # e.g. the scoring-only truth start the deployment replaced
+        print(f"note:       {note}")
 
 
 def _cmd_compare(a) -> int:
@@ -335,9 +342,11 @@ def _cmd_export(a) -> int:
     run_dir = Path(a.run_dir)
     if not (run_dir / "best.yaml").exists():
         raise UsageError(f"{run_dir}: no best.yaml (not a run directory, or nothing evaluated yet)")
-    if a.prefix is not None and (a.format not in ("c", "c-filter") or not a.prefix.isidentifier()
-                                 or not a.prefix.isascii()):
-        raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*) for --format c")
+    if a.prefix is not None and a.format not in ("c", "c-filter"):
+        raise UsageError(f"--prefix {a.prefix!r}: names C identifiers, only for --format c or c-filter "
+                         f"(got --format {a.format})")
+    if a.prefix is not None and (not a.prefix.isidentifier() or not a.prefix.isascii()):
+        raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*)")
     if a.format == "c-filter":
         from tuner.export import export_c_filter
 
@@ -390,6 +399,8 @@ def _cmd_evaluate(a) -> int:
         dep = out.get("deployment") or {}
         if dep:  # every value of the scored filter/controller (searched, fixed, defaults)
             print(f"deployed {dep['kind']} {dep['name']}: " + ", ".join(f"{k}={v!r}" for k, v in dep["values"].items()))
+            for note in dep.get("notes") or []:  # the scores above used the run's scoring settings (a truth start)
+                print(f"note: the scores above use the run's scoring settings; {note}")
     return 0
 
 
@@ -410,8 +421,11 @@ def _cmd_cv(a) -> int:
 
     progress = None if a.quiet else (lambda m: print(m, file=sys.stderr, flush=True))
     if Path(a.config).is_dir():  # a finished run: its best is the tuning result, the tables go into it
+        from tuner.registry import say_imports
+        from tuner.rundir import RunDir
         from tuner.validation import cv_run_dir
 
+        say_imports(RunDir(a.config).config().get("objective") or {}, Path(a.config) / "config.yaml")
         v = cv_run_dir(a.config, k=a.k, progress=progress, budget_fraction=a.budget_fraction)
         print(f"CV mean {v['cv_score']:.4g} (defaults {v['defaults_cv_score']:.4g}), tuning score "
               f"{v['tuning_score']:.4g}, gap {v['gap']:+.3g}{' (large)' if v['gap_large'] else ''}\n{a.config}")
@@ -431,6 +445,9 @@ def _cmd_sweep(a) -> int:
     from tuner.sweep import collect, run_sweep, summary_text
 
     res = run_sweep(a.sweep, sweep_dir=a.dir, jobs=a.jobs, quiet=a.quiet)
+    if res.get("interrupted"):
+        print(f"sweep interrupted; run the same command again to continue: {res['dir']}", file=sys.stderr)
+        return 1
     print(summary_text(collect(res["dir"]), res["dir"]))
     print(f"sweep directory: {res['dir']}")
     print(f"report: {res['report']}")
@@ -444,8 +461,14 @@ def _cmd_report(a) -> int:
 
         print(write_sweep_report(path))
     elif (path / "meta.json").exists() or (path / "config.yaml").exists():
+        from tuner.replay import verify_history
         from tuner.report import write_run_report
+        from tuner.rundir import RunDir
 
+        if (path / "meta.json").exists():
+            note = verify_history(RunDir(path))  # RunError naming an edited row
+            if note:
+                print(f"note: {note}", file=sys.stderr)
         print(write_run_report(path))  # RunError naming the file if one is corrupt
     elif path.is_dir():
         return _cmd_dashboard(a)
@@ -510,6 +533,9 @@ def main(argv: list[str] | None = None) -> int:
     if not a.command:
         ap.print_help()
         return 2
+    from tuner import signals
+
+    old_handlers = signals.install()  # SIGTERM and SIGHUP stop every command as Ctrl-C does
     try:
         try:
             code = COMMANDS[a.command](a)
@@ -525,12 +551,14 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {where}: {exc.strerror or exc} (results written before this point are kept; "
                   "`tuner resume` continues a run)", file=sys.stderr)
             return 2
-        except KeyboardInterrupt:  # pragma: no cover - runs handle their own interrupts
+        except KeyboardInterrupt:  # runs handle their own; `tuner cv CONFIG` or a report stops here
             print("interrupted", file=sys.stderr)
             return 1
     except BrokenPipeError:  # stdout closed early (`tuner list | head -1`): stop quietly
         _silence_stdout()
         return 0
+    finally:
+        signals.restore(old_handlers)
 
 
 def _silence_stdout() -> None:

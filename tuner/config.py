@@ -19,6 +19,7 @@ Shape of a job (see README for every key)::
 from __future__ import annotations
 
 import copy
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +27,7 @@ from typing import Any
 
 import yaml
 
+from tuner import safe_yaml
 from tuner.objective import hook
 from tuner.space import Space, SpaceError
 
@@ -54,6 +56,14 @@ class ConfigError(ValueError):
         super().__init__(f"{self.file}: {key}: {message}" if key else f"{self.file}: {message}")
 
 
+_INPROC = re.compile(r"inproc://\S+")  # a scheduler in this process (a LocalCluster without processes)
+_ADDRESS = re.compile(r"(tcp|tls|ucx|ws|wss)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9][A-Za-z0-9.-]*):[0-9]{1,5}")
+
+#: the largest population or number of generations accepted (more would exhaust memory before the first
+#: generation, or take longer than any run: a typo such as 1e12)
+MAX_COUNT = 1_000_000
+
+
 @dataclass(frozen=True)
 class RefineConfig:
     """Multi-stage refinement: after each stage the bounds shrink around the best point."""
@@ -76,6 +86,7 @@ class ParallelConfig:
     backend: str = "loky"
     n_jobs: int = 2
     address: str | None = None
+    connect_timeout_s: float = 30.0  # how long to wait for the Dask scheduler at ``address``
 
 
 @dataclass(frozen=True)
@@ -194,7 +205,7 @@ def _get(d: Mapping, key: str, types: Any, file: Any, path: str, default: Any = 
 def parse_value(text: str) -> Any:
     """A ``--set`` value: YAML scalar/flow syntax (``3``, ``1e-3``, ``true``, ``[1, 2]``, ``{a: 1}``)."""
     try:
-        return yaml.safe_load(text)
+        return safe_yaml.load(text)
     except yaml.YAMLError:
         return text
 
@@ -233,9 +244,9 @@ def read_yaml(path: str | Path, what: str = "") -> Any:
     if "\x00" in text:
         raise ConfigError(path, "", f"{label}is a binary file; expected a YAML file")
     try:
-        return yaml.safe_load(text)
+        return safe_yaml.load(text)
     except yaml.YAMLError as exc:
-        raise ConfigError(path, "", f"not valid YAML: {exc}") from None
+        raise ConfigError(path, "", f"{label}not valid YAML: {safe_yaml.one_line(exc)}") from None
 
 
 def load_config(path: str | Path, overrides: list[str] | None = None, seed: int | None = None,
@@ -249,8 +260,10 @@ def load_config(path: str | Path, overrides: list[str] | None = None, seed: int 
     if seed is not None:
         raw["seed"] = int(seed)
     if n_jobs is not None:
-        raw.setdefault("parallel", {})
-        raw["parallel"] = {**(raw["parallel"] or {}), "n_jobs": int(n_jobs)}
+        par = raw.get("parallel") or {}
+        if not isinstance(par, dict):
+            raise ConfigError(path, "parallel", f"expected a mapping, got {type(par).__name__} {par!r}")
+        raw["parallel"] = {**par, "n_jobs": int(n_jobs)}
     return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
 
 
@@ -383,6 +396,8 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     for k, v in (("population", population), ("generations", generations)):
         if v is not None and v < 1:
             raise ConfigError(f, f"optimizer.{k}", f"must be >= 1, got {v}")
+        if v is not None and v > MAX_COUNT:  # before anything is allocated for it
+            raise ConfigError(f, f"optimizer.{k}", f"must be <= {MAX_COUNT:,}, got {v:,}")
     refine_raw = _get(opt, "refine", dict, f, "optimizer.", default={})
     bad = sorted(set(refine_raw) - {"stages", "shrink"})
     if bad:
@@ -404,9 +419,9 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     optimizer = OptimizerConfig(method, population, generations, options, RefineConfig(stages, shrink))
 
     par = dict(_get(raw, "parallel", dict, f, "", default={}))
-    bad = sorted(set(par) - {"backend", "n_jobs", "address"})
+    bad = sorted(set(par) - {"backend", "n_jobs", "address", "connect_timeout_s"})
     if bad:
-        raise ConfigError(f, f"parallel.{bad[0]}", "unknown key; allowed: backend, n_jobs, address")
+        raise ConfigError(f, f"parallel.{bad[0]}", "unknown key; allowed: backend, n_jobs, address, connect_timeout_s")
     backend = _get(par, "backend", str, f, "parallel.", default="loky")
     if backend not in ("serial", "loky", "dask", "threads"):
         raise ConfigError(f, "parallel.backend", f"unknown backend {backend!r}; allowed: serial, loky, dask, threads")
@@ -416,7 +431,16 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     address = _get(par, "address", str, f, "parallel.", default=None)
     if address and backend != "dask":
         raise ConfigError(f, "parallel.address", f"only used with backend: dask (backend is {backend!r})")
-    parallel = ParallelConfig(backend, n_jobs, address)
+    if address and not (_INPROC.fullmatch(address) or _ADDRESS.fullmatch(address)
+                        and 0 < int(address.rsplit(":", 1)[1]) < 65536):
+        raise ConfigError(f, "parallel.address", "expected a scheduler address such as tcp://10.0.0.5:8786 (tcp, "
+                                                 f"tls, ucx, ws or wss; a host and a port 1-65535), got {address!r}")
+    timeout = _get(par, "connect_timeout_s", (int, float), f, "parallel.", default=30.0)
+    if "connect_timeout_s" in par and not address:
+        raise ConfigError(f, "parallel.connect_timeout_s", "only used with parallel.address (a Dask scheduler)")
+    if not 0 < timeout <= 3600:
+        raise ConfigError(f, "parallel.connect_timeout_s", f"expected seconds in (0, 3600], got {timeout!r}")
+    parallel = ParallelConfig(backend, n_jobs, address, float(timeout))
     output = str(_get(raw, "output", str, f, "", default="runs"))
     validation = parse_validation(raw.get("validation"), f)
 
@@ -428,7 +452,8 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
         "parameters": parameters,
         "optimizer": {"method": method, "population": population, "generations": generations, **options,
                       "refine": {"stages": stages, "shrink": shrink}},
-        "parallel": {"backend": backend, "n_jobs": n_jobs, "address": address},
+        "parallel": {"backend": backend, "n_jobs": n_jobs, "address": address,
+                     **({"connect_timeout_s": timeout} if "connect_timeout_s" in par else {})},
         "output": output,
     }
     if raw.get("validation") is not None:  # absent stays absent: the config hash of older jobs is unchanged

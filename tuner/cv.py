@@ -41,6 +41,8 @@ from tuner.config import ConfigError, RunConfig, ValidationConfig
 from tuner.deployment import DEFAULTS_MEANING, defaults_baseline
 from tuner.loop import minimize
 from tuner.objective import hook
+from tuner.selection import plain_score, scored, tune_and_select
+from tuner.setup import LiveMap, build_objective, new_optimizer, worker_count
 
 __all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score",
            "scored", "scores_on_test_data"]
@@ -91,23 +93,6 @@ class CVOutcome:
         return out
 
 
-def plain_score(objective: Any, params: dict[str, Any]) -> tuple[float, str, int]:
-    """Plain score (fitness, failure, number of recordings) of ``params`` on ``objective``'s data."""
-    fit, failed, names = scored(objective, params)
-    return fit, failed, max(len(names), 1)
-
-
-def scored(objective: Any, params: dict[str, Any], which: str = "train") -> tuple[float, str, tuple[str, ...]]:
-    """Plain score (fitness, failure, recording names) of ``params`` on ``objective``'s ``which`` data
-    (``train`` or ``test``); no names for an objective without a ``score`` hook."""
-    score = hook(objective, "score")
-    if score is None:
-        ev = objective(params)
-        return float(getattr(ev, "fitness", ev)), getattr(ev, "error", ""), ()
-    s = score(params, which)
-    return float(s.fitness), s.failed, tuple(str(n) for n in s.recordings)
-
-
 def scores_on_test_data(objective: Any, params: dict[str, Any] | None,
                         defaults: dict[str, Any] | None) -> dict[str, Any]:
     """``{n, recordings, tuned, defaults, failed}`` on the objective's ``test:`` data; empty without any."""
@@ -137,8 +122,6 @@ def scaled_budget(cfg: RunConfig, fraction: float) -> RunConfig:
 
 def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int,
           callback: Callable | None = None) -> tuple[dict[str, Any], float]:
-    from tuner.run import new_optimizer
-
     space = cfg.space(objective)
     if space.dim == 0:
         raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
@@ -152,8 +135,6 @@ def _procedure(cfg: RunConfig, objective: Any, evaluate: Callable) -> tuple[dict
     """Tune ``objective`` as a run would: plainly, or with the final selection of ``validation.select``."""
     if cfg.validation.select is None:
         return (*_tune(cfg, objective, evaluate, stage=0), {})
-    from tuner.validation import tune_and_select
-
     return tune_and_select(cfg, objective, lambda obj, cb: _tune(cfg, obj, evaluate, 0, cb))
 
 
@@ -181,8 +162,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
     ConfigError
         The objective has no ``cv_folds`` hook, or gives fewer than two folds.
     """
-    from tuner.registry import build_objective
-    from tuner.run import _LiveMap, _n_jobs
+    from tuner.registry import say_imports
 
     t0 = time.time()
     say = progress or (lambda msg: None)
@@ -190,10 +170,9 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         raise ConfigError(cfg.source, "validation.budget_fraction", f"expected a number in (0, 1], got "
                           f"{budget_fraction!r}")
     cfg = scaled_budget(cfg, budget_fraction)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except ValueError as exc:
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
+    if full_params is None:  # `tuner cv CONFIG` (a run's CV follows its run, which said it already)
+        say_imports(cfg.objective, cfg.source)
+    objective = build_objective(cfg)
     folds_fn = hook(objective, "cv_folds")
     if folds_fn is None:
         raise ConfigError(cfg.source, "objective", f"{type(objective).__name__} has no cv_folds hook: "
@@ -204,11 +183,11 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         raise ConfigError(cfg.source, "objective", str(exc)) from None
     if len(folds) < 2:
         raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
-    n_jobs, notes = _n_jobs(cfg, cfg.optimizer.population or 2)
+    n_jobs, notes = worker_count(cfg, cfg.space(objective))
     out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
     defaults = defaults_baseline(objective, cfg.space(objective))  # fixed values wherever written
     for i, (name, train, test) in enumerate(folds):
-        evaluate = _LiveMap(cfg, n_jobs)
+        evaluate = LiveMap(cfg, n_jobs)
         try:
             params, train_fit, sel = _procedure(cfg, train, evaluate)
         finally:
@@ -225,7 +204,7 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
         if full_params is not None:
             params, train_fit = dict(full_params), math.nan
         else:
-            evaluate = _LiveMap(cfg, n_jobs)
+            evaluate = LiveMap(cfg, n_jobs)
             try:
                 params, train_fit, sel = _procedure(cfg, objective, evaluate)
             finally:

@@ -154,7 +154,9 @@ def write_dashboard(root: str | Path, refresh_s: float = LIVE_REFRESH_S) -> Path
 
     now = _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
     n_runs = sum(r["kind"] != "sweep" for r in rows)
-    md = ["# Runs", "", f"{n_runs} runs and {len(rows) - n_runs} sweeps under this folder. Written {now}." +
+    n_sweeps = len(rows) - n_runs
+    counts = f"{n_runs} run{'' if n_runs == 1 else 's'} and {n_sweeps} sweep{'' if n_sweeps == 1 else 's'}"
+    md = ["# Runs", "", f"{counts} under this folder. Written {now}." +
           (f" Some are running: the page reloads every {refresh_s:g} s." if running else ""), ""]
     scripts: tuple[str, ...] = ()
     data = None

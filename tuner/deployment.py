@@ -90,6 +90,9 @@ class Deployment:
         extra = sorted(set(self.sources) - set(self.values))
         if extra:
             raise ValueError(f"deployment.sources: {extra} name no value")
+        for k, options in self.choices.items():  # a value outside its choices has no C enum: never silently
+            if k in self.values and isinstance(options, (list, tuple)) and self.values[k] not in options:
+                raise ValueError(f"deployment.values.{k}: {self.values[k]!r} is not one of its choices {list(options)}")
         rate = self.sample_rate_hz
         if rate is not None and not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0):
             raise ValueError(f"deployment.sample_rate_hz: expected a positive number or null, got {rate!r}")
@@ -194,15 +197,11 @@ def load_deployment(run_dir: str | Path) -> Deployment:
             return Deployment.from_doc(best.deployment, "deployment")
         except ValueError as exc:
             raise RunError(f"{rd.file('best.yaml')}: {exc}") from None
-    from tuner.config import ConfigError, config_from_dict
-    from tuner.registry import build_objective
+    from tuner.config import ConfigError
+    from tuner.setup import run_objective
 
-    raw = dict(rd.config())
-    source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
     try:
-        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-        space = cfg.space(objective)
+        _, objective, space = run_objective(rd)
     except (ConfigError, ValueError, OSError, ImportError) as exc:
         raise RunError(f"{rd.file('best.yaml')}: no deployment recorded and the objective does not "
                        f"rebuild from config.yaml: {exc}") from None

@@ -36,10 +36,10 @@ import threading
 import time
 import traceback
 import uuid
-from dataclasses import dataclass, field
 from typing import Any
 
-from tuner.objective import Evaluation, as_evaluation, hook
+from tuner import signals as _signals
+from tuner.objective import EvalRecord, Evaluation, SeededCall, as_evaluation, hook
 
 __all__ = ["Evaluator", "EvalRecord", "BACKENDS", "evaluate_one", "TimedObjective"]
 
@@ -48,52 +48,35 @@ BACKENDS = ("serial", "loky", "dask", "threads")
 _WORKER_CACHE: dict[str, Any] = {}
 
 
-@dataclass(frozen=True)
-class EvalRecord:
-    """One evaluation as the run records it.
-
-    ``raised`` is True when the objective raised (or timed out) rather than returning a result.
-    """
-
-    evaluation: Evaluation
-    seconds: float
-    worker: str = field(default="")
-    raised: bool = False
-
-
 class _SigintWatch:
-    """Count SIGINTs delivered to this process, so that a KeyboardInterrupt raised by an objective's
-    own code (a recorded failure) is told apart from the user's Ctrl-C (which stops the run)."""
+    """Count stop signals (Ctrl-C, SIGTERM, SIGHUP; :mod:`tuner.signals`) delivered to this process, so
+    that a KeyboardInterrupt raised by an objective's own code (a recorded failure) is told apart from
+    the user's Ctrl-C or a scheduler's SIGTERM (which stop the run)."""
 
-    count = 0
+    @staticmethod
+    def count() -> int:
+        return _signals.count()
 
-    @classmethod
-    def install(cls) -> None:
-        if threading.current_thread() is not threading.main_thread():
-            return
-        if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
-            signal.signal(signal.SIGINT, cls._handler)
-
-    @classmethod
-    def _handler(cls, signum, frame):
-        cls.count += 1
-        raise KeyboardInterrupt
+    @staticmethod
+    def install(others: bool = False) -> None:
+        _signals.install(sigint=True, others=others)
 
 
 def watch_sigint() -> int:
-    """Count this process's SIGINTs from now on (main thread, default handler only); the count so far.
+    """Count this process's SIGINTs (and SIGTERM/SIGHUP) from now on (main thread; handlers at their
+    defaults only); the count so far.
 
     A run compares the count at each generation's end: a Ctrl-C whose KeyboardInterrupt was swallowed
     (by an objective that catches it, or raised inside a ``__del__`` where Python only prints it) still
     stops the run there.
     """
-    _SigintWatch.install()
-    return _SigintWatch.count
+    _SigintWatch.install(others=True)
+    return _SigintWatch.count()
 
 
 def sigint_count() -> int:
-    """SIGINTs counted since :func:`watch_sigint` (0 when not watched)."""
-    return _SigintWatch.count
+    """Stop signals counted since :func:`watch_sigint` (0 when not watched)."""
+    return _SigintWatch.count()
 
 
 def _failure(exc: BaseException) -> Evaluation:
@@ -104,13 +87,13 @@ def _failure(exc: BaseException) -> Evaluation:
 
 def _call(objective: Any, params: dict[str, Any]) -> tuple[Evaluation, bool]:
     """(evaluation, raised): exceptions, SystemExit and an objective's own KeyboardInterrupt are failures."""
-    seen = _SigintWatch.count
+    seen = _SigintWatch.count()
     try:
         return as_evaluation(objective(params)), False
     except KeyboardInterrupt as exc:
         unwatched = (threading.current_thread() is threading.main_thread()
                      and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-        if _SigintWatch.count != seen or unwatched:
+        if _SigintWatch.count() != seen or unwatched:
             raise  # the user pressed Ctrl-C (or we cannot tell): stop the run
         return _failure(exc), True
     except (Exception, SystemExit) as exc:  # the objective is user code: record what it raised and go on
@@ -122,8 +105,6 @@ def evaluate_one(objective: Any, params: dict[str, Any]) -> EvalRecord:
 
     A :class:`TimedObjective` runs the call in a child process that is killed after its timeout.
     """
-    from tuner.loop import SeededCall
-
     t0 = time.perf_counter()
     if isinstance(objective, TimedObjective) and objective.timeout_s:
         ev, raised = objective.call_with_timeout(params)
@@ -330,6 +311,7 @@ class Evaluator:
         self.backend = backend if (backend != "loky" or int(n_jobs) > 1) else "serial"
         self.n_jobs = int(n_jobs)
         self.address = address
+        self.connect_timeout_s = 30.0  # set by the run from parallel.connect_timeout_s
         self.chunks_per_worker = int(chunks_per_worker)
         self.token = uuid.uuid4().hex
         self._parallel = None
@@ -389,8 +371,6 @@ class Evaluator:
 
     def _run_threads(self, items: list[Any]) -> list[EvalRecord]:
         """The whole batch through ``evaluate_batch`` (see the module docstring); serial without it."""
-        from tuner.loop import SeededCall
-
         seeded = isinstance(self.objective, SeededCall)
         inner = self.objective.objective if seeded else self.objective
         timed = inner if isinstance(inner, TimedObjective) and inner.timeout_s else None
@@ -469,7 +449,7 @@ class Evaluator:
                     "parallel.backend: dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)"
                 ) from None
             if self.address:
-                self._client = Client(self.address, timeout="30s")
+                self._client = Client(self.address, timeout=f"{self.connect_timeout_s:g}s")
             else:
                 self._cluster = LocalCluster(n_workers=self.n_jobs, threads_per_worker=1, processes=True,
                                              host="127.0.0.1", dashboard_address=None)

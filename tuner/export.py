@@ -29,11 +29,14 @@ __all__ = ["export", "FORMATS", "provenance", "export_c_filter", "verify_c"]
 
 
 def _build(run_dir: Path) -> Any:
-    """The run's objective, or None when it no longer builds (moved data, removed package...)."""
+    """The run's objective, or None when it no longer builds (moved data, removed package...) or is a
+    ``kind: python`` callable: exporting reads a run directory as data and never imports code it names."""
     from tuner.registry import build_objective
     from tuner.rundir import RunDir
 
     cfg = RunDir(run_dir).config()
+    if not isinstance(cfg.get("objective"), dict) or cfg["objective"].get("kind") == "python":
+        return None
     try:
         return build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
     except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds

@@ -159,6 +159,22 @@ def _c_ident(name: str) -> str:
     return s if s and not s[0].isdigit() else f"P_{s}"
 
 
+def _c_idents(names: list[str]) -> dict[str, str]:
+    """Distinct C identifiers for ``names``: names that map to the same one (``k`` and ``K``, ``a-b`` and
+    ``a_b``) get ``_2``, ``_3``... in their order, never two constants of one name."""
+    out: dict[str, str] = {}
+    used: set[str] = set()
+    for name in names:
+        base = ident = _c_ident(name)
+        n = 1
+        while ident in used:
+            n += 1
+            ident = f"{base}_{n}"
+        used.add(ident)
+        out[name] = ident
+    return out
+
+
 def _c_number(v: Any) -> str:
     if isinstance(v, bool):
         return "1" if v else "0"
@@ -201,11 +217,11 @@ def _rate_line(doc: dict[str, Any]) -> str:
     return s + (f" ({note})." if note else ".")
 
 
-def _c_value(prefix: str, name: str, v: Any, choices: list | None) -> list[str]:
+def _c_value(prefix: str, name: str, v: Any, choices: list | None, ident: str | None = None) -> list[str]:
     """The C lines of one value: booleans as ``int`` 0/1, numbers as ``int``/``double`` (arrays of
     numbers as ``double[]``), an option with choices as one ``#define`` per choice and an ``int`` equal to
     the chosen one; other strings have no C form (a comment)."""
-    ident = f"{prefix}_{_c_ident(name)}"
+    ident = f"{prefix}_{ident or _c_ident(name)}"
     if isinstance(v, bool) or isinstance(v, int):
         return [f"static const int {ident} = {_c_number(v)};"]
     if isinstance(v, float):
@@ -241,11 +257,13 @@ def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | No
         f" * Exported {_comment(doc.get('exported'))}; commit {_comment(doc.get('git_commit') or 'unknown')}.",
         " * Units (per parameter, as the objective defines them):",
     ]
+    idents = _c_idents([*doc["params"], *(tables or {})])
     dep = doc.get("deployment") or {}
     sources = dep.get("sources") or {}
     for name in doc["params"]:
         src = f" [{sources[name]}]" if name in sources else ""
-        lines.append(f" *   {prefix}_{_c_ident(name)}: {_comment(units.get(name) or 'unit not declared')}{src}")
+        renamed = f" (parameter {_comment(name)})" if idents[name] != _c_ident(name) else ""
+        lines.append(f" *   {prefix}_{idents[name]}{renamed}: {_comment(units.get(name) or 'unit not declared')}{src}")
     for line in _notes(doc):
         lines.append(f" * {_comment(line)}")
     for key, v in (dep.get("scoring") or {}).items():  # never values: they only served scoring the run
@@ -253,9 +271,9 @@ def to_c(doc: dict[str, Any], prefix: str = "TUNER", tables: dict[str, Any] | No
     lines += [" */", f"#ifndef {guard}", f"#define {guard}", "", "#include <math.h> /* INFINITY, NAN */", ""]
     choices = dep.get("choices") or {}
     for name, v in doc["params"].items():
-        lines += _c_value(prefix, name, v, choices.get(name))
+        lines += _c_value(prefix, name, v, choices.get(name), idents[name])
     for name, t in (tables or {}).items():
-        ident = f"{prefix}_{_c_ident(name)}"
+        ident = f"{prefix}_{idents[name]}"
         arr = np.asarray(t["table"], float)
         if arr.ndim == 1:
             arr = arr[None, :]

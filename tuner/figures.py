@@ -44,9 +44,20 @@ def pyplot():
 
 
 def _save(fig, path: Path) -> Path:
+    """Save through a temporary file and a rename, never through a symbolic link (:mod:`tuner.safe_io`)."""
+    import os
+
+    from tuner.safe_io import check_not_link, open_nofollow
+
     path = Path(path)
+    check_not_link(path.parent)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=DPI)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    if os.path.lexists(tmp):
+        os.unlink(tmp)
+    with os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
+        fig.savefig(fh, dpi=DPI, format=path.suffix.lstrip(".") or "png")
+    os.replace(tmp, path)
     pyplot().close(fig)
     return path
 
@@ -288,8 +299,10 @@ def responses_figure(sweep_dir: Path, done: pd.DataFrame):
         rd = RunDir(jobs / job)
         try:
             cfg, best = rd.config(), rd.best()
+            if cfg["objective"].get("kind") == "python":  # a report never imports code a run directory names
+                return None
             obj = build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", rd.path)))
-        except (RunError, ValueError, OSError, ImportError, KeyError):
+        except (RunError, ValueError, OSError, ImportError, KeyError, AttributeError):
             return None
         fn = hook(obj, "traces")
         if fn is None:
@@ -331,6 +344,9 @@ def sweep_figures(sweep_dir: Path, df: pd.DataFrame) -> list[tuple[str, Path]]:
     per method (filter objectives), best parameters of every job in unit coordinates."""
     plt = pyplot()
     figs_dir = Path(sweep_dir) / "figures"
+    from tuner.safe_io import check_not_link
+
+    check_not_link(figs_dir)
     figs_dir.mkdir(parents=True, exist_ok=True)
     out: list[tuple[str, Path]] = []
     done = df[df["status"] == "finished"] if len(df) else df

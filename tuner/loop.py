@@ -22,8 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from tuner.evaluate import EvalRecord
-from tuner.objective import as_evaluation
+from tuner.objective import EvalRecord, SeededCall, as_evaluation
 from tuner.space import Space
 
 __all__ = ["minimize", "MinimizeResult", "Generation", "GenerationStats", "BestPoint", "SeededCall",
@@ -37,19 +36,6 @@ def evaluation_seed(run_seed: int, i: int) -> int:
     """The seed of evaluation ``i`` of a run: ``SeedSequence(run_seed, spawn_key=(_EVAL_KEY, i))``, 63 bits."""
     ss = np.random.SeedSequence(int(run_seed), spawn_key=(_EVAL_KEY, int(i)))
     return int(ss.generate_state(1, np.uint64)[0] >> np.uint64(1))
-
-
-@dataclass(frozen=True)
-class SeededCall:
-    """Picklable adapter: called with ``(params, seed)``, passes the seed on if the objective takes one."""
-
-    objective: Any
-
-    def __call__(self, item: tuple[dict[str, Any], int]) -> Any:
-        params, seed = item
-        if getattr(self.objective, "takes_seed", False):
-            return self.objective(params, seed=seed)
-        return self.objective(params)
 
 
 @dataclass(frozen=True)

@@ -26,7 +26,8 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 if TYPE_CHECKING:  # pragma: no cover
     from tuner.space import Space
 
-__all__ = ["Evaluation", "Score", "Objective", "TunableObjective", "HOOKS", "hook", "as_evaluation", "PENALTY"]
+__all__ = ["Evaluation", "EvalRecord", "SeededCall", "Score", "Objective", "TunableObjective", "HOOKS", "hook",
+           "as_evaluation", "PENALTY"]
 
 #: fitness given to failed evaluations (exception, NaN, inf); finite so every optimiser copes.
 PENALTY = 1.0e12
@@ -222,3 +223,32 @@ def as_evaluation(value: Any) -> Evaluation:
     if ev.status == "failed" and not math.isfinite(ev.fitness):
         return Evaluation(PENALTY, ev.metrics, "failed", ev.error)
     return ev
+
+
+# The evaluation contract: how the loop calls an objective and what an evaluator hands back.
+
+
+@dataclass(frozen=True)
+class SeededCall:
+    """Picklable adapter: called with ``(params, seed)``, passes the seed on if the objective takes one."""
+
+    objective: Any
+
+    def __call__(self, item: tuple[dict[str, Any], int]) -> Any:
+        params, seed = item
+        if getattr(self.objective, "takes_seed", False):
+            return self.objective(params, seed=seed)
+        return self.objective(params)
+
+
+@dataclass(frozen=True)
+class EvalRecord:
+    """One evaluation as the run records it.
+
+    ``raised`` is True when the objective raised (or timed out) rather than returning a result.
+    """
+
+    evaluation: Evaluation
+    seconds: float
+    worker: str = field(default="")
+    raised: bool = False

@@ -5,11 +5,14 @@
 
 1. every name under ``parameters:`` and ``objective.fixed:`` is one the objective knows
    (``parameter_names`` hook; a misspelled ``betta:`` names the key, the allowed names and the
-   closest one);
+   closest one); a name under ``objective.fixed:`` that ``parameters:`` also searches, or fixes to
+   another value, is an error (one value, one place);
    and each searched parameter's ``low`` and ``high`` is a value the objective accepts
    (``check_params`` hook, at the default point with one parameter moved to its bound);
 2. the objective's ``preflight`` hook loads and validates all its data once (bad files, missing
    columns, NaN rows, ``warmup_s`` longer than a recording...) and returns warnings (units);
+   then ``validation.cv`` must give folds (``cv_folds`` hook: e.g. ``folds`` at most the tuning
+   recordings), so a CV that cannot run is found before the tuning, not after it;
 3. with ``parallel.backend: dask`` and a scheduler ``address``, the same hook runs on every worker
    (a ``kind: python`` callable or a data file missing there is found now);
 4. the default parameters (``default_params`` hook, else the centre of the space) are evaluated
@@ -20,6 +23,7 @@
 from __future__ import annotations
 
 import difflib
+import os
 from collections.abc import Callable
 from typing import Any
 
@@ -29,7 +33,7 @@ from tuner.config import ConfigError, RunConfig
 from tuner.objective import hook
 from tuner.space import Space
 
-__all__ = ["preflight", "check_names", "check_bounds", "reference_point"]
+__all__ = ["preflight", "check_names", "check_bounds", "check_cv_folds", "reference_point"]
 
 
 def _key_error(cfg: RunConfig, exc: ValueError, default_key: str = "objective") -> ConfigError:
@@ -57,6 +61,17 @@ def check_names(cfg: RunConfig, objective: Any, space: Space) -> None:
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
                 raise ConfigError(cfg.source, f"{where}.{name}",
                                   f"not a parameter of this objective{hint}; allowed: {', '.join(known)}")
+    if cfg.parameters is None or not isinstance(fixed, dict):
+        return
+    for name, value in fixed.items():  # one value in two places: which one the run used would be a guess
+        if name in space.free_names:
+            raise ConfigError(cfg.source, f"objective.fixed.{name}",
+                              f"{value!r} is fixed here but parameters.{name} searches it; write it in one "
+                              f"place (objective.fixed, or parameters.{name} with low/high or fixed)")
+        if name in space.fixed and space.fixed[name] != value:
+            raise ConfigError(cfg.source, f"objective.fixed.{name}",
+                              f"{value!r} contradicts parameters.{name}: {{fixed: {space.fixed[name]!r}}}; "
+                              f"write it in one place")
 
 
 def check_bounds(cfg: RunConfig, objective: Any, space: Space) -> None:
@@ -100,16 +115,40 @@ def _worker_preflight(objective: Any) -> str:
     return ""
 
 
+def _connect(cfg: RunConfig, client_cls: Any) -> Any:
+    """A Dask client of ``parallel.address`` within ``parallel.connect_timeout_s``, or a :class:`ConfigError`.
+
+    The connection is made in a helper thread with a hard deadline: a server that accepts but is not a
+    scheduler can leave the client's handshake waiting forever, or answer bytes it reads as a huge frame.
+    """
+    import threading
+
+    t = cfg.parallel.connect_timeout_s
+    box: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            box["client"] = client_cls(cfg.parallel.address, timeout=f"{t:g}s")
+        except BaseException as exc:  # noqa: BLE001 - reported as the error line below
+            box["error"] = exc
+
+    th = threading.Thread(target=connect, daemon=True, name="tuner-dask-connect")
+    th.start()
+    th.join(t + 5.0)
+    if "client" in box:
+        return box["client"]
+    why = (f"no Dask scheduler answered within {t:g} s (parallel.connect_timeout_s)" if th.is_alive() else
+           f"cannot reach the scheduler: {type(box['error']).__name__}: {str(box['error'])[:300]}")
+    raise ConfigError(cfg.source, "parallel.address", f"{cfg.parallel.address}: {why}")
+
+
 def _dask_check(cfg: RunConfig, objective: Any) -> None:
     try:
         from distributed import Client
     except ImportError:
         raise ConfigError(cfg.source, "parallel.backend",
                           "dask needs the 'distributed' package: pip install -e '.[cluster]' (in a clone)") from None
-    try:
-        client = Client(cfg.parallel.address, timeout="30s")
-    except OSError as exc:
-        raise ConfigError(cfg.source, "parallel.address", f"cannot reach the scheduler: {exc}") from None
+    client = _connect(cfg, Client)
     try:
         results = client.run(_worker_preflight, objective)
     finally:
@@ -119,6 +158,73 @@ def _dask_check(cfg: RunConfig, objective: Any) -> None:
         worker, why = next(iter(sorted(bad.items())))
         raise ConfigError(cfg.source, "objective", f"fails on Dask worker {worker} ({len(bad)} of {len(results)} "
                                                    f"workers): {why}")
+
+
+def check_cv_folds(cfg: RunConfig, objective: Any) -> None:
+    """With ``validation.cv``, the objective must give at least two folds (``cv_folds`` hook) for the
+    configured ``folds`` (``kfold``) or its own grouping (``logo``); else a :class:`ConfigError` before tuning."""
+    v = cfg.validation
+    if v.cv is None:
+        return
+    fn = hook(objective, "cv_folds")
+    if fn is None:
+        raise ConfigError(cfg.source, "validation.cv", f"{type(objective).__name__} has no held-out folds (no "
+                                                       "cv_folds hook): it cannot be cross-validated; remove it")
+    try:
+        n = len(list(fn(v.folds if v.cv == "kfold" else None)))
+    except ValueError as exc:
+        raise ConfigError(cfg.source, "validation.folds" if v.cv == "kfold" else "validation.cv",
+                          f"{exc}; the cross-validation after the run needs it") from None
+    if n < 2:
+        raise ConfigError(cfg.source, "validation", f"the objective gives {n} fold(s) here; cross-validation "
+                                                    "needs at least 2")
+
+
+def _child_eval(objective: Any, point: dict[str, Any], send: Any) -> None:
+    from tuner.evaluate import evaluate_one
+
+    code = 0
+    try:
+        send.send(evaluate_one(objective, point))
+    except BaseException:  # pragma: no cover - evaluate_one records everything but a stop signal
+        code = 1
+    finally:
+        os._exit(code)
+
+
+def _evaluate_in_child(cfg: RunConfig, objective: Any, point: dict[str, Any]) -> Any:
+    """The default point evaluated in a forked child, so that an objective that calls ``os._exit`` or
+    crashes the interpreter there is one :class:`ConfigError` naming the exit status or signal."""
+    import multiprocessing as mp
+    import signal as _signal
+
+    ctx = mp.get_context("fork")
+    recv, send = ctx.Pipe(duplex=False)
+    child = ctx.Process(target=_child_eval, args=(objective, point, send), daemon=True)
+    child.start()
+    send.close()
+    try:
+        try:
+            rec = recv.recv()
+        except EOFError:
+            rec = None
+        child.join()
+    finally:
+        if child.is_alive():
+            child.kill()
+            child.join()
+        recv.close()
+    if rec is not None:
+        return rec
+    code = child.exitcode
+    how = f"exited with status {code}"
+    if code is not None and code < 0:
+        try:
+            how = f"killed by signal {_signal.Signals(-code).name}"
+        except ValueError:
+            how = f"killed by signal {-code}"
+    raise ConfigError(cfg.source, "objective", f"evaluating the default parameters crashed the process ({how}); "
+                                               "an objective must return or raise, not end the process")
 
 
 def preflight(cfg: RunConfig, objective: Any, space: Space,
@@ -144,7 +250,8 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
         _dask_check(cfg, objective)
     if evaluate:
         point = reference_point(objective, space)
-        rec = evaluate_one(objective, point)
+        in_child = cfg.objective.get("kind") == "python" or cfg.parallel.backend in ("loky", "dask")
+        rec = _evaluate_in_child(cfg, objective, point) if in_child else evaluate_one(objective, point)
         if rec.raised:
             raise ConfigError(cfg.source, "objective", f"evaluating the default parameters failed: "
                                                        f"{rec.evaluation.error}")

@@ -19,6 +19,7 @@ and ``explain(name) -> dict | None`` (parameters, bounds, units, equations) show
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -37,13 +38,31 @@ class RegistryError(ValueError):
     """A kind that cannot be registered or loaded (name collision, broken entry point)."""
 
 
-def resolve_callable(spec: str) -> Any:
-    """``"package.module:attr.sub"`` -> the object (``ImportError``/``AttributeError`` if missing)."""
+def resolve_callable(spec: str, base_dir: str | Path | None = None) -> Any:
+    """``"package.module:attr.sub"`` -> the object (``ImportError``/``AttributeError`` if missing).
+
+    With ``base_dir`` (a config's folder) that folder is searched first, so a module next to the config
+    imports without ``PYTHONPATH``.
+    """
     module, _, attr = spec.partition(":")
+    if base_dir is not None:
+        d = str(Path(base_dir).resolve())
+        if d not in sys.path:
+            sys.path.insert(0, d)
     obj = importlib.import_module(module)
     for part in attr.split("."):
         obj = getattr(obj, part)
     return obj
+
+
+def say_imports(objective: Mapping[str, Any], source: Any) -> None:
+    """Tell on stderr that a ``kind: python`` objective is about to be imported and run (by ``run``,
+    ``resume``, ``evaluate`` and ``cv``; the read-only commands never build it)."""
+    if isinstance(objective, Mapping) and objective.get("kind") == "python":
+        import sys
+
+        print(f"note: {source}: objective.kind python imports and runs {objective.get('callable')!r}: "
+              "trust it as you would the code itself", file=sys.stderr, flush=True)
 
 
 @dataclass(frozen=True)
@@ -56,6 +75,8 @@ class PythonObjective:
 
     callable: str
     options: dict = field(default_factory=dict)
+    #: the config's folder, searched first for the module (no PYTHONPATH needed)
+    base_dir: str | None = None
 
     @classmethod
     def from_config(cls, section: Mapping[str, Any], base_dir: Path | None = None) -> PythonObjective:
@@ -67,14 +88,14 @@ class PythonObjective:
         options = section.get("options") or {}
         if not isinstance(options, Mapping):
             raise ValueError(f"objective.options: expected a mapping of keyword arguments, got {options!r}")
-        obj = cls(str(section["callable"]), dict(options))
+        obj = cls(str(section["callable"]), dict(options), str(base_dir) if base_dir is not None else None)
         obj.preflight()
         return obj
 
     def preflight(self) -> list[str]:
         """Import the callable (in the process that calls this: the driver, or a Dask worker)."""
         try:
-            fn = resolve_callable(self.callable)
+            fn = resolve_callable(self.callable, self.base_dir)
         except (ImportError, AttributeError) as exc:
             raise ValueError(f"objective.callable: cannot import {self.callable!r} ({exc})") from None
         if not callable(fn):
@@ -82,7 +103,7 @@ class PythonObjective:
         return []
 
     def __call__(self, params: dict[str, Any]) -> Any:
-        return resolve_callable(self.callable)(params, **self.options)
+        return resolve_callable(self.callable, self.base_dir)(params, **self.options)
 
     def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
         """The parameters as they are: a user callable declares nothing else."""
@@ -192,7 +213,11 @@ class Registry:
             raise RegistryError(f"objective.kind: expected a name, got {kind!r}; allowed: {sorted(self.kinds())}")
         factory = self.get(kind)
         body = {k: v for k, v in section.items() if k not in ENGINE_KEYS}
-        return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+        try:
+            return factory.from_config(body, Path(base_dir) if base_dir else Path.cwd())
+        except (TypeError, OverflowError) as exc:  # a value of the wrong type or size in the section
+            raise ValueError(f"objective: a value of the wrong type or size ({exc}); `tuner describe "
+                             f"{kind}` lists the keys") from None
 
 
 #: the process-wide registry (the engine's own ``python`` kind plus every installed entry point)

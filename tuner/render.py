@@ -138,9 +138,15 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     """Write to a temporary file and rename: a reader (a reloading browser) sees the old or the new file."""
     import os
 
+    from tuner.safe_io import check_not_link, named, open_nofollow
+
     path = Path(path)
+    check_not_link(path.parent)
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    tmp.write_text(text, encoding="utf-8")
+    if os.path.lexists(tmp):
+        os.unlink(tmp)
+    with named(path), os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
+        fh.write(text.encode("utf-8"))
     os.replace(tmp, path)
     return path
 

@@ -11,10 +11,11 @@ import math
 from pathlib import Path
 from typing import Any
 
-from tuner.config import ConfigError, config_from_dict, load_config, read_yaml
+from tuner.config import ConfigError, load_config, read_yaml
 from tuner.objective import hook
-from tuner.registry import build_objective
+from tuner.registry import say_imports
 from tuner.rundir import RunDir
+from tuner.setup import build_objective, run_config
 
 __all__ = ["evaluate_target"]
 
@@ -30,20 +31,13 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
         rd = RunDir(target)
         if not rd.file("config.yaml").exists():
             raise ConfigError(target, "", "not a run directory (no config.yaml)")
-        raw = dict(rd.config())
-        source, base_dir = raw.pop("source", str(target / "config.yaml")), Path(raw.pop("base_dir", target))
-        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
+        cfg = run_config(rd)
         if rd.has_best():
             best_params = dict(rd.best().params)
     else:
         cfg = load_config(target)
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except ValueError as exc:
-        key, _, rest = str(exc).partition(": ")
-        if key.startswith("objective") and rest:
-            raise ConfigError(cfg.source, key, rest) from None
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
+    say_imports(cfg.objective, cfg.source)
+    objective = build_objective(cfg)
     space = cfg.space(objective)
     if params_file:
         doc = read_yaml(params_file, "--params")
@@ -59,10 +53,21 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
         if baseline is None:
             raise ConfigError(target, "", "no parameters: give --params (a config has no best)")
         params = {k: v for k, v in baseline.items() if k in space}
+    names_fn = hook(objective, "parameter_names")
+    unknown = sorted(set(params) - set(names_fn())) if params_file and names_fn is not None else []
+    if unknown:  # a misspelt name would otherwise be reported as the right name missing
+        raise ConfigError(params_file, f"params.{unknown[0]}", f"not a parameter of this objective; allowed: "
+                                                                 f"{', '.join(sorted(names_fn()))}")
     full = {**space.fixed, **params}
     missing = [n for n in space.free_names if n not in full]
     if missing:
         raise ConfigError(params_file or target, "params", f"missing value(s) for {missing}")
+    check = hook(objective, "check_params")
+    try:  # a value the objective refuses is an error line, not a traceback from the scoring
+        if check is not None:
+            check(full)
+    except ValueError as exc:
+        raise ConfigError(params_file or target, "params", str(exc)) from None
     warnings: list[str] = []  # the new data's preflight warnings (units, a start in motion)
     if data_file:
         doc = read_yaml(data_file, "--data")

@@ -18,7 +18,6 @@ import math
 import os
 import platform
 import secrets
-import signal
 import socket
 import subprocess
 import sys
@@ -30,12 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from tuner.config import ConfigError, RunConfig, config_from_dict
+from tuner import signals as stop_signals
+from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
-from tuner.evaluate import EvalRecord, Evaluator, sigint_count, watch_sigint
+from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
-from tuner.objective import Evaluation
-from tuner.optimizers import get_optimizer
+from tuner.replay import Replay as _Replay
 from tuner.rundir import (
     Best,
     Checkpoint,
@@ -49,6 +48,9 @@ from tuner.rundir import (
     parse_cell,
     plain,
 )
+from tuner.selection import select_best
+from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
+from tuner.setup import build as _build  # the old name, used by benchmarks
 from tuner.space import Space
 from tuner.validation import validate_run
 
@@ -147,6 +149,14 @@ def _cell(v: Any) -> str:
     return "" if v is None else str(fmt_cell(v))
 
 
+def _clip(text: str, limit: int = 4000) -> str:
+    """An error text as stored in ``history.csv``: at most ``limit`` characters, its length noted when cut
+    (a 128 kB message would exceed the CSV reader's field limit and make the history unreadable)."""
+    if len(text) <= limit:
+        return text
+    return f"{text[:limit]} [... {len(text):,} characters, cut to {limit:,}]"
+
+
 def _metrics(m: dict[str, Any]) -> dict[str, Any]:
     """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
     return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
@@ -162,71 +172,10 @@ def _preload_report() -> None:
         pass
 
 
-class _Interrupted(Exception):
-    pass
+class _Interrupted(BaseException):
+    """A stop signal whose KeyboardInterrupt was swallowed on the way (never a recorded failure)."""
 
 
-class _LiveMap:
-    """``evaluate(fn, items)`` on the configured backend; the pool starts at the first live generation."""
-
-    def __init__(self, cfg: RunConfig, n_jobs: int):
-        self.cfg, self.n_jobs, self.evaluator = cfg, n_jobs, None
-
-    def __call__(self, fn: Callable, items: list) -> list[EvalRecord]:
-        if self.evaluator is None:
-            p = self.cfg.parallel
-            self.evaluator = Evaluator(fn, p.backend, self.n_jobs, p.address)
-        return self.evaluator(items)
-
-    def describe(self) -> str:
-        p = self.cfg.parallel
-        return Evaluator(None, p.backend, self.n_jobs, p.address).describe()
-
-    def close(self) -> None:
-        if self.evaluator is not None:
-            self.evaluator.close()
-
-
-class _Replay:
-    """Hands back the recorded results of the first rows of ``history.csv``, then evaluates live.
-
-    Each replayed candidate is checked against its row: a row whose parameters differ from what
-    the re-created optimiser asks means the history was edited (or the code changed), and is refused.
-    """
-
-    def __init__(self, rows: list[dict[str, str]], names: list[str], metric_names: list[str], live: _LiveMap,
-                 where: Path):
-        self.rows, self.names, self.metric_names, self.live, self.where = rows, names, metric_names, live, where
-        self.pos = 0
-
-    @property
-    def replaying(self) -> bool:
-        return self.pos < len(self.rows)
-
-    def __call__(self, fn: Callable, items: list[tuple[dict[str, Any], int]]) -> list[EvalRecord]:
-        if not self.replaying:
-            return self.live(fn, items)
-        chunk = self.rows[self.pos:self.pos + len(items)]
-        if len(chunk) != len(items):
-            raise RunError(f"{self.where}: rows {self.pos}-{len(self.rows) - 1} are not a complete generation "
-                           f"({len(items)} evaluations)")
-        out = []
-        for (params, _), row in zip(items, chunk):
-            for k in self.names:
-                if _cell(params[k]) != row.get(k):
-                    raise RunError(f"{self.where}: row eval={row.get('eval')}: {k} is {row.get(k)!r} but the "
-                                   f"optimiser re-created from the seed asks {_cell(params[k])!r}; the history "
-                                   "was edited or the code changed, so it cannot be resumed")
-            if row.get("status") not in ("ok", "failed"):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: status {row.get('status')!r}")
-            try:
-                fit, secs = float(row["fitness"]), float(row["seconds"])
-            except (TypeError, ValueError):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: fitness/seconds not numbers") from None
-            metrics = {k: parse_cell(row[k]) for k in self.metric_names if row.get(k) not in (None, "")}
-            out.append(EvalRecord(Evaluation(fit, metrics, row["status"], row.get("error") or ""), secs))
-        self.pos += len(items)
-        return out
 
 
 class Run:
@@ -256,9 +205,17 @@ class Run:
 
     # --- main loop ----------------------------------------------------------------------------
     def execute(self, replay_rows: list[dict[str, str]] | None = None) -> RunResult:
+        """Run (or replay, then continue) to the end; SIGTERM and SIGHUP act as Ctrl-C meanwhile."""
+        old_handlers = stop_signals.install()
+        try:
+            return self._execute(replay_rows)
+        finally:
+            stop_signals.restore(old_handlers)
+
+    def _execute(self, replay_rows: list[dict[str, str]] | None) -> RunResult:
         stages = self.cfg.optimizer.refine.stages
-        history = self.rd.history(self.base_space.names)
-        live = _LiveMap(self.cfg, self.n_jobs)
+        history = self.rd.history(self.base_space.names, self.meta.config_hash)
+        live = LiveMap(self.cfg, self.n_jobs)
         replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
                          history.path)
         t = self.meta.timing
@@ -266,7 +223,7 @@ class Run:
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
         t_session, wall0 = time.perf_counter(), self.meta.timing.wall_s
         state = {"gens": 0, "t0": time.perf_counter()}
-        sigints = watch_sigint()
+        sigints = sigint_count()
 
         def on_generation(g: Generation) -> None:
             state["gens"] += 1
@@ -297,14 +254,6 @@ class Run:
             if sigint_count() != sigints:  # a Ctrl-C whose KeyboardInterrupt was swallowed on the way
                 raise _Interrupted()
 
-        def on_term(signum, frame):  # SIGTERM behaves like Ctrl-C
-            raise _Interrupted()
-
-        old_handler = None
-        try:
-            old_handler = signal.signal(signal.SIGTERM, on_term)
-        except ValueError:  # not in the main thread
-            pass
         stage, space, n_evals, n_failed, best, interrupted = 0, self.base_space, 0, 0, None, False
         optimizer = self._new_optimizer(0, space, None)
         if self.progress and hasattr(optimizer, "describe"):  # e.g. the method `auto` picked
@@ -328,11 +277,17 @@ class Run:
             interrupted = True
         finally:
             live.close()
-            if old_handler is not None:
-                try:
-                    signal.signal(signal.SIGTERM, old_handler)
-                except ValueError:  # pragma: no cover
-                    pass
+        try:
+            return self._conclude(optimizer, replay, history, interrupted, n_evals, n_failed, state, wall0, t_session)
+        except KeyboardInterrupt:  # a stop signal during the selection, the report step or the CV after a run
+            self._write_meta(status="interrupted", interrupted=_now())
+            if self.progress:
+                self.progress(f"interrupted; resume with: tuner resume {self.dir}")
+            return self._result("interrupted", n_evals, state["gens"], "interrupted")
+
+    def _conclude(self, optimizer, replay, history, interrupted: bool, n_evals: int, n_failed: int,
+                  state: dict[str, Any], wall0: float, t_session: float) -> RunResult:
+        """After the optimiser stopped: the interrupted record, or selection, report step, CV and report."""
         if replay.replaying and not interrupted:
             raise RunError(f"{history.path}: {len(replay.rows)} rows recorded, but the run ends after "
                            f"{n_evals}; the history does not belong to this config")
@@ -344,15 +299,7 @@ class Run:
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
-        selection = None
-        if self.best is not None and self.cfg.validation.select is not None:  # final choice on a held-out fold
-            from tuner.validation import select_best
-
-            self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
-        extra = self._finalize() if self.best is not None else {}
-        if self.best is not None:  # the defaults' scores, CV into the run directory (tuner.validation)
-            self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
-                                     self.base_space)
+        extra = self._finish() if self.best is not None else {}
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None:
@@ -369,7 +316,7 @@ class Run:
         r, ev = g.records[i], g.records[i].evaluation
         row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
         row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
-        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=ev.error.replace("\n", " "),
+        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=_clip(ev.error.replace("\n", " ")),
                    seconds=f"{r.seconds:.6f}")
         row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
         return row
@@ -388,10 +335,26 @@ class Run:
         fail = f"  failed {g.n_failed}" if g.n_failed else ""
         self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
+    def _finish(self) -> dict[str, Any]:
+        """The end of a finished run: the final choice on a held-out fold (``validation.select``), the
+        objective's report step, the defaults' scores and the cross-validation (``validation.cv``); then
+        ``best.yaml``, derived from the history with all their results, written once. Returns the report
+        step's results."""
+        assert self.best is not None
+        selection = None
+        if self.cfg.validation.select is not None:
+            self.best, selection = select_best(self.cfg, self.rd, self.best, self.base_space.names, self.progress)
+        extra = self._finalize()
+        # the defaults' scores, the CV into the run directory: their numbers into best's evaluation
+        self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
+                                 self.base_space)
+        self.rd.write_best(self.best)
+        return extra
+
     def _finalize(self) -> dict[str, Any]:
-        """The objective's report step; ``best.yaml`` rewritten from the history with its results."""
-        self.best = attach_deployment(self.best, self.objective, self.base_space)  # the complete tuned system
-        self.rd.write_best(self.best)  # derived from the history, whatever happened before
+        """The complete tuned system (the deployment) and the objective's report step, both into ``self.best``."""
+        assert self.best is not None
+        self.best = attach_deployment(self.best, self.objective, self.base_space)
         extra: dict[str, Any] = {}
         finalize = getattr(self.objective, "finalize", None)
         if callable(finalize):
@@ -403,7 +366,6 @@ class Run:
                     self.progress(f"warning: the objective's report step failed: {exc}")
         if extra:
             self.best = dataclasses.replace(self.best, evaluation=plain(extra))
-            self.rd.write_best(self.best)
         return extra
 
     def _report(self) -> None:
@@ -429,72 +391,8 @@ class Run:
         return RunResult(self.dir, status, self.best, n_evals, gens, reason, dict(extra or {}))
 
 
-def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | None):
-    """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``."""
-    o = cfg.optimizer
-    rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, stage]))
-    kwargs = dict(o.options)
-    if o.population is not None:
-        kwargs["population"] = o.population
-    kwargs["generations"] = o.generations
-    if x0 is not None:
-        kwargs["x0"] = x0
-    try:
-        if isinstance(kwargs.get("x0"), dict):
-            kwargs["x0"] = space.encode(kwargs["x0"])
-        return get_optimizer(o.method)(space.dim, rng, **kwargs)
-    except (ValueError, TypeError) as exc:  # OptionError, or e.g. pycma refusing a population of 1
-        raise ConfigError(cfg.source, f"optimizer ({o.method})", str(exc)) from None
-
-
 def _printer(quiet: bool) -> Callable[[str], None] | None:
     return None if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
-
-
-def _build(cfg: RunConfig):
-    """Objective and space of ``cfg``, checked by :func:`tuner.preflight.preflight` (bad data, names,
-    a failing default evaluation are :class:`ConfigError` before anything is written)."""
-    from tuner.evaluate import TimedObjective
-    from tuner.preflight import preflight
-    from tuner.registry import build_objective
-
-    try:
-        objective = build_objective(dict(cfg.objective), cfg.base_dir)
-    except FileNotFoundError as exc:
-        raise ConfigError(cfg.source, "objective", f"file not found: {exc.filename or exc}") from None
-    except ValueError as exc:
-        msg = str(exc)
-        key, _, rest = msg.partition(": ")
-        if key.startswith("objective") and rest:
-            raise ConfigError(cfg.source, key, rest) from None
-        raise ConfigError(cfg.source, "objective", msg) from None
-    if cfg.validation.select is not None:  # tune without the held-out fold of the final selection
-        from tuner.validation import tuning_objective
-
-        objective = tuning_objective(cfg, objective)
-    space = cfg.space(objective)
-    if space.dim == 0:
-        raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
-    if cfg.objective.get("timeout_s"):
-        objective = TimedObjective(objective, cfg.objective["timeout_s"])
-    preflight(cfg, objective, space, warn=lambda msg: print(msg, file=sys.stderr, flush=True))
-    return objective, space
-
-
-def _n_jobs(cfg: RunConfig, population: int) -> tuple[int, list[str]]:
-    """Workers actually used: at most the population and, for local pools, the CPU count."""
-    p = cfg.parallel
-    n, notes = int(p.n_jobs), []
-    if p.backend == "serial":
-        return n, notes
-    cpus = os.cpu_count() or 1
-    if n > population:
-        notes.append(f"n_jobs {n} capped at the population {population} (more workers would idle)")
-        n = population
-    if not p.address and n > cpus:
-        notes.append(f"n_jobs {n} capped at the {cpus} CPUs of this machine")
-        n = cpus
-    return n, notes
 
 
 def _resolved(cfg: RunConfig, space: Space) -> dict[str, Any]:
@@ -524,7 +422,7 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
     optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
     """
     objective, space = _build(cfg)
-    n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
+    n_jobs, notes = worker_count(cfg, space)
     printer = progress or _printer(quiet)
     if run_dir is None:
         stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
@@ -572,11 +470,9 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
         ck = rd.checkpoint()
-        raw = rd.check_config(meta) if meta is not None else rd.config()
-        source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
-        cfg = config_from_dict(raw, source=source, base_dir=base_dir)
+        cfg = run_config(rd, rd.check_config(meta) if meta is not None else None)
         objective, space = _build(cfg)
-        n_jobs, notes = _n_jobs(cfg, new_optimizer(cfg, 0, space, None).population)
+        n_jobs, notes = worker_count(cfg, space)
         removed = rd.remove_tmp()
         if printer and removed:
             printer(f"removed {len(removed)} temporary file(s) left by the kill: {', '.join(sorted(removed))}")
@@ -590,7 +486,7 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
                 rd.file(name).unlink(missing_ok=True)
             rows: list[dict[str, str]] = []
         else:
-            rows = rd.history(space.names).truncate(ck.n_evals)
+            rows = rd.history(space.names, meta.config_hash).truncate(ck.n_evals)
         r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
         if printer:
             printer(f"resuming {rd.path} after {len(rows)} evaluations")

@@ -44,7 +44,9 @@ from typing import Any
 import numpy as np
 import yaml
 
+from tuner import digest, safe_yaml
 from tuner.loop import BestPoint
+from tuner.safe_io import check_not_link, named, open_nofollow, read_text, refuse_links
 
 __all__ = ["RunError", "RunDir", "Meta", "Timing", "Best", "Checkpoint", "History", "atomic_write",
            "config_hash", "first_difference", "fmt_cell", "parse_cell", "FAULT_ENV"]
@@ -80,11 +82,19 @@ def atomic_write(path: Path, data: bytes | str) -> None:
     _n_writes += 1
     path = Path(path)
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    mode = "wb" if isinstance(data, bytes) else "w"
-    with open(tmp, mode) as fh:
-        fh.write(data)
-        fh.flush()
-        os.fsync(fh.fileno())
+    check_not_link(path.parent)
+    if os.path.lexists(tmp):
+        os.unlink(tmp)  # a leftover of a killed process with this pid (a link is removed, not followed)
+    try:
+        with named(path):  # a full disk names the file, not `?`
+            with os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
+                fh.write(data if isinstance(data, bytes) else data.encode())
+                fh.flush()
+                os.fsync(fh.fileno())
+    except OSError:
+        if os.path.lexists(tmp):
+            os.unlink(tmp)  # nothing half-written stays behind; the old file is untouched
+        raise
     _fault("before")
     os.replace(tmp, path)
     try:
@@ -102,7 +112,7 @@ def _append(path: Path, text: str) -> None:
     """Append and fsync (a kill can leave a torn last line, which the checkpoint's row count excludes)."""
     global _n_writes
     _n_writes += 1
-    with open(path, "a", newline="") as fh:
+    with named(path), os.fdopen(open_nofollow(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT), "a", newline="") as fh:
         if os.environ.get(FAULT_ENV):
             fh.write(text[: len(text) // 2])
             fh.flush()
@@ -329,21 +339,31 @@ class Checkpoint:
 
 # --- history -----------------------------------------------------------------------------------
 class History:
-    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear."""
+    """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear. Beside it,
+    ``history.chain``: each row's digest chained to the row before and to ``config_hash`` (:mod:`tuner.digest`);
+    an older history without it stays readable and is continued without digests."""
 
-    def __init__(self, path: Path, param_names: list[str]):
+    def __init__(self, path: Path, param_names: list[str], config_hash: str = ""):
         self.path = Path(path)
+        self.chain_path = self.path.with_name(CHAIN)
         self.param_names = list(param_names)
         self.metric_names: list[str] = []
+        self.config_hash, self._last = config_hash, config_hash
         if self.path.exists():
-            with open(self.path, newline="") as fh:
-                header = next(csv.reader(fh), None)
+            try:
+                header = next(csv.reader(io.StringIO(read_text(self.path), newline="")), None)
+            except (UnicodeDecodeError, csv.Error) as exc:
+                raise RunError(f"{self.path}: unreadable ({exc})") from None
             fixed = FIXED_COLUMNS + self.param_names + RESULT_COLUMNS
             if header is None or header[:len(fixed)] != fixed:
                 raise RunError(f"{self.path}: header {header} does not start with the expected columns {fixed}")
             self.metric_names = header[len(fixed):]
+            self.chained = self.chain_path.exists()
+            self._last = None  # read when first needed
         else:
+            self.chained = True
             self._rewrite([])
+            atomic_write(self.chain_path, "")
 
     @property
     def columns(self) -> list[str]:
@@ -358,14 +378,22 @@ class History:
         atomic_write(self.path, buf.getvalue())
 
     def read_rows(self) -> list[dict[str, str]]:
-        with open(self.path, newline="") as fh:
-            return list(csv.DictReader(fh))
+        try:
+            return list(csv.DictReader(io.StringIO(read_text(self.path), newline="")))
+        except (UnicodeDecodeError, csv.Error) as exc:
+            raise RunError(f"{self.path}: unreadable ({exc})") from None
 
     def truncate(self, n_rows: int) -> list[dict[str, str]]:
-        """Keep the first ``n_rows`` evaluations (what the checkpoint covers) and return them."""
+        """Keep the first ``n_rows`` evaluations (what the checkpoint covers), checked, and return them."""
         rows = self.read_rows()
         if len(rows) < n_rows:
             raise RunError(f"{self.path}: {len(rows)} rows, but checkpoint.json says {n_rows} were written")
+        if self.chained:
+            digests = read_chain(self.chain_path)
+            check_chain(self.path, rows[:n_rows], digests, self.config_hash)
+            if len(digests) != n_rows:
+                atomic_write(self.chain_path, "".join(f"{e},{d}\n" for e, d in digests[:n_rows]))
+            self._last = digests[n_rows - 1][1] if n_rows else self.config_hash
         if len(rows) != n_rows:
             self._rewrite(rows[:n_rows])
         return rows[:n_rows]
@@ -376,11 +404,36 @@ class History:
             old = self.read_rows()
             self.metric_names += new
             self._rewrite(old)
-        buf = io.StringIO()
+        if self.chained and self._last is None:
+            digests = read_chain(self.chain_path)
+            self._last = digests[-1][1] if digests else self.config_hash
+        buf, lines = io.StringIO(), []
         w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
         for r in rows:
             w.writerow(r)
+            if self.chained:
+                self._last = digest.row_digest(str(self._last), r)
+                lines.append(f"{r.get('eval')},{self._last}\n")
         _append(self.path, buf.getvalue())
+        if lines:
+            _append(self.chain_path, "".join(lines))
+
+
+CHAIN = digest.CHAIN
+
+
+def read_chain(path: Path) -> list[tuple[str, str]]:
+    try:
+        return digest.parse_chain(read_text(path))
+    except UnicodeDecodeError as exc:
+        raise RunError(f"{path}: unreadable ({exc})") from None
+
+
+def check_chain(path: Path, rows: list[dict[str, str]], digests: list[tuple[str, str]], config_hash: str) -> None:
+    """:class:`RunError` naming the first of ``rows`` that does not match ``history.chain`` (:mod:`tuner.digest`)."""
+    if (bad := digest.first_mismatch(rows, digests, config_hash)) is not None:
+        raise RunError(f"{path}: row eval={bad[0]}: {bad[1]}: the history was edited (or rows removed or "
+                       "reordered), so it is not used")
 
 
 # --- the directory -----------------------------------------------------------------------------
@@ -389,6 +442,7 @@ class RunDir:
 
     def __init__(self, path: str | Path):
         self.path = Path(path)
+        refuse_links(self.path)  # a handed-over directory is data: no entry of it is followed (tuner.safe_io)
 
     def __repr__(self) -> str:
         return f"RunDir({str(self.path)!r})"
@@ -404,7 +458,7 @@ class RunDir:
         if not p.is_file():
             raise RunError(f"{p}: missing ({what})")
         try:
-            return p.read_text()
+            return read_text(p)
         except (OSError, UnicodeDecodeError) as exc:
             raise RunError(f"{p}: unreadable: {exc}") from None
 
@@ -416,9 +470,9 @@ class RunDir:
 
     def _yaml(self, name: str, what: str) -> Any:
         try:
-            return yaml.safe_load(self._text(name, what))
+            return safe_yaml.load(self._text(name, what))
         except yaml.YAMLError as exc:
-            msg = str(exc).replace("\n", " ")
+            msg = safe_yaml.one_line(exc)
             raise RunError(f"{self.path / name}: not valid YAML: {msg}") from None
 
     def is_run(self) -> bool:
@@ -438,7 +492,7 @@ class RunDir:
     def config_snapshot(self) -> dict[str, Any] | None:
         p = self.path / ".config.json"
         try:
-            return json.loads(p.read_text()) if p.is_file() else None
+            return json.loads(read_text(p)) if p.is_file() else None
         except (OSError, ValueError):
             return None
 
@@ -458,8 +512,8 @@ class RunDir:
             return None
         return Checkpoint.from_doc(self._json("checkpoint.json", "checkpoint"), self.path / "checkpoint.json")
 
-    def history(self, param_names: list[str]) -> History:
-        return History(self.path / "history.csv", param_names)
+    def history(self, param_names: list[str], config_hash: str = "") -> History:
+        return History(self.path / "history.csv", param_names, config_hash)
 
     def history_rows(self) -> list[dict[str, str]]:
         """The rows of ``history.csv`` as strings (empty when nothing was evaluated yet)."""
@@ -467,8 +521,7 @@ class RunDir:
         if not p.is_file():
             return []
         try:
-            with open(p, newline="") as fh:
-                return list(csv.DictReader(fh))
+            return list(csv.DictReader(io.StringIO(read_text(p), newline="")))
         except (OSError, UnicodeDecodeError, csv.Error) as exc:
             raise RunError(f"{p}: unreadable ({exc})") from None
 
@@ -530,7 +583,7 @@ class RunDir:
         import fcntl
 
         self.path.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        fd = open_nofollow(self.path / ".lock", os.O_RDWR | os.O_CREAT)  # never truncate a link's target
         try:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

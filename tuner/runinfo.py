@@ -26,7 +26,8 @@ _NAME_KEYS = ("filter", "controller", "function", "callable")
 
 
 def tuned_system(run_dir: str | Path) -> dict[str, Any]:
-    """``{kind, name, searched: [names], fixed: {name: value}}`` of a run (see the module docstring).
+    """``{kind, name, searched: [names], fixed: {name: value}, notes: [text]}`` of a run (see the module
+    docstring); ``notes`` are the deployment's (e.g. a scoring-only truth start replaced by ``accmag``).
 
     ``searched`` are the names the run's search space searched; ``fixed`` every other value the run handed
     to the objective (its space's fixed part: ``objective.fixed``, ``parameters: {x: {fixed: v}}`` and the
@@ -39,7 +40,8 @@ def tuned_system(run_dir: str | Path) -> dict[str, Any]:
         src = dep["sources"]
         return {"kind": str(dep.get("kind", "")), "name": str(dep.get("name", "")),
                 "searched": [k for k in dep["values"] if src.get(k) == "searched"],
-                "fixed": {k: v for k, v in dep["values"].items() if src.get(k) == "fixed"}}
+                "fixed": {k: v for k, v in dep["values"].items() if src.get(k) == "fixed"},
+                "notes": [str(n) for n in dep.get("notes") or []]}
     raw = rd.config()
     obj = raw.get("objective") or {}
     name = next((str(obj[k]) for k in _NAME_KEYS if obj.get(k) is not None), "")
@@ -50,7 +52,7 @@ def tuned_system(run_dir: str | Path) -> dict[str, Any]:
         if k not in searched and k not in fixed:
             fixed[k] = spec["fixed"] if isinstance(spec, dict) and "fixed" in spec else spec
     fixed.update({k: v for k, v in (obj.get("fixed") or {}).items() if k not in searched})
-    return {"kind": str(obj.get("kind", "")), "name": name, "searched": searched, "fixed": fixed}
+    return {"kind": str(obj.get("kind", "")), "name": name, "searched": searched, "fixed": fixed, "notes": []}
 
 
 def scores(evaluation: dict[str, Any]) -> dict[str, Any]:

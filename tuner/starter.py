@@ -68,6 +68,7 @@ def write_starter(name: str, path: str | Path | None = None) -> Path:
     out = Path(path) if path is not None else Path(f"{name}.yaml")
     if out.exists():
         raise StarterError(f"{out}: exists; not overwritten (remove it or choose another file with -o)")
+    text = text.replace(f"`tuner run {name}.yaml`", f"`tuner run {out}`")  # the header names the file written
     with open(out, "x") as fh:  # "x": a file created between the check and here is not overwritten either
         fh.write(text)
     return out

@@ -33,18 +33,27 @@ from typing import Any
 
 import yaml
 
+from tuner import safe_yaml
 from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
-from tuner.rundir import RunDir
+from tuner.rundir import RunDir, atomic_write
+from tuner.safe_io import check_not_link, read_text, refuse_links
 
 __all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file", "ranked_by",
            "RANKED_BY", "DEFAULTS_OF"]
+
+JOBS_FILE = "jobs.json"
+
+
+def _plain_name(s: str) -> bool:
+    return bool(s) and "/" not in s and "\\" not in s and s not in (".", "..") and "\0" not in s
+
 
 _SWEEP_KEYS = ("name", "description", "base", "variants", "grid", "seeds", "jobs", "output")
 
 
 def is_sweep_file(path: str | Path) -> bool:
     try:
-        raw = yaml.safe_load(Path(path).read_text())
+        raw = safe_yaml.load(Path(path).read_text())
     except (OSError, UnicodeDecodeError, yaml.YAMLError):  # the job loader reports it
         return False
     return isinstance(raw, dict) and "sweep" in raw
@@ -82,7 +91,7 @@ def load_sweep(path: str | Path) -> dict[str, Any]:
         p = (base_dir / base).resolve()
         if not p.exists():
             raise ConfigError(path, key, f"file not found: {p}")
-        raw = yaml.safe_load(p.read_text())
+        raw = read_yaml(p)
         if not isinstance(raw, dict):
             raise ConfigError(p, "", "expected a job mapping")
         return raw, p.parent
@@ -143,6 +152,36 @@ def _job_status(run_dir: Path) -> str:
     return rd.meta().status if rd.is_run() else "new"
 
 
+def _stamp(path: Path) -> str | None:
+    """A job stamp's text, or None when absent or not whole (written by an older tuner and torn)."""
+    try:
+        text = read_text(path)
+        json.loads(text)
+    except FileNotFoundError:
+        return None
+    except (ValueError, UnicodeDecodeError):
+        return None
+    return text
+
+
+def sweep_jobs(n: int, n_jobs: int) -> tuple[int, str]:
+    """Runs at the same time (``--jobs``/``sweep.jobs``), capped at the jobs and the CPUs; (n, note or '')."""
+    import os
+
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ConfigError("--jobs", "", f"expected an integer >= 1, got {n!r}")
+    cap = max(1, min(n_jobs, os.cpu_count() or 1))
+    if n > cap:
+        return cap, f"{n} jobs at a time capped at {cap} (the sweep's jobs and this machine's CPUs)"
+    return n, ""
+
+
+def _job_list(sw: dict[str, Any]) -> dict[str, Any]:
+    """What show and report need of a sweep, stored in its directory (no config is rebuilt from it)."""
+    return {"name": sw["name"], "description": sw.get("description", ""), "source": sw["source"],
+            "jobs": [{k: j[k] for k in ("id", "method", "variant", "grid", "seed")} for j in sw["jobs"]]}
+
+
 def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> dict[str, Any]:
     """Run, resume or skip one job (module-level so a process pool can call it)."""
     from tuner.run import resume, run
@@ -153,7 +192,7 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> di
         raw["parallel"] = {"backend": "serial"}
     stamp = run_dir.parent / f".{run_dir.name}.json"  # the job's resolved config, beside its run directory
     resolved = json.dumps({"raw": job["raw"], "base_dir": job["base_dir"]}, sort_keys=True, default=str)
-    if stamp.exists() and stamp.read_text() != resolved:
+    if _stamp(stamp) not in (None, resolved):
         raise ConfigError(job["id"], "sweep", f"{run_dir} was run with another configuration (a base config "
                           "or an override changed); delete the sweep directory or choose another --dir")
     status = _job_status(run_dir)
@@ -165,7 +204,7 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> di
         res = resume(run_dir, progress=printer, quiet=quiet)      # replays the history and goes on
         return {"id": job["id"], "status": res.status, "action": "resumed"}
     cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
-    stamp.write_text(resolved)
+    atomic_write(stamp, resolved)  # whole or absent: a torn stamp (disk full, kill) reads as "not started"
     res = run(cfg, run_dir=run_dir, progress=printer, quiet=quiet)
     return {"id": job["id"], "status": res.status, "action": "ran"}
 
@@ -175,16 +214,21 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
     """Run (or continue) every job of a sweep, then write its report."""
     sw = load_sweep(path)
     out = Path(sweep_dir) if sweep_dir else Path(sw["output"]) / sw["name"]
+    n_par, n_cap = sweep_jobs(sw["parallel_jobs"] if jobs is None else jobs, len(sw["jobs"]))
+    check_not_link(out / "jobs")
+    refuse_links(out)  # a sweep directory is data: nothing in it is followed (tuner.safe_io)
     out.mkdir(parents=True, exist_ok=True)
     (out / "jobs").mkdir(exist_ok=True)
     spec_text = yaml.safe_dump(sw["doc"], sort_keys=False)
     old = out / "sweep.yaml"
-    if old.exists() and old.read_text() != spec_text:
+    if old.exists() and read_text(old) != spec_text:
         raise ConfigError(path, "sweep", f"{out} holds a different sweep; choose another --dir or delete it")
-    old.write_text(spec_text)
-    (out / "command.txt").write_text(" ".join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
-                                                                             if sweep_dir else [])) + "\n")
-    n_par = jobs or sw["parallel_jobs"]
+    atomic_write(old, spec_text)
+    atomic_write(out / "command.txt", " ".join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
+                                                                              if sweep_dir else [])) + "\n")
+    atomic_write(out / JOBS_FILE, json.dumps(_job_list(sw), indent=1, default=str))  # show/report read this
+    if n_cap and not quiet:
+        print(f"note: {n_cap}", file=sys.stderr, flush=True)
     todo = [(j, str(out / "jobs" / j["id"])) for j in sw["jobs"]]
     if not quiet:
         done = sum(_job_status(Path(d)) == "finished" for _, d in todo)
@@ -193,13 +237,18 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
     if n_par > 1:
         from joblib import Parallel, delayed
 
-        results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
+        try:  # a stop signal here makes joblib kill its workers (their runs resume as after a kill -9)
+            results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
+        except KeyboardInterrupt:
+            return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:
         from tuner.report import throttled
 
         results = []
         for j, d in todo:  # the report is rewritten between jobs (throttled): a live view of the sweep
             results.append(_run_job(j, d, False, quiet))
+            if results[-1]["status"] == "interrupted":  # Ctrl-C, SIGTERM or SIGHUP: stop the sweep here
+                return {"dir": out, "report": None, "ok": False, "results": results, "interrupted": True}
             if len(results) < len(todo):
                 throttled(f"sweep:{out.resolve()}", lambda: write_sweep_report(out, live=True))
     report = write_sweep_report(out)
@@ -228,6 +277,9 @@ def collect(sweep_dir: Path) -> Any:
         row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
                                "status": _job_status(d)}
         rd = RunDir(d)
+        if row["status"] == "finished" and not rd.has_best():  # nothing to rank: say why
+            row["status"] = "all failed"
+            row["n_failed"] = rd.meta().n_failed
         if rd.has_best():
             best = rd.best()
             meta = rd.meta()
@@ -260,8 +312,20 @@ def collect(sweep_dir: Path) -> Any:
 
 
 def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
-    """Re-expand the sweep stored in a sweep directory (its ``sweep.yaml`` copy)."""
+    """The jobs of a sweep directory from its own ``jobs.json`` (whatever the working directory; no config
+    is rebuilt, nothing imported); a sweep directory of an older tuner is re-expanded from its sweep file."""
     sweep_dir = Path(sweep_dir)
+    refuse_links(sweep_dir)
+    if (sweep_dir / JOBS_FILE).is_file():
+        try:
+            doc = json.loads(read_text(sweep_dir / JOBS_FILE))
+            if not isinstance(doc, dict) or not isinstance(doc.get("jobs"), list) or \
+                    not all(isinstance(j, dict) and isinstance(j.get("id"), str) and _plain_name(j["id"])
+                            for j in doc["jobs"]):
+                raise ValueError("expected {name, jobs: [{id, method, seed, ...}]} with plain job names")
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise ConfigError(sweep_dir / JOBS_FILE, "", f"unreadable: {exc}") from None
+        return {"description": "", **doc, "name": str(doc.get("name", sweep_dir.name))}
     cmd = (sweep_dir / "command.txt").read_text().split() if (sweep_dir / "command.txt").exists() else []
     src = Path(cmd[2]) if len(cmd) > 2 else sweep_dir / "sweep.yaml"
     if not src.exists():
@@ -358,7 +422,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
             hashes.append((job["id"], meta.config_hash[:16] or _hash(d / "config.yaml"), job["seed"]))
             if not versions:
                 versions = {**meta.versions, "git_commit": meta.git_commit}
-    command = (sweep_dir / "command.txt").read_text().strip() if (sweep_dir / "command.txt").exists() else ""
+    command = read_text(sweep_dir / "command.txt").strip() if (sweep_dir / "command.txt").exists() else ""
     key_col, what = summ.attrs.get("ranked_by", ranked_by(df)) if len(df) else RANKED_BY[-1]
     fit_cols = tuple(dict.fromkeys((key_col, *(("train_fitness", "test_fitness") if "train_fitness.median"
                                                 in flat.columns else ("best_fitness",)))))
@@ -399,7 +463,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
            "| job | config sha256 (16) | seed |", "|---|---|---|"] + \
           [f"| {i} | `{h}` | {s} |" for i, h, s in hashes] + [""]
     text = "\n".join(md)
-    (sweep_dir / "report.md").write_text(text)
+    atomic_write(sweep_dir / "report.md", text)
     if running:
         text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
     from tuner import interactive
@@ -473,7 +537,7 @@ def summary_text(df: Any, sweep_dir: Path) -> str:
         c = f"{split}.{ax}_rmse_deg"
         if c in df.columns:
             cols.append(c)
-    if "train_fitness" not in df.columns:
+    if "train_fitness" not in df.columns and "best_fitness" in df.columns:
         cols.insert(3, "best_fitness")
     out = df[cols].copy()
     out.columns = [c.replace(f"{split}.", f"{split} ").replace("_rmse_deg", " RMSE (deg)") for c in cols]

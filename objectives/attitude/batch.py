@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit, prange
 from numba.typed import List
 
+from objectives.attitude.disturbance import CONTEXT_KEYS
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms, growth_verdict
 from objectives.attitude.filters._bias_filter import initial_state, robust_coef
 from objectives.attitude.filters._ekf_kernel import ekf_kernel
@@ -345,11 +346,9 @@ def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str,
 
 def _disturbances(obj: Any, data: _Data, flt: Any) -> tuple[List, List, List]:
     """The FAEKF's fuzzy inputs per recording, from the objective's cache as its serial path uses them."""
-    from objectives.attitude.objective import _CONTEXT_KEYS
-
     outs = ([], [], [])
     for i, rec in enumerate(data.recs):
-        key = ("dist", ("train", i), tuple((k, flt.values.get(k)) for k in _CONTEXT_KEYS))
+        key = ("dist", ("train", i), tuple((k, flt.values.get(k)) for k in CONTEXT_KEYS))
         if key not in obj._cache:
             obj._cache[key] = flt.disturbances(rec)
         d = obj._cache[key]

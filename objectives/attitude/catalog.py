@@ -10,7 +10,10 @@ from __future__ import annotations
 import inspect
 from typing import Any
 
-__all__ = ["METRIC_DOCS", "data_sources", "explain", "metric_names"]
+__all__ = ["METRICS", "METRIC_DOCS", "data_sources", "explain", "metric_names"]
+
+#: the metrics ``objective.metric`` may name
+METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
 
 #: metric name -> (unit, definition, equation) for ``objective.metric`` (lower is better)
 METRIC_DOCS: dict[str, tuple[str, str, str]] = {
@@ -31,8 +34,6 @@ _CUT = {"start_s": "first second kept (optional)", "stop_s": "last second kept (
 
 
 def metric_names() -> list[str]:
-    from objectives.attitude.objective import METRICS
-
     return list(METRICS)
 
 

@@ -33,10 +33,13 @@ import numpy as np
 from numba import njit
 
 __all__ = ["vibration_frequency", "packet_spectrum", "external_acceleration", "magnetic_perturbation_measure",
-           "G_STANDARD"]
+           "G_STANDARD", "CONTEXT_KEYS"]
 
 #: the gravity magnitude used by default, m/s^2 (the value the synthetic benches use)
 G_STANDARD = 9.81
+#: filter values on which precomputed fuzzy inputs (these disturbance measures) depend: the filter
+#: objective's cache of them, serial and batch, is keyed by these
+CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
 
 def _int_at_least(name: str, value: Any, low: int) -> int:

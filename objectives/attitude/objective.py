@@ -52,9 +52,11 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude import deployment as _deployment
+from objectives.attitude.catalog import METRICS
 from objectives.attitude.cexport import hooks as _c_hooks
 from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.disturbance import CONTEXT_KEYS as _CONTEXT_KEYS
 from objectives.attitude.divergence import unbounded_growth
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective_options import (
@@ -69,10 +71,7 @@ from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
-METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
 _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
-#: filter values on which precomputed fuzzy inputs (disturbance measures) depend
-_CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
 
 def _split_data(data: Any) -> tuple[list, list]:
@@ -119,7 +118,8 @@ def _check_specs(specs: list, base_dir: Path, where: str) -> None:
             p = Path(str(opts.get("path", "")))
             p = p if p.is_absolute() else base_dir / p
             if not p.is_file():
-                raise ValueError(f"{where}[{i}].csv.path: file not found: {p}")
+                raise ValueError(f"{where}[{i}].csv.path: " + (("not a file" if p.exists() else "file not found")
+                                 + f": {p}" if opts.get("path") else "missing (required): the CSV file"))
         if kind == "broad":
             from objectives.attitude.data.broad import default_broad_dir
 
@@ -165,9 +165,10 @@ class FilterObjective:
         if len(w) != 3 or any(not isinstance(x, (int, float)) or x < 0 for x in w):
             raise ValueError(f"objective.metric_options.weights: expected 3 numbers >= 0, got {w!r}")
         if not (isinstance(self.q0, str) and self.q0 in ("accmag", "truth", "broad")):
-            q = np.asarray(self.q0, float)
-            if q.shape != (4,):
-                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 numbers, got {self.q0!r}")
+            q = np.zeros(0) if isinstance(self.q0, str) else np.asarray(self.q0, float)  # 'up': a misspelt name
+            if q.shape != (4,) or not np.all(np.isfinite(q)) or not np.any(q):
+                raise ValueError(f"objective.q0: expected accmag, truth, broad or 4 finite numbers (w, x, y, z), "
+                                 f"not all 0, got {self.q0!r}")
         if self.warmup_s < 0:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._cache: dict[str, Any] = {}
@@ -206,11 +207,14 @@ class FilterObjective:
             get_filter(section["filter"])
         except ValueError as exc:
             raise ValueError(f"objective.filter: {exc}") from None
+        warmup = section.get("warmup_s", 0.0)
+        if isinstance(warmup, bool) or not isinstance(warmup, (int, float)):
+            raise ValueError(f"objective.warmup_s: expected a number of seconds >= 0, got {warmup!r}")
         return cls(
             filter=section["filter"], train_specs=train, test_specs=test, fixed=dict(fixed),
             metric=section.get("metric", "euler_mse_geomean"),
             metric_options=dict(section.get("metric_options") or {}),
-            q0=section.get("q0", "accmag"), warmup_s=float(section.get("warmup_s", 0.0)),
+            q0=section.get("q0", "accmag"), warmup_s=float(warmup),
             report=dict(section.get("report") or {}), base_dir=str(base), prior=section.get("prior") or {},
         )
 

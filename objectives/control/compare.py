@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from objectives.control.objective import save_figure
+from objectives.control.report import save_figure
 
 __all__ = ["ControllerResult", "collect_runs", "comparison_table", "plot_responses", "write_comparison"]
 

@@ -1,5 +1,8 @@
 """Closed-loop objective: simulate the WMP with a controller on a reference profile, score eq. 2.39.
 
+``plant: wmp`` (the default) is the thesis's pendulum, below; a mapping as ``plant`` (``tf``, ``zpk``,
+``ss``, ``python``) is any plant, handed to :mod:`objectives.control.plants.objective`.
+
 YAML section (``objective:``)::
 
     kind: closed_loop
@@ -67,6 +70,7 @@ from objectives.control.metrics import (
     settling_time_s,
 )
 from objectives.control.profiles import profile_from_config
+from objectives.control.report import plot_surfaces, save_figure
 from objectives.control.wmp import STATUS_OK, SensorParams, WMPParams, simulate_closed_loop
 from tuner.objective import Evaluation
 from tuner.space import Space
@@ -171,13 +175,18 @@ class ClosedLoopObjective:
     ) -> ClosedLoopObjective:
         """Build from the YAML ``objective:`` mapping; unknown keys and bad values are ``ValueError``."""
         section = dict(section)
+        if isinstance(section.get("plant"), Mapping):  # any plant: objectives.control.plants
+            from objectives.control.plants.objective import LoopObjective
+
+            return LoopObjective.from_config(section, base_dir)
+        if section.get("plant", "wmp") != "wmp":  # before the pendulum's keys: a typo'd plant is the cause
+            raise ValueError(
+                f"objective.plant: 'wmp' or a mapping (tf, zpk, ss, python, fmu), got {section.get('plant')!r}")
         unknown = sorted(set(section) - _KEYS)
         if unknown:
             raise ValueError(f"objective: unknown key(s) {unknown}; allowed: {sorted(_KEYS)}")
         if section.get("kind", "closed_loop") != "closed_loop":
             raise ValueError(f"objective.kind must be 'closed_loop', got {section.get('kind')!r}")
-        if section.get("plant", "wmp") != "wmp":
-            raise ValueError(f"objective.plant: only 'wmp' is available, got {section.get('plant')!r}")
         profile = section.get("profile", "thesis")
         if isinstance(profile, str) and profile.endswith((".yaml", ".yml")):
             import yaml
@@ -237,9 +246,12 @@ class ClosedLoopObjective:
     def catalog(cls) -> dict[str, list[str]]:
         """Names ``objective.controller``, the cost and the profiles (``tuner list``)."""
         from objectives.control.controllers import CONTROLLERS
+        from objectives.control.plants.controllers import LOOP_CONTROLLERS
         from objectives.control.profiles import PROFILES
 
-        return {"controllers": sorted(CONTROLLERS), "metrics": ["mae_weighted_cost"], "data": sorted(PROFILES)}
+        loop = {n for n in LOOP_CONTROLLERS if n != "open_loop"}  # open_loop has nothing to tune
+        return {"controllers": sorted({*CONTROLLERS, *loop}), "metrics": ["mae_weighted_cost"],
+                "data": sorted(PROFILES), "plants": ["plant"]}
 
     @classmethod
     def explain(cls, name: str) -> dict[str, Any] | None:
@@ -249,6 +261,10 @@ class ClosedLoopObjective:
 
         if name in CONTROLLERS:
             return {"section": "controllers", **get_controller(name).describe()}
+        from objectives.control.plants.objective import LoopObjective
+
+        if (d := LoopObjective.explain(name)) is not None:
+            return d
         if name == "mae_weighted_cost":
             doc = (mae_weighted_cost.__doc__ or "").strip().splitlines()[0]
             weights = [{"name": k, "default": v, "unit": "1", "doc": "exponent (objective.cost)", "eq": "eq. 2.39"}
@@ -445,9 +461,8 @@ class ClosedLoopObjective:
 
         Writes ``figures/response.png`` (initial vs tuned closed loop, Figs. 2.16-2.17) and, for
         controllers with ``surfaces`` (the fuzzy ones), ``figures/surface_<flc>.png`` (initial vs
-        tuned action surfaces, Figs. 2.19-2.20), ``response_best.npz`` (:meth:`save_response`) and,
-        for a sweep job (``.../jobs/<id>``), ``figures/controllers.png``: the tuned responses of every
-        job of the sweep finished so far (the last job's figure has them all).
+        tuned action surfaces, Figs. 2.19-2.20) and ``response_best.npz`` (:meth:`save_response`). A sweep
+        compares the controllers' tuned responses in the engine's sweep figure, through :meth:`traces`.
         Returns ``initial_fitness``, the initial and best peak IB angle, peak current and rise times,
         ``improvement_pct`` = 100 (F_init - F_opt) / F_init, and ``train`` = {profile: {F, peaks, rise
         times, MAEs}} of the best parameters, which the sweep tables collect as ``train.*`` columns.
@@ -485,13 +500,7 @@ class ClosedLoopObjective:
         from objectives.control.report import traces_doc
 
         (run_dir / "traces.json").write_text(json.dumps(traces_doc(self, init, best), separators=(",", ":")))
-        if run_dir.parent.name == "jobs":  # a sweep job: every finished sibling's response on one figure
-            from objectives.control.compare import collect_runs, plot_responses
-
-            plot_responses(collect_runs(run_dir.parent.parent), fig_dir / "controllers.png")
         if callable(getattr(self._ctrl, "surfaces", None)):
-            from objectives.control.report import plot_surfaces
-
             values = dict(self.fixed)
             values.update(best)
             plot_surfaces(self._ctrl, init, values, fig_dir)
@@ -558,15 +567,3 @@ class ClosedLoopObjective:
         ax[-1].set_xlabel("time (s)")
         ax[0].set_title(f"WMP closed loop, controller {self.controller}")
         return save_figure(fig, path)
-
-
-def save_figure(fig, path: str | pathlib.Path) -> pathlib.Path:
-    """Lay out ``fig``, write it as a PNG at 110 dpi (creating the folder) and close it."""
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path

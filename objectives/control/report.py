@@ -1,5 +1,6 @@
-"""Report figures of the closed-loop objective: fuzzy action surfaces (thesis Figs. 2.19-2.20) and the
-step responses before and after tuning as ``traces.json`` (the interactive report, :mod:`tuner.interactive`)."""
+"""Report figures of the closed-loop objective: fuzzy action surfaces (thesis Figs. 2.19-2.20), the
+step responses before and after tuning as ``traces.json`` (the interactive report, :mod:`tuner.interactive`),
+and the one way its figures are written (:func:`save_figure`)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import pathlib
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["plot_surfaces", "traces_doc"]
+__all__ = ["plot_surfaces", "save_figure", "traces_doc"]
 
 #: samples per plotted series
 POINTS = 2000
@@ -49,6 +50,18 @@ def traces_doc(obj: Any, before: Mapping[str, Any], after: Mapping[str, Any]) ->
                     "parameters and the tuned ones (thesis Figs. 2.16-2.18).",
             "replaces": ["response.png"],
             "items": [{"name": name, "label": f"profile {name}", "x": col(t, step), "panels": panels}]}
+
+
+def save_figure(fig, path: str | pathlib.Path) -> pathlib.Path:
+    """Lay out ``fig``, write it as a PNG at 110 dpi (creating the folder) and close it."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def plot_surfaces(

@@ -11,6 +11,7 @@ from objectives.attitude.filters.complementary import CCF, LCF, NCF
 from objectives.attitude.filters.ekf import EKF
 from objectives.attitude.filters.madgwick import Madgwick
 from objectives.attitude.filters.mahony import Mahony
+from objectives.attitude.filters.realtime import Realtime
 
 needs_cc = pytest.mark.skipif(find_compiler() is None, reason="no C compiler (cc, gcc or clang) on the PATH")
 
@@ -31,6 +32,9 @@ CONFIGS = {
     "ccf_robust": lambda: CCF(alpha_mode="tau", tau_s=0.2, Kp=2.0, Ki=0.05, acc_gate=0.3, mag_rejection=True,
                               mag_weight=0.5),
     "ccf_acc_lp": lambda: CCF(acc_lp_tau_s=3.0, acc_gate=0.3),
+    "realtime_vqf": lambda: Realtime(),
+    "realtime_tuned": lambda: Realtime(start="q0", mag_first_at_rest=True, tau_mag_s=22.46, mag_recover_tau_s=10.98),
+    "realtime_6d": lambda: Realtime(use_mag=False, motion_bias=False, tau_acc_s=1.5),
 }
 
 

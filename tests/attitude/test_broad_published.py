@@ -14,31 +14,24 @@ slowly enough at these gains that the start value matters by up to 0.4 deg, so t
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from objectives.attitude.data.broad import broad_trials, default_broad_dir, load_broad
+from objectives.attitude.data.broad import broad_trials, load_broad
 from objectives.attitude.filters.madgwick import Madgwick
 from objectives.attitude.filters.mahony import Mahony
 from objectives.attitude.metrics import broad_errors
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from broad_protocol import broad_quat_from_acc_mag  # noqa: E402
+from tests.reference.broad_protocol import broad_quat_from_acc_mag
 
 TOL_DEG = 0.05
-BROAD = default_broad_dir()
 KEYS = ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")
 
 
 @pytest.fixture(scope="module")
-def broad():
-    if not (BROAD / "published_results.json").exists() or not broad_trials(BROAD):
-        pytest.skip(f"BROAD data not found in {BROAD}")
-    published = json.loads((BROAD / "published_results.json").read_text())["algorithms"]
-    recs = {t: load_broad(BROAD / f"{t}.mat") for t in broad_trials(BROAD)}
+def broad(broad_dir):
+    published = json.loads((broad_dir / "published_results.json").read_text())["algorithms"]
+    recs = {t: load_broad(broad_dir / f"{t}.mat") for t in broad_trials(broad_dir)}
     return published, recs
 
 

@@ -2,20 +2,20 @@
 (beta = 0.12, the 2010 C code) on trials that were not used for tuning."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.conftest import BROAD_DIR as BROAD
 from tuner.config import config_from_dict
 from tuner.run import run
 
-BROAD = Path(__file__).resolve().parents[3] / "shared" / "data" / "broad"
 TRAIN = ["01_undisturbed_slow_rotation_A", "10_undisturbed_slow_translation_A", "28_disturbed_stationary_magnet_A"]
 TEST = ["03_undisturbed_slow_rotation_C", "12_undisturbed_slow_translation_C", "30_disturbed_stationary_magnet_C"]
 
 
-@pytest.mark.skipif(not BROAD.is_dir(), reason="needs ../shared/data/broad")
+@pytest.mark.broad
+@pytest.mark.slow
 def test_tuned_madgwick_beats_published_tagp_on_held_out_trials(tmp_path):
     published = json.loads((BROAD / "published_results.json").read_text())["algorithms"]["madgwick"]["trials"]
     raw = {"name": "broad-madgwick", "seed": 3,

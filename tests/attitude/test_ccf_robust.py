@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,10 +14,8 @@ from objectives.attitude.filters._cf_robust import cf_robust_kernel, robust_stat
 from objectives.attitude.filters.complementary import CCF, _cf_kernel, euler_zyx_from_quat
 from objectives.attitude.filters.ekf import gravity_in_units
 from objectives.attitude.filters.stream import as_recording
+from tests.conftest import BROAD_DIR as BROAD
 
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = next((p for p in (ROOT.parent / "shared" / "data" / "broad", ROOT.parent.parent / "shared" / "data" / "broad")
-              if (p / "trials.json").exists()), None)
 TAU = {"alpha_mode": "tau", "tau_s": 0.5, "Kp": 1.0, "Ki": 0.01}
 
 # sha256 of CCF(**options).run(bench6dof 6 s, seed 4) as little-endian float64, computed before the robust
@@ -143,7 +140,7 @@ def test_mag_rejection_holds_the_heading_through_a_disturbance():
     assert (gain[int(12 / dt):int(19 / dt)] == 1.0).all()  # a reference learned while turning, field undisturbed
 
 
-@pytest.mark.skipif(BROAD is None, reason="BROAD data not found")
+@pytest.mark.broad
 def test_on_broad_the_blocks_lower_the_fast_translation_and_magnet_errors():
     # measured (total RMSE, deg): trial 15 59.99 -> 2.90 with the low-pass; trial 28 45.69 -> 9.85 with the
     # low-pass (its heading error came from tilt compensation with accelerating-frame angles) -> 8.55 with

@@ -4,10 +4,19 @@ CC-BY-4.0, ../shared/data/broad).
 Double: within 1e-9 rad of the kernel at every sample (-O2, with and without -ffast-math); where the model itself
 moves by more than that when its inputs move by one ulp, within 10 times that self-sensitivity (the NCF near
 gimbal lock on trial 07: 2.7e-8 rad).
-Float: total RMSE within 0.01 deg of the double result for the quaternion filters (measured at most 0.0005 deg).
-The Euler-angle filters (LCF, NCF, CCF) integrate roll, pitch and yaw themselves, and in float the fast-rotation
-trials 07 and 09 (pitch up to 84 deg) move their total RMSE by up to 0.023 deg (LCF tau form 0.021, NCF 0.023,
-CCF with its robust options 0.0015): their bound is 0.05 deg.
+Float: total RMSE within 0.01 deg of the double result (measured at most 0.0005 deg for the quaternion filters),
+for the Euler-angle filters (LCF, NCF, CCF) on every trial where their pitch stays 0.2 deg or more away from
+gimbal lock. Where it passes closer (NCF on trials 07, 09, 24 and 28, LCF on 09 and 24, CCF on 24 and 30),
+1/cos(pitch) in eqs. (1)-(3) amplifies any rounding by about 1e8 (the double model moves by 2.7e-8 rad for one
+double ulp of its inputs, see below), so the float build's few-sample excursion there is an accident of
+rounding, not a loss a float formulation could avoid: the double model itself, given the float32-rounded inputs,
+moves its total RMSE on trial 07 by 0.055 deg (NCF). The bound there is 0.05 deg (measured NCF 0.020 on 07,
+0.014 on 28, the rest below 0.003 deg; Cody-Waite reduction of the float angles and wraps moved them about as
+much in either direction).
+The realtime filter's bound is 0.05 deg: its bias Kalman filter works with variances up to 1e8 (0.01 deg/s units,
+as VQF) and its rest and disturbance decisions are thresholds, so in float single samples decide differently;
+measured 0.009 deg at VQF's values, 0.028 deg (trial 28) as configs/broad_realtime.yaml tuned it; double 2.5e-12
+rad.
 Trials 28 and 30 (stationary magnet) and the trials with breaks exercise magnetic rejection and the rest bias;
 the test checks that they fire.
 """
@@ -27,7 +36,9 @@ pytestmark = [needs_cc, pytest.mark.slow, pytest.mark.broad]
 BROAD = default_broad_dir()
 TOL_RAD = 1e-9
 FLOAT_TOL_DEG = 0.01
-EULER_FLOAT_TOL_DEG = 0.05
+GIMBAL_FLOAT_TOL_DEG = 0.05
+GIMBAL_MARGIN_DEG = 0.2
+REALTIME_FLOAT_TOL_DEG = 0.05
 
 
 @pytest.fixture(scope="module")
@@ -47,6 +58,14 @@ def _self_sensitivity(flt, rec, ref) -> float:
     bumped = dataclasses.replace(rec, gyr=np.nextafter(rec.gyr, np.inf), acc=np.nextafter(rec.acc, np.inf),
                                  mag=np.nextafter(rec.mag, np.inf))
     return float(angle(ref, flt.run(bumped)).max())
+
+
+def _max_pitch_deg(q: np.ndarray, frame: str) -> float:
+    """The largest |pitch| (ZYX Euler angles in NED, as the Euler filters integrate them), deg."""
+    from objectives.attitude.filters.complementary import euler_zyx_from_quat
+    from objectives.attitude.quaternion import to_frame
+
+    return float(np.degrees(np.abs(euler_zyx_from_quat(to_frame(q, frame, "NED"))[:, 1])).max())
 
 
 def _compare(flt, recs, tmp_path, exact: bool) -> dict[str, float]:
@@ -69,12 +88,17 @@ def _compare(flt, recs, tmp_path, exact: bool) -> dict[str, float]:
         d = abs(broad_errors(out["float"], rec.quat, rec.motion).total_rmse_deg
                 - broad_errors(out["O2"], rec.quat, rec.motion).total_rmse_deg)
         worst["float_deg"] = max(worst["float_deg"], d)
-        assert d < (EULER_FLOAT_TOL_DEG if flt.name in ("lcf", "ncf", "ccf") else FLOAT_TOL_DEG), (flt, rec.name, d)
+        if flt.name == "realtime":
+            worst.setdefault("float_by_trial", {})[rec.name] = d
+        tol = REALTIME_FLOAT_TOL_DEG if flt.name == "realtime" else FLOAT_TOL_DEG
+        if flt.name in ("lcf", "ncf", "ccf") and _max_pitch_deg(out["O2"], rec.frame) > 90.0 - GIMBAL_MARGIN_DEG:
+            tol = GIMBAL_FLOAT_TOL_DEG
+        assert d < tol, (flt, rec.name, d, tol)
     return worst
 
 
 @pytest.mark.parametrize("case", ["madgwick_c_zeta", "mahony_robust", "mahony_imu", "ekf_robust", "ekf_paper_euler",
-                                  "lcf_tau", "ncf", "ccf_robust"])
+                                  "lcf_tau", "ncf", "ccf_robust", "realtime_vqf", "realtime_tuned"])
 def test_every_trial(case, trials, tmp_path):
     _compare(CONFIGS[case](), trials, tmp_path, exact=True)
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,11 +16,9 @@ from objectives.attitude.cv import (
     score_trials,
     search_space,
 )
+from tests.conftest import BROAD_DIR as BROAD
 
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = next((p for p in (ROOT.parent / "shared" / "data" / "broad", ROOT.parent.parent / "shared" / "data" / "broad")
-              if (p / "trials.json").exists()), None)
-needs_broad = pytest.mark.skipif(BROAD is None, reason="BROAD data not found")
+needs_broad = pytest.mark.broad
 
 
 def test_logo_holds_each_name_out_once():

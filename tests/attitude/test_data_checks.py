@@ -7,7 +7,6 @@ import shutil
 import subprocess
 import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -26,8 +25,8 @@ from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.data.synthetic import simulate_imu
 from objectives.attitude.filters import filter_names, get_filter
 from objectives.attitude.objective import FilterObjective
+from tests.conftest import REPO as ROOT
 
-ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "configs" / "examples"
 DT = 0.01
 
@@ -183,12 +182,10 @@ def test_describe_csv_lists_every_key_and_allowed_value():
 
 
 # --- the example job for one's own CSV -------------------------------------------------------------
-def test_example_csv_is_what_its_generator_writes(tmp_path):
-    sys.path.insert(0, str(EXAMPLES))
-    try:
-        import make_imu_csv
-    finally:
-        sys.path.remove(str(EXAMPLES))
+def test_example_csv_is_what_its_generator_writes(tmp_path, monkeypatch):
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+    import make_imu_csv
+
     assert make_imu_csv.main(tmp_path / "imu.csv").read_text() == (EXAMPLES / "imu.csv").read_text()
 
 
@@ -258,12 +255,9 @@ def test_start_in_motion_warns_naming_recording_and_fix(tmp_path, moving_and_res
     assert w.startswith("moving: starts in motion") and "init: truth" in w and "warmup_s" in w
 
 
-def test_broad_segment_starting_in_motion_warns():
+def test_broad_segment_starting_in_motion_warns(broad_dir):
     """The issue's case: a ``start_s`` segment that starts in motion (BROAD trial 01 moves at 60 s)."""
-    broad = ROOT.parent / "shared" / "data" / "broad"
-    if not (broad / "01_undisturbed_slow_rotation_A.mat").exists():
-        pytest.skip(f"BROAD data not found under {broad}")
-    specs = [{"broad": {"dir": str(broad), "trial": "01_undisturbed_slow_rotation_A", **cut}}
+    specs = [{"broad": {"dir": str(broad_dir), "trial": "01_undisturbed_slow_rotation_A", **cut}}
              for cut in ({"start_s": 60.0, "stop_s": 70.0}, {"start_s": 0.0, "stop_s": 10.0})]
     obj = FilterObjective.from_config({"kind": "filter", "filter": "mahony", "data": specs,
                                        "fixed": {"init": "broad"}}, ROOT)

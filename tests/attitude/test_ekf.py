@@ -4,8 +4,6 @@ noise behaviour, the fuzzy scaling of R, frames, the parameter space and input c
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,9 +22,7 @@ from objectives.attitude.filters.ekf import (
 )
 from objectives.attitude.metrics import euler_mse_geomean, euler_stats
 from objectives.attitude.quaternion import quat_from_euler_zyx, to_frame, triad_batch
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from ekf_reference import ekf_reference, fuzzy_scale_reference  # noqa: E402
+from tests.reference.ekf_reference import ekf_reference, fuzzy_scale_reference
 
 
 def _trajectory(n: int, dt: float, seed: int = 0, rate: float = 1.0) -> np.ndarray:

@@ -11,7 +11,6 @@ import math
 import numpy as np
 import pytest
 
-from objectives.attitude.data.broad import default_broad_dir
 from objectives.attitude.data.loaders import load_recording
 from objectives.attitude.filters import get_filter
 from objectives.attitude.filters.ekf import EKF, gravity_in_units
@@ -23,10 +22,8 @@ REAL = {"p0_b": 1e-4, "gyro_sample": "current"}
 
 
 @pytest.fixture(scope="module")
-def rec():
-    d = default_broad_dir()
-    if not any(d.glob(TRIAL + ".*")):
-        pytest.skip(f"BROAD trial {TRIAL} not found in {d}")
+def rec(broad_dir):
+    d = broad_dir
     # 60 s: 10 s of rest, then the fast translations
     return load_recording({"broad": {"dir": str(d), "trial": TRIAL, "start_s": 30, "stop_s": 90}})
 

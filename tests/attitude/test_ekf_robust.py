@@ -8,8 +8,6 @@ trial, and the earth-frame acc low-pass keeps the inclination through fast trans
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -19,10 +17,8 @@ from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_robust_kerne
 from objectives.attitude.filters.ekf import EKF, FAEKF, gravity_in_units
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.attitude.fused_errors import error_sums
+from tests.conftest import BROAD_DIR as BROAD
 
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = next((p for p in (ROOT.parent / "shared" / "data" / "broad", ROOT.parent.parent / "shared" / "data" / "broad")
-              if (p / "trials.json").exists()), None)
 BASE = {"p0_b": 1e-4, "gyro_sample": "current", "huber_deg": 5.0, "acc_gate": 0.3}
 
 
@@ -73,7 +69,7 @@ def test_faekf_with_blocks_runs_and_stream_equals_batch(rec):
     assert np.allclose(qs, q[:200], atol=1e-12)
 
 
-@pytest.mark.skipif(BROAD is None, reason="BROAD data not found")
+@pytest.mark.broad
 def test_mag_rejection_lowers_heading_error_on_a_stationary_magnet_trial():
     # the paper's EKF (every other option at its default); measured: heading 6.6 -> 5.2 deg, total 26.6 -> 17.4
     rec = load_broad(BROAD / "30_disturbed_stationary_magnet_C.mat")
@@ -85,7 +81,7 @@ def test_mag_rejection_lowers_heading_error_on_a_stationary_magnet_trial():
     assert 0.1 < (res.diagnostics["mag_gain"] < 1.0).mean() < 0.9  # the magnet passes are detected, not all
 
 
-@pytest.mark.skipif(BROAD is None, reason="BROAD data not found")
+@pytest.mark.broad
 def test_blocks_on_survive_fast_translation():
     rec = load_broad(BROAD / "15_undisturbed_fast_translation_A.mat")
     e_plain = error_sums(EKF(**BASE).run(rec), rec.quat, rec.motion).broad_rmse_deg[0]

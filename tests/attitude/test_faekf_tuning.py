@@ -23,6 +23,8 @@ from objectives.attitude.data.synthetic import PHASES, bench6dof
 from tuner.config import config_from_dict
 from tuner.run import run
 
+pytestmark = pytest.mark.slow  # every test here tunes, sweeps or drives a browser
+
 DURATION_S = 20.0
 TRAIN_SEEDS = (1, 2, 3)
 TEST_SEEDS = (101, 102)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from objectives.attitude.batch import batchable
-from objectives.attitude.data.broad import default_broad_dir
 from objectives.attitude.objective import FilterObjective
 from tuner.config import config_from_dict
 from tuner.evaluate import Evaluator
@@ -57,6 +56,7 @@ def _call(obj, p):
     ("kf1d", {}, {"metric": "mse_1d", "data": [TILT, TILT2]}),
     ("kf1d", {}, {"metric": "euler_rmse_mean", "data": [TILT]}),
 ])
+@pytest.mark.slow
 def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
     extra = dict(extra)
     obj = FilterObjective(flt, extra.pop("data", [BENCH, BENCH2]), fixed=dict(fixed), **extra)
@@ -120,6 +120,7 @@ def _run(tmp_path, objective, backend, name, parameters=None):
     return _history(tmp_path / name)
 
 
+@pytest.mark.slow
 def test_history_of_a_filter_run_is_identical_serial_and_threads(tmp_path):
     objective = {"kind": "filter", "filter": "faekf", "data": [BENCH, BENCH2], "fixed": dict(FAEKF_FIXED),
                  "metric": "euler_mse_geomean", "warmup_s": 0.5}
@@ -128,10 +129,10 @@ def test_history_of_a_filter_run_is_identical_serial_and_threads(tmp_path):
     assert len(ref) == 12 and got == ref
 
 
-@pytest.mark.skipif(not default_broad_dir().exists(), reason="BROAD data not found")
-def test_history_on_broad_is_identical_serial_and_threads(tmp_path):
+@pytest.mark.slow
+def test_history_on_broad_is_identical_serial_and_threads(tmp_path, broad_dir):
     objective = {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
-                 "data": [{"broad": {"dir": str(default_broad_dir()), "trial": "07_undisturbed_fast_rotation_B",
+                 "data": [{"broad": {"dir": str(broad_dir), "trial": "07_undisturbed_fast_rotation_B",
                                      "stop_s": 35.0}}]}
     ref = _run(tmp_path, objective, "serial", "serial", {"beta": {"low": 0.001, "high": 1.0, "scale": "log"}})
     got = _run(tmp_path, objective, "threads", "threads", {"beta": {"low": 0.001, "high": 1.0, "scale": "log"}})
@@ -147,6 +148,7 @@ def test_threads_backend_uses_the_kernel_for_the_filter_objective():
     _same([r.evaluation for r in recs], _serial(obj, params))
 
 
+@pytest.mark.slow
 def test_with_a_timeout_the_batch_runs_in_a_forked_child_with_the_same_history(tmp_path):
     objective = {"kind": "filter", "filter": "mahony", "data": [BENCH]}
     ref = _run(tmp_path, objective, "serial", "serial")

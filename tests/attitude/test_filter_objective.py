@@ -145,6 +145,7 @@ def _tiny_kf_job(tmp_path):
             "output": str(tmp_path)}
 
 
+@pytest.mark.slow
 def test_tiny_pso_run_improves_thesis_initial_kf_parameters(tmp_path):
     """Thesis 3.1.3.1: PSO improves on the initial parameters (8 x 5 PSO, short tilt1d recording)."""
     cfg = config_from_dict(_tiny_kf_job(tmp_path), base_dir=tmp_path)
@@ -163,6 +164,7 @@ def test_tiny_pso_run_improves_thesis_initial_kf_parameters(tmp_path):
     assert any(p.name.startswith("euler_") for p in (res.run_dir / "figures").iterdir())
 
 
+@pytest.mark.slow
 def test_tuner_evaluate_json_on_other_data(tmp_path):
     cfg = config_from_dict(_tiny_kf_job(tmp_path), base_dir=tmp_path)
     res = run(cfg, run_dir=tmp_path / "kf", quiet=True)

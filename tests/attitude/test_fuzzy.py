@@ -1,17 +1,13 @@
 """objectives.fuzzy against closed forms and the slow reference in tests/reference/fuzzy_reference.py."""
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from numba import njit
 
 from objectives import fuzzy as fz
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from fuzzy_reference import mamdani_ref, mf, sugeno_ref  # noqa: E402
+from tests.reference.fuzzy_reference import mamdani_ref, mf, sugeno_ref
 
 
 def test_membership_closed_forms():

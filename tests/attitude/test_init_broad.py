@@ -9,8 +9,6 @@ Mahony with BROAD's trial-agnostic good parameters (Kp = 0.74, Ki = 0.0012) star
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,13 +18,9 @@ from objectives.attitude.filters.mahony import Mahony
 from objectives.attitude.init_broad import broad_initial_quaternion, broad_quat_from_acc_mag, broad_start
 from objectives.attitude.metrics import broad_errors
 from objectives.attitude.quaternion import qmul, to_frame
+from tests.conftest import BROAD_DIR as BROAD
+from tests.reference.broad_protocol import broad_quat_from_acc_mag as reference_quat
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from broad_protocol import broad_quat_from_acc_mag as reference_quat  # noqa: E402
-
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = next((p for p in (ROOT.parent / "shared" / "data" / "broad", ROOT.parent.parent / "shared" / "data" / "broad")
-              if (p / "published_results.json").exists()), None)
 KEYS = ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")
 
 
@@ -75,7 +69,7 @@ def test_degenerate_samples_are_refused(acc, mag, what):
         broad_quat_from_acc_mag(acc, mag)
 
 
-@pytest.mark.skipif(BROAD is None, reason="BROAD data not found")
+@pytest.mark.broad
 def test_mahony_tagp_reproduces_published_rmse_on_every_trial():
     published = json.loads((BROAD / "published_results.json").read_text())["algorithms"]["mahony"]["trials"]
     flt = Mahony(Kp=0.74, Ki=0.0012)

@@ -18,10 +18,9 @@ import pytest
 import yaml
 
 from objectives.attitude.filters.mahony import Mahony
+from tests.conftest import BROAD_DIR as BROAD
+from tests.conftest import REPO
 
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = next((p for p in (ROOT.parent / "shared" / "data" / "broad", ROOT.parent.parent / "shared" / "data" / "broad")
-              if (p / "published_results.json").exists()), None)
 KEYS = ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")
 
 
@@ -32,9 +31,9 @@ def _evaluate(tmp_path: Path, trials: list[str], params: dict) -> dict:
         "optimizer": {"method": "pso", "population": 4, "generations": 1}}
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
     (tmp_path / "p.yaml").write_text(yaml.safe_dump(params))
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(ROOT / ".cache" / "numba")}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(REPO / ".cache" / "numba")}
     out = subprocess.run([sys.executable, "-m", "tuner", "evaluate", str(tmp_path / "c.yaml"), "--params",
-                          str(tmp_path / "p.yaml"), "--json"], cwd=ROOT, env=env, capture_output=True, text=True,
+                          str(tmp_path / "p.yaml"), "--json"], cwd=REPO, env=env, capture_output=True, text=True,
                          timeout=600)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout)
@@ -46,7 +45,8 @@ def test_init_is_a_declared_option_of_every_filter():
         Mahony(init="broda")
 
 
-@pytest.mark.skipif(BROAD is None, reason="BROAD data (../shared/data/broad) not found")
+@pytest.mark.broad
+@pytest.mark.slow
 def test_cli_reproduces_published_mahony_rmse_per_trial(tmp_path):
     published = json.loads((BROAD / "published_results.json").read_text())["algorithms"]["mahony"]["trials"]
     trials = sorted(t for t in published if (BROAD / f"{t}.mat").exists())

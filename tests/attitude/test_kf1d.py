@@ -1,8 +1,6 @@
 """1-D tilt filters (objectives.attitude.filters.kf1d) against slow references and exact data."""
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,9 +8,7 @@ import pytest
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import get_filter
 from objectives.attitude.filters.kf1d import AKF1D, KF1D, Madgwick1D, Mahony1D, akf1d_fis, tilt_from_quat
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from tilt1d_reference import kf1d_ref, madgwick_imu_ref, mahony_imu_ref  # noqa: E402
+from tests.reference.tilt1d_reference import kf1d_ref, madgwick_imu_ref, mahony_imu_ref
 
 G = 9.81
 

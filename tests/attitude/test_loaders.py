@@ -8,27 +8,20 @@ import numpy as np
 import pytest
 
 from objectives.attitude.data import loaders
-from objectives.attitude.data.broad import broad_trials, default_broad_dir, load_broad
+from objectives.attitude.data.broad import broad_trials, load_broad
 from objectives.attitude.data.csv import load_csv
 from objectives.attitude.data.recording import Recording, RecordingError
 
-BROAD = default_broad_dir()
 FIRST = "01_undisturbed_slow_rotation_A"
 
 
-def need_broad():
-    if not (BROAD / f"{FIRST}.mat").exists():
-        pytest.skip(f"BROAD data not found in {BROAD}")
-
-
 @pytest.fixture(scope="module")
-def broad_all():
-    need_broad()
-    return {p.stem: load_broad(p) for p in sorted(BROAD.glob("*.mat"))}
+def broad_all(broad_dir):
+    return {p.stem: load_broad(p) for p in sorted(broad_dir.glob("*.mat"))}
 
 
-def test_every_broad_file_loads(broad_all):
-    assert len(broad_all) == len(broad_trials()) == len(list(BROAD.glob("*.mat"))) > 0
+def test_every_broad_file_loads(broad_all, broad_dir):
+    assert len(broad_all) == len(broad_trials()) == len(list(broad_dir.glob("*.mat"))) > 0
     for name, rec in broad_all.items():
         assert rec.name == name and rec.frame == "ENU" and rec.units["mag"] == "uT"
         assert rec.dt == pytest.approx(0.0035, rel=1e-4)
@@ -59,9 +52,8 @@ def small(broad_all):
     return broad_all[FIRST].slice(0, 2000)
 
 
-def test_broad_truncated_file_names_file_and_key(tmp_path):
-    need_broad()
-    raw = (BROAD / f"{FIRST}.mat").read_bytes()
+def test_broad_truncated_file_names_file_and_key(tmp_path, broad_dir):
+    raw = (broad_dir / f"{FIRST}.mat").read_bytes()
     bad = tmp_path / "truncated.mat"
     bad.write_bytes(raw[: len(raw) // 2])
     with pytest.raises(RecordingError) as exc:
@@ -240,15 +232,14 @@ def test_load_recording_csv_with_yaml_map(tmp_path):
         loaders.load_recording({"csv": {"path": "log.csv", "colums": {}}}, tmp_path)
 
 
-def test_load_recording_broad_and_bad_specs(tmp_path):
-    need_broad()
-    spec = {"broad": {"dir": str(BROAD), "trial": FIRST, "start_s": 1.0, "stop_s": 3.0}}
+def test_load_recording_broad_and_bad_specs(tmp_path, broad_dir):
+    spec = {"broad": {"dir": str(broad_dir), "trial": FIRST, "start_s": 1.0, "stop_s": 3.0}}
     rec = loaders.load_recording(spec)
     assert rec.n == round(2.0 / 0.0035) and rec.name == FIRST
-    recs = loaders.load_recordings({"broad": {"dir": str(BROAD), "trials": [FIRST, FIRST], "stop_s": 1}})
+    recs = loaders.load_recordings({"broad": {"dir": str(broad_dir), "trials": [FIRST, FIRST], "stop_s": 1}})
     assert [r.n for r in recs] == [round(1 / 0.0035)] * 2
     with pytest.raises(RecordingError, match="trial 'nope' not found"):
-        loaders.load_recording({"broad": {"dir": str(BROAD), "trial": "nope"}})
+        loaders.load_recording({"broad": {"dir": str(broad_dir), "trial": "nope"}})
     with pytest.raises(RecordingError, match="unknown kind 'matlab'"):
         loaders.load_recording({"matlab": {}})
     with pytest.raises(RecordingError, match="one key"):

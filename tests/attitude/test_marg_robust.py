@@ -3,9 +3,6 @@ papers' filters bit for bit, on they hold the heading through a magnet, and run 
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -20,11 +17,8 @@ from objectives.attitude.filters.mahony import _coef as mh_coef
 from objectives.attitude.metrics import broad_error_angles
 from objectives.attitude.quaternion import qrot_batch
 from objectives.attitude.quaternion.conversions import quat_from_euler_zyx
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-from madgwick_mahony_reference import madgwick_ref, mahony_ref  # noqa: E402
-
-from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings, rest_recording  # noqa: E402
+from tests.attitude.robust_cases import degenerate_arrays, digest, digest_recordings, rest_recording
+from tests.reference.madgwick_mahony_reference import madgwick_ref, mahony_ref
 
 DT = 0.01
 Q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])

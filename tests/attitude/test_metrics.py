@@ -3,17 +3,13 @@
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from objectives.attitude import metrics as M
 from objectives.attitude.quaternion import qexp_batch, quat_from_euler_zyx
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-import attitude_core_reference as ref  # noqa: E402
+from tests.reference import attitude_core_reference as ref
 
 D = math.pi / 180
 

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,9 +11,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from objectives.attitude import quaternion as Q
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-import attitude_core_reference as ref  # noqa: E402
+from tests.reference import attitude_core_reference as ref
 
 finite = st.floats(-1.0, 1.0, allow_nan=False, allow_infinity=False)
 quat4 = st.tuples(finite, finite, finite, finite).filter(lambda t: sum(x * x for x in t) > 1e-3)

@@ -6,8 +6,6 @@ each fallback and a long disturbed recording end to end.
 """
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,9 +14,7 @@ from objectives.attitude.filters import _ukf_mean as um
 from objectives.attitude.filters import _ukf_scalar as sc
 from objectives.attitude.filters.ukf import run_ukf
 from tests.attitude.test_ukf import PARAMS, _disturbed, run_against_reference
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "reference"))
-import ukf_reference as ref  # noqa: E402
+from tests.reference import ukf_reference as ref
 
 
 def _cloud(rng, center, m, spread):
@@ -87,6 +83,7 @@ def test_cholesky_with_reciprocal_diagonal():
 
 
 @pytest.mark.parametrize("robust", [False, True])
+@pytest.mark.slow
 def test_long_disturbed_run_matches_literal_reference(robust):
     """1000 samples at 40 Hz with eight magnetic and eight acceleration disturbances: the kernel and the
     plain-NumPy reference (eq. 28 evaluated literally, np.median for eq. 36) agree to 1e-10 rad throughout."""
@@ -97,6 +94,7 @@ def test_long_disturbed_run_matches_literal_reference(robust):
         assert out["lam"].min() < 0.5  # the Hampel gain acted on the disturbances
 
 
+@pytest.mark.slow
 def test_fast_rotation_uses_the_exact_maps_and_matches_reference():
     """0.6 rad per sample (beyond the 0.5 rad series range of eq. 2) and a wide initial covariance (sigma points
     beyond the 0.2 rad series range of eq. 1): the fallbacks keep the kernel on the reference."""

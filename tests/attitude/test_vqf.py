@@ -5,7 +5,7 @@ import builtins
 import numpy as np
 import pytest
 
-from objectives.attitude.data.broad import default_broad_dir, load_broad
+from objectives.attitude.data.broad import load_broad
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.metrics import broad_errors
 
@@ -83,12 +83,9 @@ def test_static_orientation_in_recording_frame(frame):
     assert err.total_rmse_deg < 0.5
 
 
-def test_broad_default_parameters_plausible():
+def test_broad_default_parameters_plausible(broad_dir):
     """VQF paper / BROAD: about 2 deg mean total RMSE with defaults; generous bound on one trial."""
-    path = default_broad_dir() / "01_undisturbed_slow_rotation_A.mat"
-    if not path.exists():
-        pytest.skip(f"BROAD data not found at {path}")
-    rec = load_broad(path)
+    rec = load_broad(broad_dir / "01_undisturbed_slow_rotation_A.mat")
     q = VQF().run(rec)
     assert q.shape == (rec.n, 4)
     assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-9)

@@ -6,16 +6,12 @@ import json
 import math
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package; `make bench` runs it from the root
-    sys.path.insert(0, str(REPO))
-
-from benchmarks.optimizers import METHODS, Budget, Exhausted, available, evals_to_band, run_method  # noqa: E402
+from benchmarks.optimizers import METHODS, Budget, Exhausted, available, evals_to_band, run_method
+from tests.conftest import REPO
 
 NAMES = ["filters", "closed_loop", "parallel", "optimizers"]
 
@@ -56,6 +52,7 @@ def test_every_method_gets_exactly_the_budget(method):
     assert r["trace"][-1] == min(float(np.sum((c - 0.3) ** 2)) for c in calls)
 
 
+@pytest.mark.slow
 def test_smoke_run_writes_well_formed_results(tmp_path):
     p = subprocess.run([sys.executable, "-m", "benchmarks.run", "--smoke", "--out", str(tmp_path)], cwd=REPO,
                        capture_output=True, text=True, timeout=600)

@@ -2,24 +2,17 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package
-    sys.path.insert(0, str(REPO))
-
-from benchmarks.broad_combined import (  # noqa: E402
+from benchmarks.broad_combined import (
     combined_recording,
     gravity_check,
     linear_acc_earth,
     quarter_errors,
 )
-from objectives.attitude.data.recording import Recording  # noqa: E402
-from objectives.attitude.quaternion import rotmat_batch  # noqa: E402
+from objectives.attitude.data.recording import Recording
+from objectives.attitude.quaternion import rotmat_batch
 
 G = 9.81
 DT = 0.01
@@ -141,11 +134,8 @@ def test_quarter_errors_see_an_error_that_grows():
     assert e["total"] == pytest.approx(np.degrees(np.sqrt(np.mean(ang ** 2))), rel=1e-6)
 
 
-@pytest.mark.skipif(not (REPO.parent / "shared" / "data" / "broad").is_dir()
-                    and not (REPO.parent.parent / "shared" / "data" / "broad").is_dir(), reason="no BROAD data")
-def test_broad_conventions_hold_at_rest():
-    from benchmarks.broad_cv_common import BROAD_DIR
+def test_broad_conventions_hold_at_rest(broad_dir):
     from objectives.attitude.data.broad import load_broad
 
-    rec = load_broad(BROAD_DIR / "15_undisturbed_fast_translation_A.mat")
+    rec = load_broad(broad_dir / "15_undisturbed_fast_translation_A.mat")
     assert gravity_check(rec) < 0.3  # noise and truth tilt error; the wrong sign would give 2 g

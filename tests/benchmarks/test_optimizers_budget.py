@@ -2,14 +2,7 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package; `make bench` runs it from the root
-    sys.path.insert(0, str(REPO))
-
-from benchmarks.optimizers import OURS, run_method  # noqa: E402
+from benchmarks.optimizers import OURS, run_method
 
 
 def test_every_method_of_ours_spends_the_whole_budget():

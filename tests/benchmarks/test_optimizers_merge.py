@@ -4,16 +4,10 @@ from __future__ import annotations
 
 import json
 import math
-import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package; `make bench` runs it from the root
-    sys.path.insert(0, str(REPO))
-
-from benchmarks.common import write_result  # noqa: E402
-from benchmarks.optimizers import run  # noqa: E402
-from benchmarks.optimizers_merge import merge  # noqa: E402
+from benchmarks.common import write_result
+from benchmarks.optimizers import run
+from benchmarks.optimizers_merge import merge
 
 
 def test_merge_keeps_each_problem_and_rebuilds_the_report(tmp_path):

@@ -18,6 +18,7 @@ def test_qraukf_over_qukf_ratio_in_chiella_setting_is_near_the_papers_7x():
     assert r < 1.0  # the robust filter stays below a degree on the held-out recordings
 
 
+@pytest.mark.slow
 def test_f_at_table_27_initial_parameters_near_thesis():
     """Eq. 2.39 (SI) at Table 2.7's initial parameters: within 10 % of the thesis's 0.1049."""
     f0 = papers.default_score("wmp_fuzzy_protective.yaml", "train")
@@ -109,6 +110,7 @@ def test_eq_14_weight_improves_on_the_ncf_at_the_ncfs_gains():
     assert ncf == pytest.approx(2.805, abs=0.01)
 
 
+@pytest.mark.slow
 def test_tuned_ccf_is_no_worse_than_tuned_ncf_at_a_reduced_budget(tmp_path):
     """Narkhede 2021's claim at 120 evaluations of the configs' `auto` (300 in `make papers`): the CCF
     contains the NCF (alpha = 1), so its tuned training error is not above the NCF's, and on the held-out

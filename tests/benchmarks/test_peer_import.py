@@ -6,13 +6,9 @@ import importlib.util
 import sys
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package; `make bench` runs it from the root
-    sys.path.insert(0, str(REPO))
+import pytest
 
-import pytest  # noqa: E402
-
-from benchmarks.common import peer, scratch_cwd  # noqa: E402
+from benchmarks.common import peer, scratch_cwd
 
 
 def test_peer_import_writes_no_file_into_the_working_directory(tmp_path, monkeypatch):

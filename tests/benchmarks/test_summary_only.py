@@ -2,17 +2,10 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-REPO = Path(__file__).resolve().parents[2]
-if str(REPO) not in sys.path:  # benchmarks/ is not an installed package; `make bench` runs it from the root
-    sys.path.insert(0, str(REPO))
-
-from benchmarks.common import write_result  # noqa: E402
-from benchmarks.run import main  # noqa: E402
+from benchmarks.common import write_result
+from benchmarks.run import main
 
 
 def test_summary_only_rebuilds_from_stored_results(tmp_path):

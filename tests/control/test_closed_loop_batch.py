@@ -35,6 +35,7 @@ def _candidates(doc, n, seed=0):
 
 
 @pytest.mark.parametrize("cfg", ["wmp_pid.yaml", "wmp_lqr.yaml", "wmp_fuzzy_protective.yaml"])
+@pytest.mark.slow
 def test_batch_equals_serial_bit_for_bit(cfg):
     doc = _doc(cfg)
     obj = ClosedLoopObjective.from_config(doc["objective"], CONFIGS)
@@ -64,6 +65,7 @@ def _history(rd):
         return [{k: v for k, v in row.items() if k != "seconds"} for row in csv.DictReader(fh)]
 
 
+@pytest.mark.slow
 def test_history_of_a_pendulum_run_is_identical_serial_and_threads(tmp_path):
     doc = _doc("wmp_pid.yaml")
     rows = {}
@@ -76,6 +78,7 @@ def test_history_of_a_pendulum_run_is_identical_serial_and_threads(tmp_path):
     assert len(rows["serial"]) == 16 and rows["threads"] == rows["serial"]
 
 
+@pytest.mark.slow
 def test_ctrl_c_interrupts_a_threads_run(tmp_path):
     doc = _doc("wmp_lqr.yaml", duration_s=8.0)
     doc.update(name="ctrl-c", optimizer={"method": "pso", "population": 8, "generations": 500},

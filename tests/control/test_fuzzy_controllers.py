@@ -1,7 +1,6 @@
 """Fuzzy WMP controllers (thesis 2.2.2, 2.3.1, eq. 2.32): kernel vs a literal reference, closed-loop
 stability with Table 2.7's initial values, LUT vs direct inference, a short PSO run, the C header."""
 
-import importlib.util
 import math
 import pathlib
 import shutil
@@ -14,13 +13,7 @@ from objectives.control.controllers import get_controller
 from objectives.control.controllers.fuzzy import THESIS_OPTIMISED, LUTFuzzy, ProtectiveFuzzy
 from objectives.control.controllers.fuzzy_steps import _protective_step, lut_nearest
 from objectives.control.objective import ClosedLoopObjective
-
-_spec = importlib.util.spec_from_file_location(
-    "fuzzy_controller_reference",
-    pathlib.Path(__file__).parents[1] / "reference" / "fuzzy_controller_reference.py",
-)
-ref = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ref)
+from tests.reference import fuzzy_controller_reference as ref
 
 CONFIG = pathlib.Path(__file__).parents[2] / "configs" / "wmp_fuzzy_protective.yaml"
 TUNED = {k: v for k, v in THESIS_OPTIMISED.items() if k != "p13"}
@@ -46,6 +39,7 @@ def test_fifteen_tuned_parameters_with_table_2_7_initial_values():
 
 
 @pytest.mark.parametrize("values", [None, TUNED])
+@pytest.mark.slow
 def test_protective_step_matches_literal_reference(values):
     ctrl = ProtectiveFuzzy()
     v = ctrl.resolve(values)
@@ -80,6 +74,7 @@ def test_protective_mechanism_lowers_the_action_as_the_current_grows():
 
 
 @pytest.mark.parametrize("name", ["flc", "protective_fuzzy", "lut"])
+@pytest.mark.slow
 def test_initial_parameters_stabilise_the_plant(objectives, name, record_property):
     obj = objectives[name]
     ev = obj(obj.defaults)
@@ -163,6 +158,7 @@ def short_run(tmp_path_factory):
     return run(cfg, tmp_path_factory.mktemp("fz") / "run", quiet=True)
 
 
+@pytest.mark.slow
 def test_short_pso_run_improves_the_initial_cost(short_run):
     import yaml
 

@@ -119,5 +119,7 @@ def test_registry_and_parameter_checks():
         get_controller("fuzzy_magic")
     with pytest.raises(ValueError, match="unknown parameter"):
         LQR().param_array({"q_theta": 1.0})
-    with pytest.raises(ValueError, match="r"):
+    with pytest.raises(ValueError, match=r"need q \(4,\) >= 0 and r \(2,\) > 0, got q=\[1\. 1\. 1\. 1\.\], r=\[0\.1"):
         lq_design(np.ones(4), np.array([0.1, 0.0]), 0.01)
+    with pytest.raises(ValueError, match=r"need q \(4,\) >= 0 .* got q=\[ 1\. -1\.  1\.  1\.\]"):
+        lq_design(np.array([1.0, -1.0, 1.0, 1.0]), np.array([0.1, 0.1]), 0.01)

@@ -34,6 +34,7 @@ def test_rest_is_equilibrium():
     assert np.max(np.abs(r["x"])) == 0.0
 
 
+@pytest.mark.slow
 def test_kernel_matches_radau_over_one_second():
     x0 = np.array([0, 0, 0.3, 0, 0, 0, 0, 0.0])
     u = (1.0, 1.6)

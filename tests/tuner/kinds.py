@@ -18,3 +18,15 @@ def kind_fixture(fixture: str, kind: str, cls: type):
         REGISTRY._specs.pop(kind, None)
 
     return registered
+
+
+class CountingObjective:
+    """Counts the calls made on this copy and returns the count as fitness: a copy kept by a worker
+    process counts on across batches, a fresh copy per task starts again at 1."""
+
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def __call__(self, params: dict) -> float:
+        self.calls += 1
+        return float(self.calls)

@@ -156,6 +156,33 @@ def test_errors_for_dicts_and_run_dirs(tmp_path):
         tuner.tune(42, progress=False)
 
 
+@pytest.mark.parametrize("kwargs, message", [
+    ({"seed": "x"}, r"^tune\(\): seed: expected an int, got str 'x'"),
+    ({"n_jobs": "two"}, r"^tune\(\): parallel.n_jobs: expected an int, got str 'two'"),
+    ({"seed": 1.5}, r"^tune\(\): seed: expected an int, got float 1.5"),
+    ({"overrides": [3]}, r"^tune\(\): overrides: expected a list of 'key.path=value' strings"),
+])
+def test_bad_keyword_arguments_are_config_errors(tmp_path, kwargs, message):
+    """seed/n_jobs/overrides of the wrong type: a ConfigError naming the argument, not a bare int() ValueError."""
+    with pytest.raises(tuner.ConfigError, match=message):
+        tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, **kwargs)
+    assert not (tmp_path / "r").exists()
+
+
+def test_one_override_string_is_one_override(tmp_path):
+    """overrides="a.b=1" is that override (it was split into characters: "--set: ... got 'o'")."""
+    res = tuner.tune(dict(JOB), overrides="optimizer.generations=2", run_dir=tmp_path / "r", progress=False)
+    assert set(res.history["generation"]) == {0, 1}
+
+
+def test_filter_warmup_of_the_wrong_type_names_its_key():
+    job = {"name": "w", "objective": {"kind": "filter", "filter": "madgwick", "warmup_s": "2s",
+                                      "data": {"train": [{"synthetic": {"generator": "bench6dof", "duration_s": 5}}]}}}
+    with pytest.raises(tuner.ConfigError, match=r"^<dict>: objective.warmup_s: expected a number of seconds >= 0, "
+                                                r"got '2s'$"):
+        tuner.tune(job, progress=False)
+
+
 def test_function_objective_builds_its_point(tmp_path):
     from objectives.functions import FUNCTIONS
 

@@ -68,6 +68,7 @@ def test_missing_data_file_in_objective(tmp_path):
     assert "missing.csv" in out.stderr and "Traceback" not in out.stderr
 
 
+@pytest.mark.slow
 def test_set_overrides_and_outputs(tmp_path):
     p = write(tmp_path, merged(output=str(tmp_path / "runs")))
     out = tuner("run", str(p), "--set", "optimizer.generations=3", "--seed", "5", "-q")
@@ -84,6 +85,7 @@ def test_set_overrides_and_outputs(tmp_path):
     assert tuner("--help").stdout.count("tuner run") >= 1
 
 
+@pytest.mark.slow
 def test_progress_lines(tmp_path):
     out = tuner("run", str(write(tmp_path, merged(output=str(tmp_path / "runs")))))
     assert "gen 1/2  best" in out.stderr and "eval/s" in out.stderr and "ETA" in out.stderr

@@ -28,6 +28,7 @@ def test_registered_by_name():
 
 
 @pytest.mark.parametrize("strategy", ["ipop", "bipop"])
+@pytest.mark.slow
 def test_restarts_beat_plain_cmaes_on_rastrigin_10d_at_equal_budget(strategy):
     # median of 5 seeds at 6000 evaluations: plain 8.95 (it stops in a local minimum), ipop 5.97, bipop 5.97
     plain = _median(CMAES)

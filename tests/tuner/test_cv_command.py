@@ -4,19 +4,16 @@ scores equal to scoring the tuned parameters on the held-out recordings directly
 from __future__ import annotations
 
 import csv
-from pathlib import Path
 
 import pytest
 import yaml
 
 from objectives.attitude.objective import FilterObjective
+from tests.conftest import BROAD_DIR as BROAD
 from tuner.cli import main
 from tuner.config import ConfigError, config_from_dict
 from tuner.cv import cross_validate, write_cv
 
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = next((p for p in (ROOT.parent / "shared" / "data" / "broad", ROOT.parent.parent / "shared" / "data" / "broad")
-              if (p / "trials.json").exists()), None)
 SPECS = [{"synthetic": {"generator": "bench6dof", "duration_s": 4, "seed": s}} for s in (1, 2, 3, 4)]
 
 
@@ -75,22 +72,17 @@ def test_cli_writes_the_directory_and_bad_k_names_the_problem(tmp_path, capsys):
         cross_validate(_cfg(SPECS[:3], tmp_path), k=4)
 
 
-def test_objective_without_cv_hook_is_refused(tmp_path):
+def test_objective_without_cv_hook_is_refused(tmp_path, monkeypatch):
     (tmp_path / "userobj_cv.py").write_text("def f(p):\n    return p['a'] ** 2\n")
-    import sys
-
-    sys.path.insert(0, str(tmp_path))
-    try:
-        cfg = config_from_dict({"name": "u", "objective": {"kind": "python", "callable": "userobj_cv:f"},
-                                "parameters": {"a": {"low": -1.0, "high": 1.0}},
-                                "optimizer": {"method": "pso", "population": 4, "generations": 1}}, base_dir=tmp_path)
-        with pytest.raises(ConfigError, match="no cv_folds hook"):
-            cross_validate(cfg)
-    finally:
-        sys.path.remove(str(tmp_path))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    cfg = config_from_dict({"name": "u", "objective": {"kind": "python", "callable": "userobj_cv:f"},
+                            "parameters": {"a": {"low": -1.0, "high": 1.0}},
+                            "optimizer": {"method": "pso", "population": 4, "generations": 1}}, base_dir=tmp_path)
+    with pytest.raises(ConfigError, match="no cv_folds hook"):
+        cross_validate(cfg)
 
 
-@pytest.mark.skipif(BROAD is None, reason="BROAD data (../shared/data/broad) not found")
+@pytest.mark.broad
 def test_broad_leave_one_group_out_on_three_trials(tmp_path):
     trials = ["01_undisturbed_slow_rotation_A", "10_undisturbed_slow_translation_A", "24_disturbed_tapping_A"]
     data = [{"broad": {"dir": str(BROAD), "trials": trials}}]

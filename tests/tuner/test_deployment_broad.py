@@ -7,18 +7,17 @@ Before the deployment carried ``objective.fixed``, ``Mahony.from_run`` lost ``ma
 
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parents[2]
-BROAD = ROOT.parent / "shared" / "data" / "broad"
+from tests.conftest import BROAD_DIR as BROAD
+from tests.conftest import REPO as ROOT
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not BROAD.is_dir(), reason="needs ../shared/data/broad (BROAD, CC-BY-4.0)")
+@pytest.mark.broad
 def test_broad_mahony_from_run_on_plain_arrays_gives_the_run_fitness(tmp_path):
     from objectives.attitude.data.loaders import load_recordings
     from objectives.attitude.filters.mahony import Mahony

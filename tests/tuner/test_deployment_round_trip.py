@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 import yaml
 
+# the pendulum's controllers and those of any plant, with the plant the latter run on
+from tests.tuner.test_export_round_trip import LOOP_CONTROLLERS, LOOP_OBJECTIVE, WMP_CONTROLLERS
 from tuner.deployment import Deployment, load_deployment
 from tuner.export import export
 from tuner.export_formats import json_load
@@ -44,6 +46,7 @@ NONDEFAULT = {
     "qraukf": {"window": 10, "mag_rejection": True, "rest_bias": True, "init": "broad"},
     "qukf": {"p0_att": 0.2, "p0_bias": 0.02, "init": "broad"},
     "vqf": {"offline": True, "magDistRejectionEnabled": False, "tauMag": 5.0},
+    "realtime": {"mag_first_at_rest": True, "mag_recover_tau_s": 4.0, "motion_bias": False, "start": "q0"},
 }
 
 
@@ -236,7 +239,32 @@ def _controller_fixed(cls):
     return out
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "flc" else n for n in CONTROLLERS])
+@pytest.mark.parametrize("name", LOOP_CONTROLLERS)
+def test_loop_controller_deployment_round_trip(name, tmp_path):
+    from objectives.control.objective import ClosedLoopObjective
+
+    obj0 = ClosedLoopObjective.from_config({**LOOP_OBJECTIVE, "controller": name})
+    choice = next((p for p in obj0._decl if p.choices), None)
+    fixed = {choice.name: next(c for c in choice.choices if c != choice.default)} if choice else {"u_max": 50.0}
+    objective = {**LOOP_OBJECTIVE, "controller": name, "fixed": fixed}
+    run_dir = _tiny_run(tmp_path, objective)
+    obj = ClosedLoopObjective.from_config(objective)
+
+    def rebuild(fmt, values):  # the discrete controller's coefficients from the exported values
+        built = obj.build(values)
+        np.testing.assert_array_equal(built.param_array(), obj.build(yaml.safe_load(
+            (run_dir / "best.yaml").read_text())["params"]).param_array(), err_msg=fmt)
+        assert built.values == dict(values)
+
+    dep = _check_exports(run_dir, tmp_path, rebuild)
+    assert dep.kind == "closed_loop" and dep.name == name and set(fixed) <= set(dep.names("fixed"))
+    assert {k: dep.values[k] for k in fixed} == fixed
+    assert dep.sample_rate_hz == pytest.approx(1.0 / LOOP_OBJECTIVE["period_s"])
+    assert "plant" in dep.scoring and "scenario" in dep.scoring  # the simulation only served scoring
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "flc" else n
+                                  for n in WMP_CONTROLLERS])
 def test_controller_deployment_round_trip(name, tmp_path):
     from objectives.control.controllers import get_controller
     from objectives.control.objective import ClosedLoopObjective

@@ -71,6 +71,7 @@ def test_sweep_names_and_variants(tmp_path, sweep, expected):
     ({"data": [{"synthetic": {"generator": "bench6dof", "duration_s": -3}}]}, ["duration_s", "got -3"]),
     ({"data": [{"csv": {"path": "missing.csv"}}]}, ["missing.csv"]),
 ])
+@pytest.mark.slow
 def test_evaluate_with_bad_data(tmp_path, data, expected):
     job = {**BASE, "objective": {"kind": "filter", "filter": "madgwick",
                                  "data": [{"synthetic": {"generator": "bench6dof", "duration_s": 3, "seed": 1}}]}}
@@ -127,6 +128,7 @@ def test_list_into_a_closed_pipe_prints_no_traceback():
     assert proc.wait(timeout=120) == 0 and "Traceback" not in err and "BrokenPipe" not in err
 
 
+@pytest.mark.slow
 def test_list_sections_come_from_the_registry():
     out = tuner("list", "filters")
     assert out.returncode == 0 and "filters (objective.kind: filter):" in out.stdout and "madgwick" in out.stdout

@@ -1,9 +1,12 @@
 """Evaluation backends: results in ask order, failures as values, a Dask cluster equal to serial."""
 
+import os
+
 import numpy as np
 import pytest
 
 from objectives.functions import FunctionObjective
+from tests.tuner.kinds import CountingObjective
 from tuner.config import config_from_dict
 from tuner.evaluate import Evaluator, _chunks
 from tuner.objective import PENALTY, Evaluation, as_evaluation
@@ -66,12 +69,20 @@ def test_objective_built_once_per_worker():
 
 
 def test_loky_reuses_worker_processes():
-    obj = FunctionObjective("sphere", 1)
-    with Evaluator(obj, "loky", n_jobs=2) as ev:
-        pids = {r.worker for _ in range(3) for r in ev([{"x0": 1.0}] * 8)}
-    assert 1 <= len(pids) <= 2
+    """Three batches of 8 on 2 workers run in at most 2 processes other than this one, and each worker
+    keeps its one copy of the objective across tasks and batches: its call counts run 1, 2, 3, ... (a
+    copy per task, one candidate per task here, would count 1 every time)."""
+    with Evaluator(CountingObjective(), "loky", n_jobs=2) as ev:
+        recs = [r for _ in range(3) for r in ev([{"x0": 1.0}] * 8)]
+    pids = {r.worker for r in recs}
+    assert str(os.getpid()) not in pids and 1 <= len(pids) <= 2
+    for pid in pids:
+        counts = sorted(r.evaluation.fitness for r in recs if r.worker == pid)
+        assert counts == [float(i) for i in range(1, len(counts) + 1)], pid
+    assert max(r.evaluation.fitness for r in recs) > 8  # some copy outlived its first batch
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_equals_serial(tmp_path):
     pytest.importorskip("distributed")
     raw = {"name": "d", "seed": 2, "objective": {"kind": "function", "function": "ackley", "dim": 3},

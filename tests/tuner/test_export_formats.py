@@ -155,6 +155,7 @@ def _tuner(*args, **kw):
     return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, timeout=300, **kw)
 
 
+@pytest.mark.slow
 def test_exports_of_a_run_with_inf_round_trip_to_the_same_score(ekf_run, tmp_path):
     from objectives.registry import build_objective
 
@@ -178,6 +179,7 @@ def test_exports_of_a_run_with_inf_round_trip_to_the_same_score(ekf_run, tmp_pat
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler")
+@pytest.mark.slow
 def test_cli_export_c_with_prefix_states_rate_and_units(ekf_run, tmp_path):
     out = _tuner("export", str(ekf_run), "--format", "c", "--prefix", "EKF1", "-o", str(tmp_path / "a.h"))
     assert out.returncode == 0, out.stderr
@@ -218,3 +220,18 @@ def test_sample_rate_from_the_config_or_from_the_loaded_recordings():
     out = _sample_rate(mixed)
     assert out["sample_rate_hz"] is None and "250 Hz, 800 Hz" in out["sample_rate_note"]
     assert _sample_rate(None)["sample_rate_hz"] is None
+
+
+@pytest.mark.skipif(shutil.which("cc") is None, reason="needs a C compiler")
+def test_c_names_differing_only_in_case_get_distinct_constants(tmp_path):
+    doc = {**DOC, "params": {"k": 1.5, "K": 2.5, "a-b": 3.5, "a_b": 4.5}}
+    text = to_c(doc, prefix="P")
+    assert "P_K = 1.5" in text and "P_K_2 = 2.5" in text and "P_A_B_2 = 4.5" in text
+    assert "P_K_2 (parameter K)" in text
+    (tmp_path / "p.h").write_text(text)
+    (tmp_path / "m.c").write_text('#include "p.h"\nint main(void) { return (P_K + P_K_2 + P_A_B + P_A_B_2) == 12.0 '
+                                  "? 0 : 1; }\n")
+    cc = subprocess.run(["cc", "-std=c99", "-Wall", "-Werror", "-o", "m", "m.c"], cwd=tmp_path, capture_output=True,
+                        text=True, timeout=120)
+    assert cc.returncode == 0, cc.stderr
+    assert subprocess.run([str(tmp_path / "m")], timeout=30).returncode == 0

@@ -19,6 +19,22 @@ FILTERS = REGISTRY.catalog()["filters"][1]
 CONTROLLERS = REGISTRY.catalog()["controllers"][1]
 
 
+def _loop_names():
+    from objectives.control.plants.controllers import LOOP_CONTROLLERS
+
+    return set(LOOP_CONTROLLERS)
+
+
+#: controllers of the pendulum (plant: wmp) and of any plant (objectives/control/plants), tested apart
+WMP_CONTROLLERS = [n for n in CONTROLLERS if n not in _loop_names()]
+LOOP_CONTROLLERS = [n for n in CONTROLLERS if n in _loop_names()]
+#: a plant every loop controller runs on (two outputs for the cascade, states for LQR)
+LOOP_OBJECTIVE = {"kind": "closed_loop", "period_s": 0.05,
+                  "plant": {"ss": {"A": [[0.0, 1.0], [-1.0, -2.0]], "B": [[0.0], [1.0]], "C": [[1.0, 0.0], [0.0, 1.0]]},
+                            "output": 0, "inner_output": 1},
+                  "scenario": {"duration_s": 3.0, "reference": [{"t": 0.5, "value": 1.0}]}}
+
+
 def _tiny_run(tmp, objective):
     from tuner.config import config_from_dict
     from tuner.run import run
@@ -66,6 +82,7 @@ def _check_scores(run_dir, tmp, rebuild):
 
 
 @pytest.mark.parametrize("name", FILTERS)
+@pytest.mark.slow
 def test_filter_export_round_trip(name, tmp_path):
     from objectives.attitude.data.synthetic import synthetic
     from objectives.attitude.filters import get_filter
@@ -83,7 +100,23 @@ def test_filter_export_round_trip(name, tmp_path):
     _check_scores(run_dir, tmp_path, rebuild)
 
 
-@pytest.mark.parametrize("name", CONTROLLERS)
+@pytest.mark.parametrize("name", LOOP_CONTROLLERS)
+@pytest.mark.slow
+def test_loop_controller_export_round_trip(name, tmp_path):
+    from objectives.control.objective import ClosedLoopObjective
+
+    objective = {**LOOP_OBJECTIVE, "controller": name}
+    run_dir = _tiny_run(tmp_path, objective)
+    obj = ClosedLoopObjective.from_config(objective)
+
+    def rebuild(params, best):  # the discrete controller's coefficients from the exported values
+        np.testing.assert_array_equal(obj.coeffs(params), obj.coeffs(best))
+
+    _check_scores(run_dir, tmp_path, rebuild)
+
+
+@pytest.mark.parametrize("name", WMP_CONTROLLERS)
+@pytest.mark.slow
 def test_controller_export_round_trip(name, tmp_path):
     from objectives.control.controllers import get_controller
 

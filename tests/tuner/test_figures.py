@@ -86,6 +86,7 @@ def test_figures_with_only_failures_do_not_raise(fn):
     plt.close(fig)
 
 
+@pytest.mark.slow
 def test_closed_loop_sweep_compares_responses_on_one_figure(tmp_path):
     from pathlib import Path
 

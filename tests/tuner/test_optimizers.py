@@ -42,6 +42,7 @@ PSO_LINEAR = dict(population=30, generations=BUDGET // 30, inertia="linear", c1=
     ("de-rosenbrock", DE, dict(population=30, generations=None), rosenbrock, -5, 10, 12.0),
     ("de-rastrigin", DE, dict(population=30, generations=None, CR=0.1, F=0.5), rastrigin, -5.12, 5.12, 1.0),
 ])
+@pytest.mark.slow
 def test_reaches_documented_threshold(name, cls, kw, f, lo, hi, threshold):
     assert _median_best(cls, f, lo, hi, **kw) < threshold
 

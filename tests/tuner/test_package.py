@@ -14,7 +14,7 @@ import yaml
 
 from tuner.cli import main as cli_main
 from tuner.config import config_from_dict
-from tuner.starter import packaged_config, packaged_configs, starter_names, starter_text
+from tuner.starter import packaged_config, packaged_configs, starter_names, starter_text, write_starter
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGED = ROOT / "tuner" / "data" / "configs"
@@ -80,6 +80,24 @@ def test_init_writes_a_starter_and_refuses_unknown_names_and_overwriting(tmp_pat
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: init: unknown filter or controller 'madgwik'; did you mean 'madgwick'")
     assert not (tmp_path / "madgwik.yaml").exists()
+
+
+@pytest.mark.parametrize("name", ["madgwick", "pid", "pid2dof"])
+def test_uncommenting_a_fixed_value_in_a_starter_keeps_it_valid(tmp_path, name):
+    """`fixed: {}` followed by indented commented values gave a YAML error once a line was uncommented."""
+    from tuner.config import load_config
+
+    path = write_starter(name, tmp_path / "job.yaml")
+    lines = path.read_text().splitlines()
+    start = next(i for i, ln in enumerate(lines) if ln.startswith("  fixed:"))
+    first = start + 1  # the first value of the block, commented out
+    lines[first] = lines[first].replace("# ", "", 1)
+    key = lines[first].split(":")[0].strip()
+    path.write_text("\n".join(lines) + "\n")
+    raw = yaml.safe_load(path.read_text())
+    assert key in raw["objective"]["fixed"]
+    load_config(path)  # a valid job
+    assert f"`tuner run {path}`" in lines[1] or f"`tuner run {path}`" in lines[2]  # the header names this file
 
 
 def test_demo_lists_and_refuses_unknown_jobs(capsys):

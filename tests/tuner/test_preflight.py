@@ -87,6 +87,7 @@ def test_bad_recordings_are_errors_naming_the_data_entry(tmp_path, kw, expected)
         assert e in line, (e, line)
 
 
+@pytest.mark.slow
 def test_gyro_in_deg_s_declared_rad_s_warns_and_runs(tmp_path):
     write_csv(tmp_path / "rec.csv", gyr_scale=180 / np.pi * 100)  # peaks ~ 2900 "rad/s"
     out = tuner("run", str(filter_job(tmp_path)))

@@ -19,6 +19,8 @@ from tests.tuner.test_render import _assert_inert, _parse
 from tuner.config import config_from_dict
 from tuner.run import run
 
+pytestmark = pytest.mark.slow  # every test here tunes, sweeps or drives a browser
+
 EVIL_METRIC = "<script>alert('m')</script>"
 EVIL_REC = "[x](javascript:alert('r'))"
 EVIL_TEXT = "<img src=x onerror=alert('d')> [y](javascript:alert('d')) <script>alert('d')</script>"
@@ -225,8 +227,12 @@ def sweep_dir(tmp_path_factory, evil_run):
     doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
                      "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
     (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
+    import os  # the objective lives in this test module: its package on the path, as a user's would be
+    from pathlib import Path
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
     out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir", str(tmp / "sw"),
-                          "-q"], capture_output=True, text=True, timeout=600)
+                          "-q"], capture_output=True, text=True, timeout=600, env=env)
     assert out.returncode == 0, out.stderr
     return tmp / "sw"
 
@@ -256,10 +262,7 @@ def test_sweep_live_report_reloads_until_every_job_finished(sweep_dir, tmp_path)
     assert 'http-equiv="refresh"' not in (copy / "report.html").read_text()
 
 
-
-
 # --- a real browser ------------------------------------------------------------------------------
-BROAD = __import__("pathlib").Path(__file__).resolve().parents[3] / "shared" / "data" / "broad"
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="Chromium not installed (.ci/run installs it)")
 
 
@@ -274,12 +277,10 @@ def _output_dir():
 
 
 @pytest.fixture(scope="module")
-def filter_run(tmp_path_factory):
+def filter_run(tmp_path_factory, broad_dir):
     """Madgwick on two BROAD trials, scored on a third: the time series with a recording selector."""
-    if not BROAD.is_dir():
-        pytest.skip("needs ../shared/data/broad")
     tmp = tmp_path_factory.mktemp("filter")
-    spec = {"dir": str(BROAD), "stop_s": 60}
+    spec = {"dir": str(broad_dir), "stop_s": 60}
     raw = {"name": "madgwick", "seed": 1,
            "objective": {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
                          "fixed": {"init": "broad"},

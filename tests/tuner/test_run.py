@@ -21,6 +21,7 @@ from tests.tuner.jobs import (
 )
 from tuner.objective import PENALTY
 from tuner.run import resume, run
+from tuner.rundir import RunError
 
 
 def job(tmp_path, **over):
@@ -32,6 +33,7 @@ def history(run_dir):
 
 
 @pytest.mark.parametrize("method", ["pso", "cmaes", "de", "random"])
+@pytest.mark.slow
 def test_loky_history_equals_serial(tmp_path, method):
     """Same config and seed: identical history.csv serially and on 2 loky workers.
 
@@ -80,7 +82,7 @@ def test_run_directory_contents(tmp_path):
     assert res.best.params == best["params"] == res.best_params and res.best.metrics == res.best_metrics
     assert (best["found"]["stage"], best["found"]["generation"], best["found"]["eval"]) == \
         (res.best.stage, res.best.generation, res.best.eval)
-    with pytest.raises(Exception, match="exists and is not empty"):
+    with pytest.raises(RunError, match="exists and is not empty; use `tuner resume "):
         run(job(tmp_path), run_dir=d, quiet=True)
 
 
@@ -106,6 +108,7 @@ def _write_job(tmp_path, name, **objective):
                               {"method": "de", "population": 6, "generations": 12})
 
 
+@pytest.mark.slow
 def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
     ref = run(load_job(_write_job(tmp_path, "ref"), tmp_path), run_dir=tmp_path / "ref", quiet=True)
     run_dir = tmp_path / "killed"
@@ -123,6 +126,7 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
     pd.testing.assert_frame_equal(h_ref, h_res)
 
 
+@pytest.mark.slow
 def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     job_file = _write_job(tmp_path, "int", sleep_s=0.1)
     run_dir = tmp_path / "int"

@@ -84,6 +84,7 @@ def fast_dir(tmp_path):
         shutil.rmtree(d, ignore_errors=True)
 
 
+@pytest.mark.slow
 def test_kill_at_every_write_then_resume_equals_uninterrupted(fast_dir, monkeypatch):
     tmp_path = fast_dir
     import tuner.report
@@ -105,7 +106,7 @@ def test_kill_at_every_write_then_resume_equals_uninterrupted(fast_dir, monkeypa
             if (d / "meta.json").exists() or (d / "config.yaml").exists():
                 status = json.loads((d / "meta.json").read_text())["status"] if (d / "meta.json").exists() else ""
                 if status == "finished":  # killed while writing the report: nothing left to resume
-                    with pytest.raises(Exception, match="already finished"):
+                    with pytest.raises(rundir.RunError, match=r": already finished$"):
                         resume(d, quiet=True)
                 else:
                     assert _in_child(lambda d=d: resume(d, quiet=True), {}) == 0, f"resume after write {k} {when}"

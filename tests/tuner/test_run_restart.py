@@ -2,6 +2,7 @@
 the chosen method, and a killed run resumed by replay equals the uninterrupted one."""
 
 import pandas as pd
+import pytest
 
 from tests.tuner.jobs import kill_after_generations, load_job, resume_cli, start_cli_run, write_function_job
 from tuner.run import run
@@ -13,6 +14,7 @@ def _write_job(tmp_path, name, optimizer, **objective):
     return write_function_job(tmp_path, name, 5, {"function": "rastrigin", "dim": 2, **objective}, optimizer)
 
 
+@pytest.mark.slow
 def test_auto_prints_its_choice(tmp_path):
     lines = []
     res = run(load_job(_write_job(tmp_path, "a", {"method": "auto", "generations": 10}), tmp_path),
@@ -21,6 +23,7 @@ def test_auto_prints_its_choice(tmp_path):
     assert "optimizer: auto -> cmaes" in lines  # 20 x 10 = 200 evaluations in 2-D: 100 per dimension
 
 
+@pytest.mark.slow
 def test_restarts_survive_kill_and_resume(tmp_path):
     ref = run(load_job(_write_job(tmp_path, "ref", OPT), tmp_path), run_dir=tmp_path / "ref", quiet=True)
     h_ref = pd.read_csv(ref.run_dir / "history.csv", keep_default_na=False).drop(columns="seconds")

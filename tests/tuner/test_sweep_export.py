@@ -20,6 +20,8 @@ from tuner.config import config_from_dict
 from tuner.export import export
 from tuner.run import run
 
+pytestmark = pytest.mark.slow  # every test here tunes, sweeps or drives a browser
+
 SWEEP = {"sweep": {
     "name": "grid",
     "base": {"name": "f", "seed": 0, "objective": {"kind": "function", "function": "rastrigin", "dim": 3},

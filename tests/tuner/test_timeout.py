@@ -67,6 +67,7 @@ def history(out):
 
 
 @pytest.mark.parametrize("backend, n_jobs", [("serial", 1), ("loky", 2)])
+@pytest.mark.slow
 def test_timed_out_evaluations_are_recorded_failures(tmp_path, backend, n_jobs):
     t0 = time.perf_counter()
     out = run(tmp_path, job(tmp_path, "hang", backend, n_jobs, timeout_s=1.0))
@@ -79,6 +80,7 @@ def test_timed_out_evaluations_are_recorded_failures(tmp_path, backend, n_jobs):
     assert time.perf_counter() - t0 < 60 + 2 * len(hung)
 
 
+@pytest.mark.slow
 def test_timeout_changes_no_result_and_serial_equals_loky(tmp_path):
     ref = history(run(tmp_path, job(tmp_path, "ok", name="ref")))
     for backend, n in (("serial", 1), ("loky", 2)):
@@ -92,6 +94,7 @@ def test_timeout_must_be_positive(tmp_path):
 
 
 @pytest.mark.parametrize("mode, error", [("exit", "SystemExit: 3"), ("kbd", "KeyboardInterrupt")])
+@pytest.mark.slow
 def test_systemexit_and_keyboardinterrupt_raised_by_the_objective_are_failures(tmp_path, mode, error):
     out = run(tmp_path, job(tmp_path, mode))
     assert out.returncode == 0, out.stderr
@@ -136,6 +139,7 @@ def test_ctrl_c_ends_the_run_as_interrupted_even_when_the_report_cannot_be_impor
     assert len(history(out)) == 2  # the first generation, kept
 
 
+@pytest.mark.slow
 def test_a_crashed_loky_worker_gives_recorded_failures(tmp_path):
     out = run(tmp_path, job(tmp_path, "crash", "loky", 2))
     assert out.returncode == 0, out.stderr

@@ -147,6 +147,7 @@ def test_replaying_the_history_asks_the_same_points():
     assert replay.best_f == live.best_f and replay.done
 
 
+@pytest.mark.slow
 def test_engine_run_killed_and_resumed_equals_the_uninterrupted_one(tmp_path):
     # resume rebuilds the optimiser from the seed and replays tell() with the recorded fitness
     import json
@@ -205,6 +206,7 @@ def _wedge(u):
     return float(u[0] + u[1] + (u[2] - 0.5) ** 2)
 
 
+@pytest.mark.slow
 def test_gets_close_to_an_optimum_on_the_edge_of_failures():
     # the model steps stay out of the failures' nearest-neighbour cells (bisecting towards the edge, sliding along
     # it); fitting the model on the successes alone, as before, left a median gap of 0.041 over these seeds

@@ -65,6 +65,7 @@ def test_large_gap_rule():
     assert not ValidationConfig().gap_is_large(0.6, 10.0)  # no absolute threshold by default
 
 
+@pytest.mark.slow
 def test_run_with_cv_writes_tables_and_the_report_shows_the_gap(tmp_path):
     cfg = config_from_dict(_raw(tmp_path, {"cv": "kfold", "folds": 2, "budget_fraction": 0.5, "gap_warn_rel": 0.0}))
     res = run(cfg, quiet=True)
@@ -100,6 +101,7 @@ def test_budget_fraction_scales_generations_and_max_evals(tmp_path):
     assert scaled_budget(capped, 0.25).optimizer.options["max_evals"] == 10
 
 
+@pytest.mark.slow
 def test_cv_of_a_finished_run_writes_into_it(tmp_path, capsys):
     res = run(config_from_dict(_raw(tmp_path)), quiet=True)
     assert not (res.run_dir / "cv.md").exists()
@@ -114,6 +116,7 @@ def test_cv_of_a_finished_run_writes_into_it(tmp_path, capsys):
     assert "gap" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_sweep_report_has_the_gap_column(tmp_path):
     from tuner.sweep import collect, run_sweep
 

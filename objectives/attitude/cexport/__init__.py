@@ -1,7 +1,8 @@
 """C99 source of the attitude filters firmware runs, with a tuned configuration baked in.
 
-``render_c_filter(flt, ...)`` turns a validated filter (Madgwick, Mahony, the EKF, the LCF, NCF and CCF, the
-thesis's tilt KF and AKF of :mod:`objectives.attitude.filters`; robust blocks included) into a header and a
+``render_c_filter(flt, ...)`` turns a validated filter (Madgwick, Mahony, the EKF, the LCF, NCF and CCF,
+``realtime``, the thesis's tilt KF and AKF of :mod:`objectives.attitude.filters`; robust blocks included) into a
+header and a
 source file. The C is a line-by-line port of the numba kernels (same operations in the same order, the same
 start orientation, the robust blocks in the kernels' order), so that it computes what the tuning scored;
 ``tests/attitude/test_cexport*.py`` compile it and compare it with the kernels sample by sample.
@@ -35,7 +36,7 @@ __all__ = ["render_c_filter", "C_FILTERS", "CField", "c_identifier"]
 
 #: filters with a C port: name -> the template of its update
 C_FILTERS = {"madgwick": "madgwick.c", "mahony": "mahony.c", "ekf": "ekf.c", "lcf": "cf.c", "ncf": "cf.c",
-             "ccf": "cf.c", "kf1d": "kf1d.c", "akf1d": "kf1d.c"}
+             "ccf": "cf.c", "kf1d": "kf1d.c", "akf1d": "kf1d.c", "realtime": "realtime.c"}
 _TILT = ("kf1d", "akf1d")
 _ALPHA_MODES = {"per_sample": 0, "tau": 1, "static": 2}
 _INIT = {"accmag": 0, "broad": 1, "given": 2}
@@ -132,7 +133,25 @@ def _fields(name: str, v: dict, dt: float, g: float, init: str, q0, up_sign: flo
                        CField("real", "p0_bias", float(v["p0_bias"]), "initial bias variance, (rad/s)^2"),
                        CField("real", "up_sign", up_sign, "+1: z-up earth frame (ENU), -1: NED"),
                        CField("int", "use_mag", True, "the start orientation uses the magnetometer when given")] + start
+    if name == "realtime":
+        return head + _realtime_fields(v) + start
     raise ValueError(f"c-filter: no C port of filter {name!r}; available: {sorted(C_FILTERS)}")
+
+
+def _realtime_fields(v: dict) -> list[CField]:
+    """Every value of the realtime filter in its declaration's units (the C derives the per-sample gains)."""
+    from objectives.attitude.filters.realtime import DECL
+
+    out = []
+    for p in DECL.params:
+        if p.name in ("start", "init"):
+            continue
+        ctype = "int" if isinstance(p.default, bool) else "real"
+        val = bool(v[p.name]) if ctype == "int" else float(v[p.name])
+        out.append(CField(ctype, p.name, val, f"{p.doc}{', ' + p.unit if p.unit and p.unit != '1' else ''}"))
+    out.append(CField("int", "start_q0", v["start"] == "q0", "1: strapdown start at the start orientation (init), "
+                                                             "0: identity start (VQF's)"))
+    return out
 
 
 def _cf_fields(name: str, v: dict, g: float) -> list[CField]:
@@ -182,7 +201,16 @@ def _akf_defines(flt: Any, rate_hz: float) -> list[str]:
             f"#define AKF_OMEGA_THR {_literal(v['omega_thr'], 'real')}",
             f"#define AKF_NRULES {fis.rules.shape[0]}", f"#define AKF_MF_INIT {arr(fis.mf_params)}",
             f"#define AKF_KIND_INIT {arr(fis.mf_kind, 'int')}", f"#define AKF_RULES_INIT {arr(fis.rules, 'int')}",
-            f"#define AKF_CONS_INIT {arr(fis.consequents)}"]
+            f"#define AKF_CONS_INIT {arr(fis.consequents)}", *_akf_twiddles(int(v["fft_length"]))]
+
+
+def _akf_twiddles(n_fft: int) -> list[str]:
+    """sin(2 pi r / n_fft), r = 0 .. n_fft / 4: the DFT's twiddle factors by quarter-wave symmetry, so that
+    the packet's DFT needs no sine or cosine per term (n_fft not a multiple of 4: computed per term)."""
+    if n_fft % 4:
+        return []
+    tw = [math.sin(2.0 * math.pi * r / n_fft) for r in range(n_fft // 4 + 1)]
+    return [f"#define AKF_TW_INIT {{{', '.join(_literal(x, 'real') for x in tw)}}}"]
 
 
 def _literal(x: Any, ctype: str) -> str:
@@ -199,6 +227,10 @@ def _literal(x: Any, ctype: str) -> str:
 
 def _quat_literal(q: np.ndarray) -> str:
     return "{" + ", ".join(_literal(float(c), "real") for c in q) + "}"
+
+
+#: the streaming functions' definitions in the templates, made static (run.c defines the exported names)
+_API_DEF = re.compile(r"^void PFX_(init|update|quaternion|set_quaternion)\(", re.MULTILINE)
 
 
 def _template(name: str) -> str:
@@ -276,6 +308,13 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
                  "PFX_real alpha;       /* per-sample gains at dt_s */\n"
                  "PFX_real kp;\n"
                  "PFX_real mag_gain;    /* the last factor on the yaw correction */\n") + _ROBUST_STATE
+    elif name == "realtime":
+        state = ("PFX_real c[45];  /* per-sample coefficients at dt_s (layout of _realtime_kernel.py) */\n"
+                 "PFX_real s[79];  /* the state carried between samples (same layout) */\n"
+                 "int lpf[6];      /* phase of each low-pass: 0 no sample, 1 averaging its first tau, 2 running */\n"
+                 "PFX_real dt_s;\n"
+                 "int started;     /* 0: start orientation from the next sample (start_q0) */\n"
+                 "PFX_params p;\n")
     elif name == "ekf":
         state = ("PFX_real x[7];        /* state: quaternion (working frame NED) and gyro bias, rad/s */\n"
                  "PFX_real P[7][7];     /* its covariance */\n"
@@ -304,8 +343,10 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define WORK_TO_OUT {_quat_literal(rot)}",
            f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}", *_akf_defines(flt, rate_hz), ""]
     extra = ["bias_prologue.c"] if name in ("madgwick", "mahony") else ["trig.c"]
-    parts = ["common.c", *(["robust.c"] if name not in _TILT else []), *extra, C_FILTERS[name], "run.c"]
-    body = "\n".join(_template(p) for p in parts)
+    parts = ["common.c", *(["robust.c"] if name not in (*_TILT, "realtime") else []), *extra, C_FILTERS[name],
+             "run.c"]
+    body = _API_DEF.sub(r"static void PFX_\1_(", "\n".join(_template(p) for p in parts[:-1]))
+    body += "\n" + _template(parts[-1])  # run.c: the exported names of the static functions and PFX_run
     if name == "madgwick":
         body = body.replace("BIAS_OUT", "int i;\n    for (i = 0; i < 3; i++)\n"
                                         "        b[i] = f->b[i] + (f->p.rest_bias ? f->rs[8 + i] : 0.0);")

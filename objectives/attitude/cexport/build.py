@@ -87,4 +87,4 @@ class CFilter:
 
         params = ctypes.cast(ctypes.addressof(self._tuned), ctypes.c_void_p)
         self._fn(params, ctypes.c_long(n), p(gyr), p(acc), p(mag_a), real(dt), p(q0_a), p(out))
-        return out.astype(np.float64)
+        return out.astype(np.float64, copy=False)  # double: the buffer the C wrote, no copy

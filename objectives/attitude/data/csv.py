@@ -185,6 +185,9 @@ def load_csv(
         raise RecordingError(
             f"{path}: quat_convention must be 'sensor_to_earth' or 'earth_to_sensor', got {quat_convention!r}"
         )
+    if isinstance(jitter_tol, bool) or not isinstance(jitter_tol, (int, float)) or not jitter_tol > 0:
+        raise RecordingError(f"{path}: jitter_tol must be a number > 0 (a fraction of the mean time step), "
+                             f"got {jitter_tol!r}")
     wanted = {sig: _column_names(path, sig, spec, _SIGNALS[sig]) for sig, spec in columns.items()}
     try:
         df = pd.read_csv(path, sep=delimiter, skipinitialspace=True)

@@ -108,7 +108,7 @@ def _load_csv(opts: dict, base_dir: Path) -> Recording:
         except OSError as exc:
             raise RecordingError(f"data spec 'csv': cannot read column map {map_path} ({exc})") from None
         except yaml.YAMLError as exc:
-            raise RecordingError(f"{map_path}: not valid YAML ({exc})") from None
+            raise RecordingError(f"{map_path}: not valid YAML ({' '.join(str(exc).split())})") from None
         if not isinstance(loaded, Mapping):
             raise RecordingError(f"{map_path}: a column map must be a mapping, got {type(loaded).__name__}")
         if "columns" in loaded:  # a full map: columns plus unit options

@@ -195,7 +195,7 @@ class Recording:
         if np.any(d <= 0):
             i = int(np.argmax(d <= 0)) + 1
             raise RecordingError(
-                f"{src}: 'time' must increase strictly; sample {i} at {t[i]!r} s follows {t[i - 1]!r} s"
+                f"{src}: 'time' must increase strictly; sample {i} at {float(t[i])!r} s follows {float(t[i - 1])!r} s"
             )
         dt = float((t[-1] - t[0]) / (t.shape[0] - 1))
         dev = np.abs(d - dt)

@@ -24,6 +24,7 @@ FILTERS: dict[str, str] = {
     "qukf": "objectives.attitude.filters.ukf:QUKF",
     "qraukf": "objectives.attitude.filters.ukf:QRAUKF",
     "vqf": "objectives.attitude.filters.vqf:VQF",
+    "realtime": "objectives.attitude.filters.realtime:Realtime",
 }
 
 

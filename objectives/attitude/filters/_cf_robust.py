@@ -30,8 +30,8 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.attitude.filters._cf_steps import _blend, _mag_yaw, _pi_step, _quat_zyx, _read_mag, _wrap
 from objectives.attitude.filters._scalar import FASTMATH, read_rate, sq_norm_ok
-from objectives.attitude.filters.complementary import _blend, _mag_yaw, _pi_step, _quat_zyx, _read_mag, _wrap
 from objectives.attitude.filters.robust import (
     _acc_lp_update,
     _mag_dist_update,

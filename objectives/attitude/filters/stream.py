@@ -134,7 +134,7 @@ class StreamBase:
 
     def _initial_q(self, acc: np.ndarray, mag: np.ndarray | None) -> np.ndarray:
         """The initial quaternion in the working frame (as ``initial_quaternion`` does)."""
-        from objectives.attitude.filters.base import quat_from_acc_mag
+        from objectives.attitude.filters.start import quat_from_acc_mag
 
         init = self.filter.values.get("init", "auto")
         q0 = self.q0 if init == "auto" else init

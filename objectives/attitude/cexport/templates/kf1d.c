@@ -1,6 +1,7 @@
 /* ---- the thesis's 2-state tilt Kalman filter (ported from objectives/attitude/filters/_kf1d_kernels.py,
         thesis eqs. 3.9-3.13, 3.17): the tilt about the sensor y axis from gyr[1], acc[0] and acc[2] ------ */
 #define TWO_PI_ (2.0 * PI_)
+#define TILT_RUN 1 /* run.c: the state is the angle th alone */
 
 /* floor without libm (exact for |x| < 2^52; larger doubles are integers already) */
 static real floor_(real x)
@@ -62,6 +63,28 @@ static real fis_(real f_hz, real a_g)
     return num / AKF_NRULES;
 }
 
+/* exp(-2 pi i m / AKF_NFFT) = cs + i sn, 0 <= m < AKF_NFFT */
+#ifdef AKF_TW_INIT
+static const real AKF_TW[AKF_NFFT / 4 + 1] = AKF_TW_INIT; /* sin(2 pi r / AKF_NFFT), r <= AKF_NFFT / 4 */
+
+static void twiddle_(int m, real *sn, real *cs)
+{
+    int quarter = AKF_NFFT / 4, r = m % quarter;
+    real s = AKF_TW[r], c = AKF_TW[quarter - r];
+    switch (m / quarter) { /* the angle is (m / quarter) pi / 2 + 2 pi r / AKF_NFFT */
+    case 0: *cs = c; *sn = -s; break;
+    case 1: *cs = -s; *sn = -c; break;
+    case 2: *cs = -c; *sn = s; break;
+    default: *cs = s; *sn = c; break;
+    }
+}
+#else
+static void twiddle_(int m, real *sn, real *cs)
+{
+    sincos_(-TWO_PI_ * (real)m / (real)AKF_NFFT, sn, cs);
+}
+#endif
+
 /* a complete packet: the dominant gyro frequency up to f_thr (eqs. 3.19-3.21: zero-padded DFT of length
    AKF_NFFT, amplitudes 2 |W_i| / L, 0 below omega_thr) and the mean external acceleration (eq. 3.22) */
 static void packet_done(PFX_filter *f)
@@ -72,7 +95,7 @@ static void packet_done(PFX_filter *f)
         re = 0.0;
         im = 0.0;
         for (k = 0; k < AKF_WINDOW; k++) {
-            sincos_(-TWO_PI_ * (real)((i * k) % AKF_NFFT) / (real)AKF_NFFT, &sn, &cs);
+            twiddle_((i * k) % AKF_NFFT, &sn, &cs);
             re += f->buf[k] * cs;
             im += f->buf[k] * sn;
         }
