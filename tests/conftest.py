@@ -15,11 +15,20 @@
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+# A test suite started in the background by a non-interactive shell (`cmd &`, `nohup`) inherits SIGINT (and,
+# under nohup, SIGHUP) ignored, and so would every `tuner` the tests start: the tests that stop a run as a
+# user or a scheduler would (Ctrl-C, SIGHUP) then see it go on. Give them the dispositions of a terminal.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+if signal.getsignal(signal.SIGHUP) is signal.SIG_IGN:
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
 REPO = Path(__file__).resolve().parents[1]
 BROAD_DIR: Path | None = next((p for p in (REPO.parent / "shared" / "data" / "broad",

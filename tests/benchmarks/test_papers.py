@@ -1,8 +1,13 @@
 """benchmarks.papers: the claims it measures at the paper's values, and the page it writes."""
 
+import re
+
 import pytest
 
 from benchmarks import papers
+from benchmarks.papers_common import DIRECTION, NOT_REPRODUCED, REPRODUCED, SENSITIVITY, UNTESTABLE
+
+VERDICTS = (REPRODUCED, DIRECTION, NOT_REPRODUCED, SENSITIVITY, UNTESTABLE)
 
 
 def test_qraukf_over_qukf_ratio_in_chiella_setting_is_near_the_papers_7x():
@@ -20,13 +25,29 @@ def test_f_at_table_27_initial_parameters_near_thesis():
     assert abs(f0 / 0.1049 - 1.0) < 0.10
 
 
-def test_page_has_one_row_per_claim(tmp_path):
-    rows = [papers.Row("c1", "1", "2", "ok", "cmd one"), papers.Row("c2", "3", "4", "no", "cmd two")]
+def _claims(text: str) -> list[str]:
+    """The claim cells of a page's table (the first column of the rows under "## Claims")."""
+    body = text.split("## Claims", 1)[1].split("\n## ", 1)[0]
+    return [line.split(" | ")[0][2:] for line in body.splitlines() if line.startswith("| ") and "---" not in line][1:]
+
+
+@pytest.mark.slow
+def test_smoke_run_writes_the_same_rows_as_docs_papers_md_with_its_provenance(tmp_path):
+    """docs/papers.md comes from one run of the generator: a smoke run (tiny budgets, two seeds) writes the
+    same claims in the same order, and the header names the wall time, the commit and the machine."""
     out = tmp_path / "papers.md"
-    papers.write(rows, out, 1.0, "notes\n")
-    text = out.read_text()
-    assert text.count("\n| c1 |") == 1 and text.count("\n| c2 |") == 1
-    assert "`cmd two`" in text and text.endswith("notes\n")
+    assert papers.main(["--smoke", "--out", str(out), "--runs", str(tmp_path / "runs")]) == 0
+    fresh = out.read_text()
+    committed = (papers.ROOT / "docs" / "papers.md").read_text()
+    assert _claims(fresh) == _claims(committed) and len(_claims(fresh)) > 50
+    for text in (fresh, committed):
+        head = text.split("## Verdict rules", 1)[0]
+        assert re.search(r"- wall time: \d+ s\n", head)
+        assert re.search(r"- commit: [0-9a-f]{40}(\+dirty)?\n", head)
+        assert re.search(r"- machine: .*\d+ logical CPUs", head)
+        rows = [line for line in text.splitlines() if line.startswith("| ") and "**" in line]
+        assert rows and all(any(f"**{v}**" in line for v in VERDICTS) for line in rows)
+    assert "budget `reduced`" in committed or "budget `full`" in committed
 
 
 def test_akf_fuzzy_config_searches_sets_and_singletons():
@@ -70,7 +91,7 @@ def test_eq_14_weight_improves_on_the_ncf_at_the_ncfs_gains():
     """At the NCF's tuned gains (PSO 20 x 15, seed 1: Kp 0.222, Ki 0.0104) on the config's training
     recordings: eq. (14)'s alpha = 0.99 (PI gains alpha Kp, alpha Ki kept) lowers the error, the
     per-sample alpha = 0.99 (a 2 s time constant at 50 Hz) raises it (2.796 / 2.805 / 3.528 deg); the
-    per-sample reading at its own tuned point (alpha 0.9964, about 5 s; docs/papers.md) is below the NCF."""
+    per-sample reading at its own tuned point (alpha 0.9964, about 5 s) is below the NCF."""
     from tuner.config import load_config
     from tuner.run import _build
 
@@ -93,7 +114,7 @@ def test_eq_14_weight_improves_on_the_ncf_at_the_ncfs_gains():
 def test_tuned_ccf_is_no_worse_than_tuned_ncf_at_a_reduced_budget(tmp_path):
     """Narkhede 2021's claim at 120 evaluations of the configs' `auto` (300 in `make papers`): the CCF
     contains the NCF (alpha = 1), so its tuned training error is not above the NCF's, and on the held-out
-    pair it stays below too (docs/papers.md: 2.427 vs 2.436 at 300)."""
+    pair it stays below too (2.427 vs 2.436 at 300 evaluations, seed 1)."""
     serial = ("parallel.backend=serial",)
     ccf = papers.tuned("ccf_narkhede.yaml", None, None, tmp_path, serial, max_evals=120)
     ncf = papers.tuned("ncf_narkhede.yaml", None, None, tmp_path, serial, max_evals=120)
