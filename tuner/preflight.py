@@ -247,7 +247,10 @@ def preflight(cfg: RunConfig, objective: Any, space: Space,
         _dask_check(cfg, objective)
     if evaluate:
         point = reference_point(objective, space)
-        in_child = cfg.objective.get("kind") == "python" or cfg.parallel.backend in ("loky", "dask")
+        # a crash at the defaults is one error line: evaluate them in a child (with `timeout_s` the evaluation
+        # already runs in a forked child, which a daemonic preflight child could not start)
+        in_child = ((cfg.objective.get("kind") == "python" or cfg.parallel.backend in ("loky", "dask"))
+                    and not cfg.objective.get("timeout_s"))
         rec = _evaluate_in_child(cfg, objective, point) if in_child else evaluate_one(objective, point)
         if rec.raised:
             raise ConfigError(cfg.source, "objective", f"evaluating the default parameters failed: "
