@@ -107,6 +107,8 @@ def _mutate_run_dir(rng: random.Random, d: Path, victim: Path) -> None:
     for _ in range(rng.randint(1, 2)):
         target = rng.choice(files)
         op = rng.randrange(9)
+        if not target.exists():  # removed by the mutation before
+            continue
         if op == 0:
             target.unlink()
             os.symlink(victim, target)
