@@ -82,7 +82,7 @@ def claim(typingctx, count):
     return sig, codegen
 
 
-@njit(cache=True)
+@njit
 def _block_sum(a, lo, n):
     """NumPy's sum of at most 128 values ``a[lo:lo + n]`` (one leaf of :func:`_pairwise_sum`)."""
     if n < 8:
@@ -111,7 +111,7 @@ def _block_sum(a, lo, n):
     return res
 
 
-@njit(cache=True)
+@njit
 def _pairwise_sum(a, lo, n):
     """``np.sum(a[lo:lo + n])`` of a float64 array, bit for bit: NumPy's pairwise summation.
 

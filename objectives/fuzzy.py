@@ -125,7 +125,7 @@ def membership(kind, p, x):
 
 
 # --- Sugeno ------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def fuzzify(x, mf_kind, mf_params, mu):
     """Membership of every input in every set: ``mu[j, s]`` (writes into ``mu``, (n_in, n_sets))."""
     n_in, n_sets = mf_kind.shape
@@ -153,7 +153,7 @@ def firing(mu, rules, i, and_op):
     return w
 
 
-@njit(cache=True)
+@njit
 def sugeno_mu(mu, rules, consequents, and_op=AND_MIN, default=np.nan):
     """Zero-order Sugeno output from precomputed memberships (FAEKF paper eqs. 29-30).
 
@@ -191,7 +191,7 @@ def sugeno(x, mf_kind, mf_params, rules, consequents, and_op=AND_MIN, default=np
 
 
 # --- Mamdani -----------------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def mamdani_mu(mu, rules, out_kind, out_params, rule_out, y_grid, and_op=AND_MIN, default=np.nan):
     """Mamdani system (min implication, max aggregation, centroid) from memberships ``mu``.
 
@@ -239,7 +239,7 @@ def mamdani(x, mf_kind, mf_params, rules, out_kind, out_params, rule_out, y_grid
 
 
 # --- look-up tables ----------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def lut_interp(table, x_range, y_range, x, y):
     """Bilinear interpolation in ``table`` (nx, ny) sampled uniformly on ``x_range`` x ``y_range``.
 

@@ -31,18 +31,18 @@ from numba import njit, prange
 from numba.typed import List
 
 from objectives.attitude.disturbance import CONTEXT_KEYS
-from objectives.attitude.divergence import N_SEGMENTS, _segment_ms, growth_verdict
+from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict
 from objectives.attitude.filters._bias_filter import initial_state, robust_coef
-from objectives.attitude.filters._ekf_kernel import ekf_kernel
-from objectives.attitude.filters._kf1d_kernels import kf1d_kernel
+from objectives.attitude.filters._ekf_kernel import ekf_kernel_inner
+from objectives.attitude.filters._kf1d_kernels import kf1d_kernel_inner
 from objectives.attitude.filters.base import initial_quaternion
-from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale, gravity_in_units
-from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt, _up_sign, tilt_from_quat
-from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel
-from objectives.attitude.filters.mahony import Mahony, _mahony_kernel
-from objectives.attitude.fused_errors import ErrorSums, _error_sums
+from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale_inner, gravity_in_units
+from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt_inner, _up_sign, tilt_from_quat
+from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel_inner
+from objectives.attitude.filters.mahony import Mahony, _mahony_kernel_inner
+from objectives.attitude.fused_errors import ErrorSums, _error_sums_inner
 from objectives.attitude.quaternion import euler_zyx
-from objectives.attitude.quaternion.algebra import _qmul_kernel
+from objectives.attitude.quaternion.algebra import _qmul_kernel_inner
 from objectives.attitude.quaternion.conversions import frame_rotation
 from objectives.batch_threads import _pairwise_sum, claim, counter, deal, use_threads
 from tuner.objective import Score
@@ -62,7 +62,7 @@ def _pair_sums(q, c, rots, r, true, mask, acc, out):
     (converted into ``c`` to its frame if needed), accumulated in the lane's own ``acc`` (see
     :func:`_lane_sums`)."""
     if rots[r, 4] != 0.0:
-        _qmul_kernel(rots[r:r + 1, :4], q, c)
+        _qmul_kernel_inner(rots[r:r + 1, :4], q, c)
         q = c
     _lane_sums(q, true, mask, acc, out)
 
@@ -72,8 +72,8 @@ def _lane_sums(q, true, mask, acc, out):
     """The error sums and growth segments of ``q`` into ``out``, accumulated per sample in ``acc`` (the
     lane's (:data:`_N_SUMS`,) array) and copied once: rows of ``sums`` that two lanes fill at the same
     time can share a cache line, which per-sample updates would pass between the cores all the time."""
-    _error_sums(q, true, mask, acc[:_N_ERR])
-    _segment_ms(q, true, mask, acc[_N_ERR:])
+    _error_sums_inner(q, true, mask, acc[:_N_ERR])
+    _segment_ms_inner(q, true, mask, acc[_N_ERR:])
     out[:] = acc
 
 
@@ -116,9 +116,9 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
         p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
         while p >= 0:
             if family == 0:
-                _madgwick_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
+                _madgwick_kernel_inner(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             else:
-                _mahony_kernel(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
+                _mahony_kernel_inner(gyrs[r], accs[r], mag, coefs[p], states[p], q, no_bias)
             _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
             p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
@@ -146,10 +146,10 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
         while p >= 0:
             if fuzzy != 0:
                 k = kbuf[lane, :n]
-                fuzzy_scale(vibs[r], exts[r], mps[r], mf_kind, mf_params[p], rules, cons[p], k)
-                ekf_kernel(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
+                fuzzy_scale_inner(vibs[r], exts[r], mps[r], mf_kind, mf_params[p], rules, cons[p], k)
+                ekf_kernel_inner(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
             else:
-                ekf_kernel(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
+                ekf_kernel_inner(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
             _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
             p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
@@ -204,10 +204,10 @@ def _kf1d_batch(data, pairs, lanes_, bufs, sums, mse):
             r = pair_rec[p]
             n = gys[r].shape[0]
             th = tbuf[lane, :n]
-            kf1d_kernel(gys[r], axs[r], azs[r], up[r], coefs[p], one, states[p], 1, th, bbuf[lane, :n])
+            kf1d_kernel_inner(gys[r], axs[r], azs[r], up[r], coefs[p], one, states[p], 1, th, bbuf[lane, :n])
             mse[p] = _mse_1d_kernel(th, angles[r], masks[r], ebuf[lane])
             q = qbuf[lane, :n]
-            _quat_from_tilt(th, q)
+            _quat_from_tilt_inner(th, q)
             _lane_sums(q, trues[r], masks[r], acc, sums[p])
 
 

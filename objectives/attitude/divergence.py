@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.jit import uncached
+
 __all__ = ["N_SEGMENTS", "GROWTH_RATIO", "GROWTH_LIMIT_DEG", "MIN_SEGMENT", "segment_rms_deg", "unbounded_growth",
            "growth_verdict"]
 
@@ -72,6 +74,10 @@ def _segment_ms(q_est, q_true, mask, out):
     for s in range(ns):
         if out[ns + s] > 0:
             out[s] /= out[ns + s]
+
+
+#: the uncached twin other kernels call (objectives.jit)
+_segment_ms_inner = uncached(_segment_ms)
 
 
 def segment_rms_deg(q_est: np.ndarray, q_true: np.ndarray, mask: np.ndarray | None = None,

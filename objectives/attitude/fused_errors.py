@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.quaternion import _euler_into
+from objectives.jit import uncached
 
 __all__ = ["ErrorSums", "error_sums"]
 
@@ -77,6 +78,10 @@ def _error_sums(q_est, q_true, mask, out):
         out[6] += tot * tot
         out[7] += head * head
         out[8] += inc * inc
+
+
+#: the uncached twin other kernels call (objectives.jit)
+_error_sums_inner = uncached(_error_sums)
 
 
 @dataclass(frozen=True)

@@ -170,7 +170,7 @@ def _measures_kernel(e, ts, tmp, out):
     out[3] = _pairwise_sum(tmp, 0, n)
 
 
-@njit(cache=True)
+@njit
 def _weighted_cost_kernel(terms, expo):
     """F of eq. 2.39 from its four means ``terms`` and exponents ``expo`` (alpha1, alpha2, beta, gamma),
     multiplied in :func:`mae_weighted_cost`'s order (equal to it bit for bit)."""

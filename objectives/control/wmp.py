@@ -94,7 +94,7 @@ STATUS_NAMES = {STATUS_OK: "ok", STATUS_FELL: "fell", STATUS_DIVERGED: "diverged
 # --------------------------------------------------------------------------------------------------
 # model kernels
 # --------------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def _accelerations(th3, w1, w2, w3, i1, i2, c, acc):
     """Solve M(q) qdd = tau_a - tau_f - V(q, qdot) (eqs. 2.9-2.11, appendix eq. 2) into acc (3,).
 
@@ -146,7 +146,7 @@ def _derivatives(x, u, c, out):
     out[7] = (u[1] - ke * (x[4] - x[5]) - c[_RES] * x[7]) / c[_IND]
 
 
-@njit(cache=True)
+@njit
 def _stage(x, kq, kw, a, u0, u1, dI1, dI2, decay, c, outq, outw, acc):
     """One RK4 stage at x + a*(kq, kw); currents = quasi-static + ``decay`` times the transient."""
     th3 = x[2] + a * kq[2]
@@ -165,7 +165,7 @@ def _stage(x, kq, kw, a, u0, u1, dI1, dI2, decay, c, outq, outw, acc):
     outw[2] = acc[2]
 
 
-@njit(cache=True)
+@njit
 def _step(x, u0, u1, h, c, s):
     """Advance x (8,) in place by h with constant voltages (exponential/singular-perturbation RK4).
 
@@ -212,7 +212,7 @@ def _step(x, u0, u1, h, c, s):
     x[7] = (u1 - ke * (x[4] - x[5])) / res + dI2 * e_full
 
 
-@njit(cache=True)
+@njit
 def _quant(v, lsb):
     if lsb > 0.0:
         return lsb * math.floor(v / lsb + 0.5)

@@ -24,21 +24,22 @@ DT = 0.01
 Q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])
 
 
-# Computed with the kernels of commit 743dcad (before the robust blocks existed), on the recordings below; they
-# hold for the pinned NumPy/numba on x86-64 (see tests/attitude/test_synthetic_identity.py after an upgrade). The two
+# Computed with the kernels of commit 743dcad (before the robust blocks existed), on the recordings below, and
+# recomputed once when the kernels dropped fastmath (objectives.jit; the merged kernels of today give the same
+# bits as the separate paper loops did under strict arithmetic); they hold for the pinned NumPy/numba on x86-64 (see tests/attitude/test_synthetic_identity.py after an upgrade). The two
 # ``*_imu`` digests are kept for the record only: those outputs differ in the last bits between x86-64 CPUs, and
 # the test checks them against the slow reference.
 PAPER_DIGESTS = {
-    "madgwick": "24877de877c26ac86f22a36ad5ff678e774b50d3ffdf71de89fb9a36bcc34725",
-    "madgwick_zeta_c": "e45c3011386b4b5204b83bfa1f8ce7c40cfc00b94d327a480b75beb36cf68023",
+    "madgwick": "6c9aca20817d39a69d74b706e16a6c10fa63a388d99cbf4b9c98524602a7b1ec",
+    "madgwick_zeta_c": "9c4537605a1e9dd700b5cb918b6d6370185726f208b68af210f20582ee5c305e",
     "madgwick_imu": "9bc3e3b04a124a39df703125c3450297f226afa641c0e966463f0eedfbd774b7",
-    "mahony": "aa0979bb1c951c4d785a0ed765a6e7be55c7414c850d2a74cc89c9e8b1f66014",
-    "mahony_ki": "38f2d7331a6a5575a91a8c849e3e1cda298e1a77645f21e6344956b06f338dba",
+    "mahony": "c3e6c3e9a87ea3f9371016cccf8a371c9e6ee208b249dab85bdb3ad466ceb467",
+    "mahony_ki": "2dd9aa0d69e2a1d833de9cc0e26627275926c1fd8f1196db26eca75926d89efe",
     "mahony_imu": "c677975f462f1e58c7931bf80b4647bccfe01dd4d05ce7624306650bcfc7b51b",
-    "madgwick_degenerate": "da8bd81dbe7aa51ef5eec01602c4f7e14746a0f811bb7af366f251593bc87873",
-    "mahony_degenerate": "9bf8e94d65bb63ada7475cb126827652d67151df6a3f7a8d802bfac8365f10cd",
-    "madgwick_stream": "080cd1a22b1d56df0d2ebad0d46c06671d96608a7299d56ae00a49af88be4c6c",
-    "mahony_stream": "a8371e3c3897cdf8626d7faed278f05174243e50f5d1feb03cc0223c3d5bf1f6",
+    "madgwick_degenerate": "4b2800bd304e82ae567707c11f0a14bdd5c557887e7de26d310c46816b5e1a64",
+    "mahony_degenerate": "b8bb9baa1a0720102399d2786f1ee24bbfcf173bbd2b0a25314e64c06d3174ef",
+    "madgwick_stream": "308f57b0c4c4790b9f70b98633c7d5fb30c8e56873245066dfbbbceb2541317f",
+    "mahony_stream": "57421b120f81598e9030aa744c278504451ab008df609c545d41fec2559c14fc",
 }
 #: every block off, spelled out (other thresholds must not matter while the switches are off)
 OFF = {"mag_rejection": False, "rest_bias": False, "acc_lp_tau_s": 0.0, "mag_norm_th": 0.3, "mag_dip_th_deg": 3.0,
@@ -63,8 +64,8 @@ def test_blocks_off_is_the_recorded_paper_filter(options):
         got[key] = digest(np.array([s.update(rec.gyr[i], rec.acc[i], rec.mag[i]) for i in range(500)]))
     assert got == {k: v for k, v in PAPER_DIGESTS.items() if not k.endswith("_imu")}
     # Gravity only, the heading is unobservable and keeps whatever rounding it picked up, so the IMU outputs
-    # are not the same bits on every CPU (the fastmath kernels compile to other operation orders; seen: two
-    # x86-64 targets 1e-4 apart from the first sample). They are checked against the slow reference instead.
+    # were not the same bits on every CPU while the kernels used fastmath (seen: two x86-64 targets 1e-4 apart
+    # from the first sample); they are checked against the slow reference instead.
     nan = np.full_like(rec.mag, np.nan)  # the reference skips a non-finite magnetometer sample
     got = madgwick_batch(rec.gyr, rec.acc, None, DT, Q0, beta=0.1, zeta=0.01, **options)
     assert np.abs(got - madgwick_ref(rec.gyr, rec.acc, nan, DT, Q0, beta=0.1, zeta=0.01)).max() < 1e-9

@@ -1,22 +1,28 @@
 """Migration guard: filter outputs and short run histories are bit-identical to those computed before the
 code moved into its present rooms (``pinned_digests.json``, see :mod:`tests.regression.digests`).
 
-The filter digests are computed in a fresh interpreter: in the whole suite, the robust blocks' outputs in the
-suite's own process differ from a fresh process's (some earlier test leaves state behind; not yet found).
-A refactoring that changes one of these digests changed a result, not only where code lives. The digests
-are of float64 bytes from numba kernels, so they hold for the platform they were computed on (x86-64
-Linux, the CI machine); a change of numba or NumPy version that changes rounding shows up here too.
+The digests once depended on what numba's on-disk cache held when a kernel was compiled or loaded;
+:mod:`objectives.jit` states the two rules that remove the dependence, :func:`test_kernel_rules` holds
+both packages to them and :func:`test_digests_do_not_depend_on_the_cache` checks the outcome. A refactoring
+that changes one of these digests changed a result, not only where code lives. The digests are of float64
+bytes from numba kernels, so they hold for the platform they were computed on (x86-64 Linux, the CI
+machine); a change of numba or NumPy version that changes rounding shows up here too. The filters without
+``fastmath`` (Madgwick, Mahony, complementary and UKF kernels, see objectives.jit) were re-pinned then.
 """
 
 from __future__ import annotations
 
+import importlib
 import json
+import os
 import subprocess
 import sys
+import textwrap
 
 import pytest
 
-from tests.regression.digests import FILTER_CASES, PINNED, run_digests
+from objectives.jit import package_modules, rule_violations
+from tests.regression.digests import FILTER_CASES, PINNED, filter_digests, run_digests
 
 EXPECTED = json.loads(PINNED.read_text())
 
@@ -26,15 +32,53 @@ def test_every_case_is_pinned():
 
 
 def test_filter_outputs_bit_identical():
-    """Computed in a fresh interpreter: the digests are of the code, not of what earlier tests left in this
-    process (in the whole suite the robust blocks' outputs differ here; open point, see the module docstring)."""
-    code = "import json; from tests.regression.digests import filter_digests; print(json.dumps(filter_digests()))"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600,
-                         cwd=PINNED.parents[2])
-    assert out.returncode == 0, out.stderr
-    got = json.loads(out.stdout.strip().splitlines()[-1])
+    got = filter_digests()
     changed = {k: (EXPECTED["filters"][k], v) for k, v in got.items() if EXPECTED["filters"][k] != v}
     assert not changed, f"filter outputs changed (pinned, now): {changed}"
+
+
+def _digests_in_a_child(cache_dir, reverse: bool) -> dict[str, str]:
+    code = ("import json; from tests.regression.digests import filter_digests; "
+            f"print(json.dumps(filter_digests(reverse={reverse})))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=900,
+                         cwd=PINNED.parents[2], env={**os.environ, "NUMBA_CACHE_DIR": str(cache_dir)})
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_digests_do_not_depend_on_the_cache(tmp_path):
+    """One child compiles every kernel on an empty cache, in reverse order; a second loads them all from that
+    cache: both give the pinned bits (before the rules of objectives.jit, five robust kernels did not)."""
+    compiled = _digests_in_a_child(tmp_path, reverse=True)
+    loaded = _digests_in_a_child(tmp_path, reverse=False)
+    assert compiled == loaded == EXPECTED["filters"]
+
+
+def test_kernel_rules():
+    """No kernel uses fastmath and none calls a cached, not-inlined kernel (objectives.jit)."""
+    assert rule_violations(package_modules("objectives", "tuner")) == []
+
+
+def test_rules_find_their_breaches(tmp_path, monkeypatch):
+    """The finder is not blind: fastmath and a cached function called by another kernel are reported."""
+    (tmp_path / "cache_rule_probe.py").write_text(textwrap.dedent("""
+        from numba import njit
+
+        @njit(cache=True)
+        def leaf(x):
+            return x + 1.0
+
+        @njit(inline="always")
+        def inlined(x):
+            return x * 2.0
+
+        @njit(fastmath=True)
+        def caller(x):
+            return leaf(inlined(x))
+    """))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    mod = importlib.import_module("cache_rule_probe")
+    assert rule_violations([mod]) == ["cache_rule_probe.caller uses fastmath", "cache_rule_probe.leaf <- caller"]
 
 
 @pytest.mark.slow

@@ -51,8 +51,8 @@ from objectives.attitude.filters.stream import StateStream
 from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
-           "with_robust", "robust_coef", "initial_state", "robust_sample", "robust_on", "ROBUST_AT", "COEF_LEN",
-           "STATE_LEN", "ROBUST_NAMES"]
+           "with_robust", "robust_coef", "initial_state", "robust_sample", "sample_inputs", "robust_on", "ROBUST_AT",
+           "COEF_LEN", "STATE_LEN", "ROBUST_NAMES"]
 
 # --- layouts of the robust blocks in the coefficient and state arrays ----------------------------------------
 #: index of the first robust coefficient (the filters' own coefficients fit before it)
@@ -172,6 +172,27 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
                 g = 1.0
             gm = 1.0 if ms[0] == 0.0 else g
     return bx, by, bz, ax, ay, az, a_ok, gm
+
+
+@njit(cache=True, inline="always")
+def sample_inputs(robust, coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
+    """Sample ``i`` as the Madgwick and Mahony updates take it, at the previous estimate ``q``.
+
+    Returns ``(gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm)``: the gyro rate less the
+    rest bias, the rest bias to add to the bias output, the unit accelerometer, the unit magnetometer
+    (``mag_ok`` false when block a rejects it fully) and block a's gain (:func:`robust_sample`). With the
+    blocks off (``robust`` false): the raw rate, ``-0.0`` (adding it leaves every value and its sign as
+    it is), the unit samples and gain 1, so the papers' recursions get their inputs bit for bit.
+    """
+    gx, gy, gz = sc.read_rate(gyr, i)
+    if robust:
+        rbx, rby, rbz, ax, ay, az, acc_ok, gm = robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3)
+        mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
+        return (gx - rbx, gy - rby, gz - rbz, rbx, rby, rbz, ax, ay, az, acc_ok, mx, my, mz, mag_ok and gm > 0.0,
+                gm)
+    ax, ay, az, acc_ok = sc.read_unit(acc, i)
+    mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
+    return gx, gy, gz, -0.0, -0.0, -0.0, ax, ay, az, acc_ok, mx, my, mz, mag_ok, 1.0
 
 
 @njit(cache=True, inline="always")

@@ -1,8 +1,8 @@
 """The LCF / NCF / CCF kernel with the robust blocks of :mod:`objectives.attitude.filters.robust` (CCF options).
 
-The same recursion as ``complementary._cf_kernel`` (Narkhede et al. 2021, eqs. (1)-(14); see that module's
-docstring), with two optional blocks; with both off it computes what ``_cf_kernel`` computes, and the
-filter classes call ``_cf_kernel`` itself then, so the paper's output stays bit for bit.
+The recursion of Narkhede et al. 2021, eqs. (1)-(14) (see :mod:`~objectives.attitude.filters.complementary`'s
+docstring), with two optional blocks; with both off it is the paper's filter bit for bit
+(``complementary._cf_kernel`` calls it so: the recursion is written once).
 
 - Block (c), ``acc_lp_tau_s > 0``: the measurement angles of eqs. (4)-(5) (and the tilt compensation of
   eq. (6)) come from the accelerometer low-passed in the earth frame with the current estimate (VQF,
@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters._cf_steps import _blend, _mag_yaw, _pi_step, _quat_zyx, _read_mag, _wrap
-from objectives.attitude.filters._scalar import FASTMATH, read_rate, sq_norm_ok
+from objectives.attitude.filters._scalar import read_rate, sq_norm_ok
 from objectives.attitude.filters.robust import (
     _acc_lp_update,
     _mag_dist_update,
@@ -40,8 +40,9 @@ from objectives.attitude.filters.robust import (
     mag_dist_state,
     rest_state,
 )
+from objectives.jit import uncached
 
-__all__ = ["cf_robust_kernel", "robust_states"]
+__all__ = ["cf_robust_kernel", "cf_robust_inner", "robust_states"]
 
 _PI = math.pi
 
@@ -51,10 +52,10 @@ def robust_states() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return mag_dist_state(), rest_state(), acc_lp_state()
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True)
 def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms, rs, ast, out, euler_out,
                      bias_out, gain_out):
-    """``_cf_kernel`` with blocks (a) and (c) (module docstring).
+    """LCF / NCF / CCF over whole arrays with blocks (a) and (c) (module docstring).
 
     Parameters
     ----------
@@ -186,3 +187,7 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
         out[i, 0], out[i, 1], out[i, 2], out[i, 3] = _quat_zyx(o0, o1, o2)
     state[0], state[1], state[2] = phi, th, psi
     state[3], state[4], state[5] = i0, i1, i2
+
+
+#: the uncached twin other kernels call (objectives.jit)
+cf_robust_inner = uncached(cf_robust_kernel)

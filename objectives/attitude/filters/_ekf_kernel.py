@@ -19,6 +19,7 @@ from numba import njit
 
 from objectives.attitude.filters.robust import _acc_lp_update, _mag_dist_update, _rest_update
 from objectives.attitude.quaternion import _triad_into
+from objectives.jit import uncached
 
 __all__ = ["ekf_kernel", "ekf_steps", "ekf_robust_kernel", "N_COEF"]
 
@@ -56,7 +57,11 @@ def ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b):
     x = np.empty(7)
     P = np.zeros((7, 7))
     _start(coef, x0, x, P, out_q, out_b)
-    ekf_steps(gyr, acc, mag, coef, kscale, x, P, 1, out_q, out_b)
+    ekf_steps_inner(gyr, acc, mag, coef, kscale, x, P, 1, out_q, out_b)
+
+
+#: the uncached twin other kernels call (objectives.jit)
+ekf_kernel_inner = uncached(ekf_kernel)
 
 
 @njit(cache=True)
@@ -77,6 +82,10 @@ def ekf_steps(gyr, acc, mag, coef, kscale, x, P, k_start, out_q, out_b):
     """
     off = np.zeros(4)  # flags all 0; the blocks' coefficients are then never read
     _steps(gyr, acc, mag, coef, kscale, off, off, off, off, x, P, k_start, out_q, out_b, np.empty((0, 2)))
+
+
+#: the uncached twin other kernels call (objectives.jit)
+ekf_steps_inner = uncached(ekf_steps)
 
 
 @njit(cache=True)
@@ -115,7 +124,7 @@ def ekf_robust_kernel(gyr, acc, mag, coef, kscale, flags, mcoef, rcoef, acoef, x
     _steps(gyr, acc, mag, coef, kscale, flags, mcoef, rcoef, acoef, x, P, 1, out_q, out_b, out_d)
 
 
-@njit(cache=True)
+@njit
 def _steps(gyr, acc, mag, coef, kscale, flags, mcoef, rcoef, acoef, x, P, k_start, out_q, out_b, out_d):
     """Samples ``k_start .. N-1`` from the state ``(x, P)``: :func:`ekf_steps` (all flags 0, ``out_d``
     empty) or :func:`ekf_robust_kernel` (blocks as ``flags`` say; their states start here).
@@ -380,7 +389,7 @@ def _rest_bias_update(rs, r_rest, x, P, W):
                 P[r, c] -= W[0, r] * W[0, c] * s
 
 
-@njit(cache=True)
+@njit
 def _mag_dist_state():
     """Initial state of block (a) (as ``robust.mag_dist_state``), allocated inside the kernel."""
     s = np.zeros(11)

@@ -8,6 +8,8 @@ import math
 
 from numba import njit
 
+from objectives.jit import uncached
+
 __all__ = ["kf1d_kernel", "mahony1d_kernel", "madgwick1d_kernel", "tilt_state"]
 
 _TWO_PI = 2.0 * math.pi
@@ -73,6 +75,10 @@ def kf1d_kernel(gyr_y, acc_x, acc_z, up_sign, coef, kscale, state, k_start, out_
     state[2] = p00
     state[3] = p01
     state[4] = p11
+
+
+#: the uncached twin other kernels call (objectives.jit)
+kf1d_kernel_inner = uncached(kf1d_kernel)
 
 
 @njit(cache=True, inline="always")

@@ -183,7 +183,7 @@ def initial_state(coef: np.ndarray, q0: np.ndarray | None = None) -> np.ndarray:
     return s
 
 
-@njit(cache=True)
+@njit
 def _lp(s, off, n, x, y, c, k, tau, dt):
     """One step of the second-order low-pass of ``n`` channels ``x`` -> ``y`` (state ``s[off:off + 2n]``,
     coefficients ``c[k:k + 5]``); during the first ``tau`` s the output is the running mean, after which the
@@ -238,14 +238,14 @@ def _normq(s, k):
             s[k + j] /= n
 
 
-@njit(cache=True)
+@njit
 def _q6(s):
     """The 6-D quaternion ``accQuat (x) gyrQuat``."""
     return _qmul(s[S_ACC_Q], s[S_ACC_Q + 1], s[S_ACC_Q + 2], s[S_ACC_Q + 3],
                  s[S_GYR_Q], s[S_GYR_Q + 1], s[S_GYR_Q + 2], s[S_GYR_Q + 3])
 
 
-@njit(cache=True)
+@njit
 def _inv3(m, out):
     """``out = inv(m)`` for row-major (9,) ``m`` by cofactors."""
     a, b, c, d, e, f, g, h, k = m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8]
@@ -275,7 +275,7 @@ def _mul3(a, b, bo, out):
             out[3 * i + j] = acc
 
 
-@njit(cache=True)
+@njit
 def _bias_update(s, c, r, e, w, t1, t2, t3):
     """Kalman update of the bias with measurement matrix ``r`` (9,), residual ``e`` (3,) and diagonal
     measurement variance ``w`` (3,): ``K = P R^T (W + R P R^T)^-1``, ``b += K e``, ``P -= K R P``."""
@@ -306,7 +306,7 @@ def _bias_update(s, c, r, e, w, t1, t2, t3):
         s[p + k] -= t1[k]
 
 
-@njit(cache=True)
+@njit
 def _clip(x, lim):
     return min(max(x, -lim), lim)
 

@@ -2,8 +2,8 @@
 
 Each helper works on plain floats and returns a tuple of floats (and a bool), and is compiled with
 ``inline="always"``: numba inlines it into the calling kernel before type inference, so the kernel
-is compiled as one function with its own ``fastmath`` flags and the same operations in the same
-order as if the lines were written out in place (results and speed are unchanged).
+is compiled as one function with the same operations in the same order as if the lines were written
+out in place (results and speed are unchanged).
 
 Sample validity follows one rule everywhere: a vector is usable when its squared norm ``n``
 satisfies ``0 < n < inf`` (false for zero, infinite and NaN components).
@@ -15,12 +15,7 @@ import math
 
 from numba import njit
 
-__all__ = ["FASTMATH", "read_vec", "read_rate", "sq_norm_ok", "unit", "read_unit", "rotate_sensor_to_earth"]
-
-#: fastmath flags of the Madgwick, Mahony and complementary kernels; no 'nnan'/'ninf': they test for
-#: non-finite input
-FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
-
+__all__ = ["read_vec", "read_rate", "sq_norm_ok", "unit", "read_unit", "rotate_sensor_to_earth"]
 
 @njit(cache=True, inline="always")
 def read_vec(a, i):

@@ -84,7 +84,7 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.filters._ukf_mean import _FM, _r2q_series, _wmean_cov
+from objectives.attitude.filters._ukf_mean import _r2q_series, _wmean_cov
 from objectives.attitude.filters._ukf_scalar import (
     _R2Q_SERIES_TH2,
     _acc_frame,
@@ -101,6 +101,7 @@ from objectives.attitude.filters._ukf_scalar import (
     _sorted_update,
     _store_sym3,
 )
+from objectives.jit import uncached
 
 __all__ = ["N_STATE_FIXED", "WORK_SIZE", "new_state", "new_work", "ukf_chunk"]
 
@@ -117,7 +118,7 @@ WORK_SIZE = 468
 
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM)
+@njit(error_model="numpy")
 def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
     """Eq. 25: quaternion pseudo-measurement (ENU) and its covariance R (3x3) by the UT of eqs. 9-15.
 
@@ -194,7 +195,7 @@ def _hampel_gain(v, med, thr):
 
 
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy", fastmath=_FM)
+@njit(cache=True, error_model="numpy")
 def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip, out_fallback):
     """QUKF (eqs. 26-33) and, with ``robust``, QRAUKF (eqs. 34-38) over the samples of ``gyr``.
 
@@ -398,6 +399,10 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
     state[4], state[5], state[6] = b0, b1, b2
     state[_I_G], state[_I_G + 1], state[_I_G + 2] = wx, wy, wz
     istate[0], istate[1], istate[2] = seen, iwin, nwin
+
+
+#: the uncached twin other kernels call (objectives.jit)
+_ukf_run_inner = uncached(_ukf_run)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -44,17 +44,14 @@ _MAX_MEAN_ITER = 6
 _BCH_STEP2 = 1e-16  # (1e-8 rad)^2
 _BCH_NEXT2 = 1e-26  # (1e-13 rad)^2
 
-# rounding-level freedoms only (FMA, reassociation, reciprocal): NaN/inf semantics are kept for the checks
-_FM = {"nsz", "arcp", "contract", "reassoc"}
 
-
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz):
     """The six second-moment sums (xx, xy, xz, yy, yz, zz) plus the outer product of ``(dx, dy, dz)``."""
     return cxx + dx * dx, cxy + dx * dy, cxz + dx * dz, cyy + dy * dy, cyz + dy * dz, czz + dz * dz
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _r2q_series(rx, ry, rz):
     """Eq. 2 by its power series only (valid below ``|r|^2 = 0.25``, see ``_ukf_scalar``): no branch, so a
     loop over sigma points vectorises. Returns the quaternion and ``|r|^2`` for the caller's range check."""
@@ -65,7 +62,7 @@ def _r2q_series(rx, ry, rz):
     return c, s * rx, s * ry, s * rz, th2
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz):
     """Column j of :func:`_dev_pass` by the series of eq. 1, added to the running sums; ``far`` counts
     columns beyond the series' range."""
@@ -81,7 +78,7 @@ def _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz, cxx, cxy, cxz, cyy, cy
     return far, sx + dx, sy + dy, sz + dz, cxx, cxy, cxz, cyy, cyz, czz
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def _dev_pass(Y, m, r0, r1, r2, r3, D, vector):
     """One pass of the mean: ``D[:, j] = Y[:, j] (-) r`` (eq. 3) for j < m, and the sums of the deviations
     and of their outer products (sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz).
@@ -113,7 +110,7 @@ def _dev_pass(Y, m, r0, r1, r2, r3, D, vector):
     return sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz
 
 
-@njit(cache=True, error_model="numpy", fastmath=_FM)
+@njit(error_model="numpy")
 def _wmean_cov(Y, m, r0, r1, r2, r3, D, vector):
     """Eqs. 13-14 for equally weighted quaternions Y[:, :m] (one per column): iterative mean from
     (r0..r3) and covariance.

@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numba import njit
 
-from objectives.attitude.filters._ukf_kernels import _I_G, _I_P, _ukf_run
+from objectives.attitude.filters._ukf_kernels import _I_G, _I_P, _ukf_run_inner
 from objectives.attitude.filters._ukf_scalar import _qm, _r2q
 from objectives.attitude.filters.robust import (
     _acc_lp_update,
@@ -48,7 +48,7 @@ from objectives.attitude.filters.robust import (
 __all__ = ["ukf_robust_run"]
 
 
-@njit(cache=True)
+@njit
 def _rest_bias_update(state, g_lp, r_rest):
     """Three scalar Kalman updates: the low-passed gyro ``g_lp`` (3,) rad/s measures the bias state[4:7]."""
     P = state[_I_P:_I_P + 36].reshape((6, 6))
@@ -119,7 +119,7 @@ def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mc
                     mz = gm * hz / hn + (1.0 - gm) * pz / pn
         a_in[0, 0], a_in[0, 1], a_in[0, 2] = ax, ay, az
         m_in[0, 0], m_in[0, 1], m_in[0, 2] = mx, my, mz
-        _ukf_run(gyr[k:k + 1], a_in, m_in, coef, robust, state, istate, work, out_q[k:k + 1], out_bias[k:k + 1],
+        _ukf_run_inner(gyr[k:k + 1], a_in, m_in, coef, robust, state, istate, work, out_q[k:k + 1], out_bias[k:k + 1],
                  out_lam[k:k + 1], out_skip[k:k + 1], out_fallback[k:k + 1])
         if use_rest and at_rest:
             g_lp[0], g_lp[1], g_lp[2] = rs[0], rs[1], rs[2]

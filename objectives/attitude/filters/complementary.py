@@ -101,8 +101,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._cf_steps import _PI, _blend, _mag_yaw, _pi_step, _quat_zyx, _read_mag, _wrap
-from objectives.attitude.filters._scalar import FASTMATH, read_rate, sq_norm_ok
+from objectives.attitude.filters._cf_robust import cf_robust_inner, cf_robust_kernel, robust_states
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.robust_params import robust_decl
 from objectives.attitude.filters.stream import StateStream
@@ -111,7 +110,8 @@ from objectives.params import NONNEG, POSITIVE, UNIT_CLOSED, Interval, Param, Pa
 __all__ = ["LCF", "NCF", "CCF", "ALPHA_MODES", "complementary_batch", "quat_from_euler_zyx", "euler_zyx_from_quat",
            "tau_gains"]
 
-@njit(cache=True, fastmath=FASTMATH)
+
+@njit(cache=True)
 def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
     """LCF / NCF / CCF over whole arrays (see module docstring for the equations).
 
@@ -133,102 +133,15 @@ def _cf_kernel(gyr, acc, mag, coef, state, out, euler_out, bias_out):
         Written: sensor-to-earth quaternion (NED) of the estimate after each sample.
     euler_out, bias_out : (N, 3) or (0, 3) float64
         Written when not empty: the Euler estimate, rad; the Euler-rate bias estimate ``-I``, rad/s.
+
+    The recursion is :func:`~objectives.attitude.filters._cf_robust.cf_robust_kernel`'s with both blocks off
+    (their gain 1 multiplies exactly, so these are the paper's operations, bit for bit).
     """
-    dt, alpha, kp, ki = coef[0], coef[1], coef[2], coef[3]
-    use_mag = coef[4] != 0.0 and mag.shape[0] == gyr.shape[0]
-    gate = coef[5] if coef.shape[0] > 5 else math.inf
-    g_ref = coef[6] if coef.shape[0] > 6 else 1.0
-    static = coef.shape[0] > 7 and coef[7] != 0.0
-    w_euler = euler_out.shape[0] == gyr.shape[0]
-    w_bias = bias_out.shape[0] == gyr.shape[0]
-    blend = 1.0 - alpha
-    phi, th, psi = state[0], state[1], state[2]
-    i0, i1, i2 = state[3], state[4], state[5]
-    for i in range(gyr.shape[0]):
-        p, q, r = read_rate(gyr, i)
-        sp = math.sin(phi)
-        cp = math.cos(phi)
-        ct = math.cos(th)
-        if abs(ct) < 1e-6:
-            ct = 1e-6 if ct >= 0.0 else -1e-6
-        u = q * sp + r * cp
-        # eqs. (1)-(3), standard ZYX kinematics
-        d0 = p + u * math.sin(th) / ct
-        d1 = q * cp - r * sp
-        d2 = u / ct
-        # measurement angles, eqs. (4)-(6); without a usable accelerometer sample no angle is corrected
-        dx = -acc[i, 0]
-        dy = -acc[i, 1]
-        dz = -acc[i, 2]
-        an, acc_ok = sq_norm_ok(dx, dy, dz)
-        if acc_ok and gate < math.inf:
-            acc_ok = abs(math.sqrt(an) - g_ref) <= gate * g_ref
-        mx, my, mz, mag_ok = _read_mag(mag, i, use_mag)
-        yaw_ok = acc_ok and mag_ok
-        phi_a = 0.0
-        th_a = 0.0
-        psi_m = 0.0
-        if acc_ok:
-            phi_a = math.atan2(dy, dz)
-            spa = math.sin(phi_a)
-            cpa = math.cos(phi_a)
-            th_a = math.atan2(-dx, dy * spa + dz * cpa)
-            e0 = _wrap(phi_a - phi)
-            e1 = _wrap(th_a - th)
-            e2 = 0.0
-            if yaw_ok:
-                psi_m = _mag_yaw(mx, my, mz, spa, cpa, math.sin(th_a), math.cos(th_a))
-                e2 = _wrap(psi_m - psi)
-            if static:
-                # eq. (14): the PI acts on x_a - x_hat = alpha (x_a - integrator)
-                e0 *= alpha
-                e1 *= alpha
-                e2 *= alpha
-            # eqs. (10), (12): PI on the angle error (roll, pitch; yaw when observed)
-            i0, d0 = _pi_step(e0, i0, d0, kp, ki, dt)
-            i1, d1 = _pi_step(e1, i1, d1, kp, ki, dt)
-            if yaw_ok:
-                i2, d2 = _pi_step(e2, i2, d2, kp, ki, dt)
-        d0 += i0
-        d1 += i1
-        d2 += i2
-        if w_bias:
-            bias_out[i, 0] = -i0
-            bias_out[i, 1] = -i1
-            bias_out[i, 2] = -i2
-        # gyro (NCF) prediction
-        phi = phi + dt * d0
-        th = th + dt * d1
-        psi = psi + dt * d2
-        if th > 0.5 * _PI:
-            th = _PI - th
-            phi += _PI
-            psi += _PI
-        elif th < -0.5 * _PI:
-            th = -_PI - th
-            phi += _PI
-            psi += _PI
-        # eqs. (8), (14): linear blend with the measurement angles, fed back (per sample) or static
-        o0, o1, o2 = phi, th, psi
-        if acc_ok and blend != 0.0:
-            o0 = _blend(phi, phi_a, blend)
-            o1 = _blend(th, th_a, blend)
-            if yaw_ok:
-                o2 = _blend(psi, psi_m, blend)
-        o0 = _wrap(o0)
-        o2 = _wrap(o2)
-        if static:
-            phi = _wrap(phi)
-            psi = _wrap(psi)
-        else:
-            phi, th, psi = o0, o1, o2
-        if w_euler:
-            euler_out[i, 0] = o0
-            euler_out[i, 1] = o1
-            euler_out[i, 2] = o2
-        out[i, 0], out[i, 1], out[i, 2], out[i, 3] = _quat_zyx(o0, o1, o2)
-    state[0], state[1], state[2] = phi, th, psi
-    state[3], state[4], state[5] = i0, i1, i2
+    off = np.zeros(3)
+    off[2] = 1.0  # no rejection, no low-pass, mag_weight 1
+    none = np.empty(0)
+    cf_robust_inner(gyr, acc, mag, coef, off, none, none, none, state, none, none, none, out, euler_out, bias_out,
+                    none)
 
 
 def quat_from_euler_zyx(euler: np.ndarray) -> np.ndarray:
@@ -422,7 +335,6 @@ class _ComplementaryBase(AttitudeFilter):
         if not self.robust:
             q, euler, bias = _run_arrays(gyr, acc, mag, coef, euler_zyx_from_quat(q0), detailed=True)
             return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias})
-        from objectives.attitude.filters._cf_robust import cf_robust_kernel, robust_states
 
         n = gyr.shape[0]
         state = np.zeros(6)
@@ -446,7 +358,6 @@ class _CFStream(StateStream):
         self._none1 = np.empty(0)
         self._robust = None
         if self.filter.robust:  # the blocks' coefficients and states, carried between samples
-            from objectives.attitude.filters._cf_robust import robust_states
 
             self._robust = (*self.filter._blocks(9.80665, self.dt), *robust_states())
         state = np.zeros(6)
@@ -458,7 +369,6 @@ class _CFStream(StateStream):
         if self._robust is None:
             _cf_kernel(gyr, acc, mag, coef, state, self._out, self._none, self._none)
         else:
-            from objectives.attitude.filters._cf_robust import cf_robust_kernel
 
             flags, mcoef, rcoef, acoef, ms, rs, ast = self._robust
             cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms, rs, ast, self._out,

@@ -101,6 +101,7 @@ from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coe
 from objectives.attitude.filters.robust_params import ROBUST_SWITCHES, robust_decl
 from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import fuzzify, grid_rules, sugeno_mu
+from objectives.jit import uncached
 from objectives.params import ANY_REAL, POSITIVE, Interval, Param, ParamSet
 from tuner.space import Real, Space
 
@@ -189,6 +190,10 @@ def fuzzy_scale(vib, acc, mag, mf_kind, mf_params, rules, consequents, out):
         xk[2] = mag[k]
         fuzzify(xk, mf_kind, mf_params, mu)
         out[k] = sugeno_mu(mu, rules, consequents, 0, np.nan)
+
+
+#: the uncached twin other kernels call (objectives.jit)
+fuzzy_scale_inner = uncached(fuzzy_scale)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -83,6 +83,7 @@ from objectives.attitude.filters._kf1d_kernels import kf1d_kernel, madgwick1d_ke
 from objectives.attitude.filters.base import AttitudeFilter, FilterResult
 from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
+from objectives.jit import uncached
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
 __all__ = ["KF1D", "AKF1D", "Mahony1D", "Madgwick1D", "kf1d_kernel", "mahony1d_kernel",
@@ -115,6 +116,10 @@ def _quat_from_tilt(theta, out):
         out[k, 1] = 0.0
         out[k, 2] = math.sin(h)
         out[k, 3] = 0.0
+
+
+#: the uncached twin other kernels call (objectives.jit)
+_quat_from_tilt_inner = uncached(_quat_from_tilt)
 
 
 def quat_from_tilt(theta: np.ndarray) -> np.ndarray:

@@ -39,12 +39,12 @@ from objectives.attitude.filters._bias_filter import (
     BiasKernelFilter,
     batch_on_arrays,
     io_flags,
-    read_mag,
     robust_on,
     robust_options,
-    robust_sample,
+    sample_inputs,
     with_robust,
 )
+from objectives.jit import uncached
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
@@ -56,13 +56,9 @@ VARIANTS = {"paper": 2.0, "original_c": 1.0}
 @njit(cache=True, inline="always")
 def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, dt, beta, zeta,
             k):
-    """One sample of the filter with the robust blocks from the estimate ``q`` and bias ``b``: the new ``(q, b)``
-    (report eqs. 11-13, 25-34, 42-49); ``gm`` scales the magnetometer's error (1: the paper; below 1: a
-    disturbed field).
-
-    The same operations as the loop of :func:`_madgwick_kernel`, which keeps them written out: under the
-    kernels' ``fastmath`` flags, that loop calling this helper compiles to a different operation order and
-    the paper's output (blocks off) must stay bit for bit what it was.
+    """One sample of the filter from the estimate ``q`` and bias ``b``: the new ``(q, b)`` (report eqs. 11-13,
+    25-34, 42-49); ``gm`` scales the magnetometer's error (1: the paper; below 1: a field block a finds
+    disturbed). The kernel's one recursion, with the robust blocks on or off.
     """
     # eq. 49: bias-compensated rate
     gx -= bx_
@@ -130,7 +126,7 @@ def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, 
     return q0_, q1, q2, q3, bx_, by_, bz_
 
 
-@njit(cache=True, fastmath=sc.FASTMATH)
+@njit(cache=True)
 def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
 
@@ -141,8 +137,7 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     coef : (5,) or (COEF_LEN,) float64
         ``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k`` the
         field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1); with a robust block on, the blocks'
-        flags and coefficients from index ``ROBUST_AT`` (:func:`~._bias_filter.with_robust`), and the
-        kernel is :func:`_madgwick_robust`.
+        flags and coefficients from index ``ROBUST_AT`` (:func:`~._bias_filter.with_robust`).
     state : (7,) or (STATE_LEN,) float64
         Read and written: the sensor-to-earth quaternion (NWU) and the gyro bias estimate ``omega_b``
         (rad/s), then the robust blocks' states when they are on; in: before the first sample, out:
@@ -153,99 +148,23 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
         Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample (plus the
         rest bias of ``rest_bias``).
     """
-    if robust_on(coef, state):
-        _madgwick_robust(gyr, acc, mag, coef, state, out, bias_out)
-        return
+    robust = robust_on(coef, state)
     dt, beta, zeta, k = coef[0], coef[1], coef[2], coef[3]
     use_mag, write_bias = io_flags(coef[4], gyr, mag, bias_out)
     q0_, q1, q2, q3, bx_, by_, bz_ = sc.load_q_bias(state)
     for i in range(gyr.shape[0]):
-        gx, gy, gz = sc.read_rate(gyr, i)
+        gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm = sample_inputs(
+            robust, coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
         if write_bias:
-            sc.write_vec(bias_out, i, bx_, by_, bz_)
-        # eq. 49: bias-compensated rate
-        gx -= bx_
-        gy -= by_
-        gz -= bz_
-        # eq. 12: rate of change from the gyroscope, q_dot = 0.5 q (x) (0, w)
-        qd0 = 0.5 * (-q1 * gx - q2 * gy - q3 * gz)
-        qd1 = 0.5 * (q0_ * gx + q2 * gz - q3 * gy)
-        qd2 = 0.5 * (q0_ * gy - q1 * gz + q3 * gx)
-        qd3 = 0.5 * (q0_ * gz + q1 * gy - q2 * gx)
-
-        ax, ay, az, acc_ok = sc.read_unit(acc, i)
-        if acc_ok:
-            # eq. 25: f_g = R(q)^T (0, 0, 1) - a
-            f1 = 2.0 * (q1 * q3 - q0_ * q2) - ax
-            f2 = 2.0 * (q0_ * q1 + q2 * q3) - ay
-            f3 = 1.0 - 2.0 * (q1 * q1 + q2 * q2) - az
-            # eq. 34: J_g^T f_g (J_g of eq. 26)
-            s0 = -2.0 * q2 * f1 + 2.0 * q1 * f2
-            s1 = 2.0 * q3 * f1 + 2.0 * q0_ * f2 - 4.0 * q1 * f3
-            s2 = -2.0 * q0_ * f1 + 2.0 * q3 * f2 - 4.0 * q2 * f3
-            s3 = 2.0 * q1 * f1 + 2.0 * q2 * f2
-            mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
-            if mag_ok:
-                # eq. 45: h = q (x) m (x) q*
-                hx, hy, hz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
-                # eq. 46 (paper: k = 2) or the C code's half-length field (k = 1)
-                tbx = k * math.sqrt(hx * hx + hy * hy)  # 2 b_x
-                tbz = k * hz  # 2 b_z
-                # eq. 29: f_b = R(q)^T b - m
-                e1 = tbx * (0.5 - q2 * q2 - q3 * q3) + tbz * (q1 * q3 - q0_ * q2) - mx
-                e2 = tbx * (q1 * q2 - q0_ * q3) + tbz * (q0_ * q1 + q2 * q3) - my
-                e3 = tbx * (q0_ * q2 + q1 * q3) + tbz * (0.5 - q1 * q1 - q2 * q2) - mz
-                # eq. 34: + J_b^T f_b (J_b of eq. 30)
-                s0 += -tbz * q2 * e1 + (-tbx * q3 + tbz * q1) * e2 + tbx * q2 * e3
-                s1 += tbz * q3 * e1 + (tbx * q2 + tbz * q0_) * e2 + (tbx * q3 - 2.0 * tbz * q1) * e3
-                s2 += ((-2.0 * tbx * q2 - tbz * q0_) * e1 + (tbx * q1 + tbz * q3) * e2
-                       + (tbx * q0_ - 2.0 * tbz * q2) * e3)
-                s3 += (-2.0 * tbx * q3 + tbz * q1) * e1 + (-tbx * q0_ + tbz * q2) * e2 + tbx * q1 * e3
-            sn = s0 * s0 + s1 * s1 + s2 * s2 + s3 * s3
-            if sn > 0.0 and sn < math.inf:
-                r = 1.0 / math.sqrt(sn)
-                s0 *= r
-                s1 *= r
-                s2 *= r
-                s3 *= r
-                # eq. 42-43: q_dot = q_dot_w - beta * grad / |grad|
-                qd0 -= beta * s0
-                qd1 -= beta * s1
-                qd2 -= beta * s2
-                qd3 -= beta * s3
-                if zeta != 0.0:
-                    # eqs. 47-48: w_eps = 2 q* (x) q_dot_eps, w_b += zeta w_eps dt
-                    c = 2.0 * zeta * dt
-                    bx_ += c * (q0_ * s1 - q1 * s0 - q2 * s3 + q3 * s2)
-                    by_ += c * (q0_ * s2 + q1 * s3 - q2 * s0 - q3 * s1)
-                    bz_ += c * (q0_ * s3 - q1 * s2 + q2 * s1 - q3 * s0)
-        # eq. 13 (Euler step) and normalisation
-        n0 = q0_ + qd0 * dt
-        n1 = q1 + qd1 * dt
-        n2 = q2 + qd2 * dt
-        n3 = q3 + qd3 * dt
-        q0_, q1, q2, q3 = sc.normalized_q(n0, n1, n2, n3)
+            sc.write_vec(bias_out, i, bx_ + ox, by_ + oy, bz_ + oz)
+        q0_, q1, q2, q3, bx_, by_, bz_ = _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx,
+                                                 my, mz, mag_ok, gm, dt, beta, zeta, k)
         sc.write_q(out, i, q0_, q1, q2, q3)
     sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
 
 
-@njit(cache=True, fastmath=sc.FASTMATH)
-def _madgwick_robust(gyr, acc, mag, coef, state, out, bias_out):
-    """:func:`_madgwick_kernel` with the robust blocks on (:func:`~._bias_filter.robust_sample` per sample)."""
-    dt, beta, zeta, k = coef[0], coef[1], coef[2], coef[3]
-    use_mag, write_bias = io_flags(coef[4], gyr, mag, bias_out)
-    q0_, q1, q2, q3, bx_, by_, bz_ = sc.load_q_bias(state)
-    for i in range(gyr.shape[0]):
-        gx, gy, gz = sc.read_rate(gyr, i)
-        rbx, rby, rbz, ax, ay, az, acc_ok, gm = robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
-        if write_bias:
-            sc.write_vec(bias_out, i, bx_ + rbx, by_ + rby, bz_ + rbz)
-        mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
-        q0_, q1, q2, q3, bx_, by_, bz_ = _update(q0_, q1, q2, q3, bx_, by_, bz_, gx - rbx, gy - rby, gz - rbz, ax,
-                                                 ay, az, acc_ok, mx, my, mz, mag_ok and gm > 0.0, gm, dt, beta, zeta,
-                                                 k)
-        sc.write_q(out, i, q0_, q1, q2, q3)
-    sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
+#: the uncached twin other kernels call (objectives.jit)
+_madgwick_kernel_inner = uncached(_madgwick_kernel)
 
 
 #: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)

@@ -39,12 +39,12 @@ from objectives.attitude.filters._bias_filter import (
     BiasKernelFilter,
     batch_on_arrays,
     io_flags,
-    read_mag,
     robust_on,
     robust_options,
-    robust_sample,
+    sample_inputs,
     with_robust,
 )
+from objectives.jit import uncached
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Mahony", "mahony_batch", "DECL"]
@@ -52,21 +52,22 @@ __all__ = ["Mahony", "mahony_batch", "DECL"]
 
 @njit(cache=True, inline="always")
 def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, dt, kp, ki):
-    """One sample with the robust blocks from the estimate ``q`` and integral ``I``: the new ``(q, I)``; ``gm``
-    scales the magnetometer's error term (1: the C code; below 1: a disturbed field).
-
-    The same operations as the loop of :func:`_mahony_kernel`, which keeps them written out: under the
-    kernels' ``fastmath`` flags, that loop calling this helper compiles to a different operation order and
-    the C code's output (blocks off) must stay bit for bit what it was.
+    """One sample from the estimate ``q`` and integral ``I``: the new ``(q, I)`` (module docstring: predicted
+    gravity and field directions, the cross-product error, PI feedback, first-order integration); ``gm``
+    scales the magnetometer's error term (1: the C code; below 1: a field block a finds disturbed). The
+    kernel's one recursion, with the robust blocks on or off.
     """
     if acc_ok:
+        # predicted gravity direction v_hat = R(q)^T (0, 0, 1)
         vx = 2.0 * (q1 * q3 - q0_ * q2)
         vy = 2.0 * (q0_ * q1 + q2 * q3)
         vz = q0_ * q0_ - q1 * q1 - q2 * q2 + q3 * q3
+        # omega_mes = a x v_hat
         ex = ay * vz - az * vy
         ey = az * vx - ax * vz
         ez = ax * vy - ay * vx
         if mag_ok:
+            # earth-field reference b = (|h_xy|, 0, h_z), h = q (x) m (x) q*; predicted w_hat = R(q)^T b
             hx, hy, bz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
             bx = math.sqrt(hx * hx + hy * hy)
             wx = 2.0 * gm * (bx * (0.5 - q2 * q2 - q3 * q3) + bz * (q1 * q3 - q0_ * q2))
@@ -98,7 +99,7 @@ def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my,
     return q0_, q1, q2, q3, ix, iy, iz
 
 
-@njit(cache=True, fastmath=sc.FASTMATH)
+@njit(cache=True)
 def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     """Mahony filter over whole arrays (see module docstring).
 
@@ -109,7 +110,7 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     coef : (4,) or (COEF_LEN,) float64
         ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` (0/1); with a
         robust block on, the blocks' flags and coefficients from index ``ROBUST_AT``
-        (:func:`~._bias_filter.with_robust`), and the kernel is :func:`_mahony_robust`.
+        (:func:`~._bias_filter.with_robust`).
     state : (7,) or (STATE_LEN,) float64
         Read and written: the sensor-to-earth quaternion (NWU) and the integral ``I`` (rad/s), then the
         robust blocks' states when they are on; in: before the first sample, out: after the last.
@@ -119,81 +120,23 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
         Written when not empty: gyro bias estimate ``b = -I`` used at each sample (plus the rest bias of
         ``rest_bias``), rad/s.
     """
-    if robust_on(coef, state):
-        _mahony_robust(gyr, acc, mag, coef, state, out, bias_out)
-        return
+    robust = robust_on(coef, state)
     dt, kp, ki = coef[0], coef[1], coef[2]
     use_mag, write_bias = io_flags(coef[3], gyr, mag, bias_out)
     q0_, q1, q2, q3, ix, iy, iz = sc.load_q_bias(state)
     for i in range(gyr.shape[0]):
-        gx, gy, gz = sc.read_rate(gyr, i)
-        ax, ay, az, acc_ok = sc.read_unit(acc, i)
-        if acc_ok:
-            # predicted gravity direction v_hat = R(q)^T (0, 0, 1)
-            vx = 2.0 * (q1 * q3 - q0_ * q2)
-            vy = 2.0 * (q0_ * q1 + q2 * q3)
-            vz = q0_ * q0_ - q1 * q1 - q2 * q2 + q3 * q3
-            # omega_mes = a x v_hat
-            ex = ay * vz - az * vy
-            ey = az * vx - ax * vz
-            ez = ax * vy - ay * vx
-            mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
-            if mag_ok:
-                # earth-field reference b = (|h_xy|, 0, h_z), h = q (x) m (x) q*
-                hx, hy, bz = sc.rotate_sensor_to_earth(q0_, q1, q2, q3, mx, my, mz)
-                bx = math.sqrt(hx * hx + hy * hy)
-                # predicted field direction w_hat = R(q)^T (bx, 0, bz)
-                wx = 2.0 * (bx * (0.5 - q2 * q2 - q3 * q3) + bz * (q1 * q3 - q0_ * q2))
-                wy = 2.0 * (bx * (q1 * q2 - q0_ * q3) + bz * (q0_ * q1 + q2 * q3))
-                wz = 2.0 * (bx * (q0_ * q2 + q1 * q3) + bz * (0.5 - q1 * q1 - q2 * q2))
-                ex += my * wz - mz * wy
-                ey += mz * wx - mx * wz
-                ez += mx * wy - my * wx
-            if ki > 0.0:
-                ix += ki * ex * dt
-                iy += ki * ey * dt
-                iz += ki * ez * dt
-            else:
-                ix = 0.0
-                iy = 0.0
-                iz = 0.0
-            gx += kp * ex
-            gy += kp * ey
-            gz += kp * ez
-        if write_bias:
-            sc.write_vec(bias_out, i, -ix, -iy, -iz)
-        gx += ix
-        gy += iy
-        gz += iz
-        h = 0.5 * dt
-        gx *= h
-        gy *= h
-        gz *= h
-        n0 = q0_ + (-q1 * gx - q2 * gy - q3 * gz)
-        n1 = q1 + (q0_ * gx + q2 * gz - q3 * gy)
-        n2 = q2 + (q0_ * gy - q1 * gz + q3 * gx)
-        n3 = q3 + (q0_ * gz + q1 * gy - q2 * gx)
-        q0_, q1, q2, q3 = sc.normalized_q(n0, n1, n2, n3)
+        gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm = sample_inputs(
+            robust, coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
+        q0_, q1, q2, q3, ix, iy, iz = _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my,
+                                              mz, mag_ok, gm, dt, kp, ki)
+        if write_bias:  # the bias used at this sample: the integral after its update, plus the rest bias
+            sc.write_vec(bias_out, i, ox - ix, oy - iy, oz - iz)
         sc.write_q(out, i, q0_, q1, q2, q3)
     sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
 
-@njit(cache=True, fastmath=sc.FASTMATH)
-def _mahony_robust(gyr, acc, mag, coef, state, out, bias_out):
-    """:func:`_mahony_kernel` with the robust blocks on (:func:`~._bias_filter.robust_sample` per sample)."""
-    dt, kp, ki = coef[0], coef[1], coef[2]
-    use_mag, write_bias = io_flags(coef[3], gyr, mag, bias_out)
-    q0_, q1, q2, q3, ix, iy, iz = sc.load_q_bias(state)
-    for i in range(gyr.shape[0]):
-        gx, gy, gz = sc.read_rate(gyr, i)
-        rbx, rby, rbz, ax, ay, az, acc_ok, gm = robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
-        mx, my, mz, mag_ok = read_mag(mag, i, use_mag)
-        # the bias written is the one used at this sample: the rest bias and the integral after its update
-        q0_, q1, q2, q3, ix, iy, iz = _update(q0_, q1, q2, q3, ix, iy, iz, gx - rbx, gy - rby, gz - rbz, ax, ay,
-                                              az, acc_ok, mx, my, mz, mag_ok and gm > 0.0, gm, dt, kp, ki)
-        if write_bias:
-            sc.write_vec(bias_out, i, rbx - ix, rby - iy, rbz - iz)
-        sc.write_q(out, i, q0_, q1, q2, q3)
-    sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
+
+#: the uncached twin other kernels call (objectives.jit)
+_mahony_kernel_inner = uncached(_mahony_kernel)
 
 
 #: the one declaration of Mahony's parameters (defaults, search space, validation, docs)

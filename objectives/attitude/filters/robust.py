@@ -113,7 +113,7 @@ def mag_dist_state() -> np.ndarray:
     return s
 
 
-@njit(cache=True)
+@njit
 def _mag_dist_update(state, coef, mx, my, mz, gyr_lp_norm):
     """One magnetometer sample in an inclination-corrected earth frame (z up); returns the gain factor.
 
@@ -188,7 +188,7 @@ def rest_state(bias_rps: np.ndarray | None = None) -> np.ndarray:
     return s
 
 
-@njit(cache=True)
+@njit
 def _rest_update(state, coef, gx, gy, gz, ax, ay, az):
     """One gyro (rad/s) and acc sample; updates rest flag and bias in place, returns True at rest."""
     dt, k, th_g2, th_a2, min_t, k_b, clip = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5], coef[6]
@@ -242,7 +242,7 @@ def _rot(qw, qx, qy, qz, vx, vy, vz, sign):
     return (vx + qw * tx + qy * tz - qz * ty, vy + qw * ty + qz * tx - qx * tz, vz + qw * tz + qx * ty - qy * tx)
 
 
-@njit(cache=True)
+@njit
 def _acc_lp_update(state, coef, q, ax, ay, az, out):
     """Low-pass the acc in the earth frame of sensor-to-earth ``q`` (4,); write it in sensor coordinates to out (3,).
 

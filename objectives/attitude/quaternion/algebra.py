@@ -14,6 +14,8 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.jit import uncached
+
 __all__ = [
     "qmul", "qconj", "qnormalize", "qrot", "qmul_batch", "qconj_batch", "normalize_batch", "qrot_batch",
     "qexp", "qlog", "qexp_batch", "qlog_batch", "make_continuous",
@@ -73,6 +75,10 @@ def _qmul_kernel(p, q, out):
     """Rows of ``out`` (N, 4): ``p[i] * q[i]``; a one-row ``p`` or ``q`` is used for every row."""
     for i in range(out.shape[0]):
         out[i] = qmul(p[i if p.shape[0] > 1 else 0], q[i if q.shape[0] > 1 else 0])
+
+
+#: the uncached twin other kernels call (objectives.jit)
+_qmul_kernel_inner = uncached(_qmul_kernel)
 
 
 def qmul_batch(p: np.ndarray, q: np.ndarray) -> np.ndarray:

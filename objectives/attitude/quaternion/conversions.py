@@ -342,7 +342,7 @@ def _triad_into(ax, ay, az, mx, my, mz, code, out, i):
     out[i, 3] = z / n
 
 
-@njit(cache=True)
+@njit
 def triad_code(acc, mag, code):
     """:func:`triad` with the earth frame as an integer code (``FRAME_CODES``): 0 ENU, 1 NED, 2 NWU."""
     out = np.empty((1, 4))

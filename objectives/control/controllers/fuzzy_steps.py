@@ -96,7 +96,7 @@ def _protective_step(p, s, ref, meas, u_out):
     u_out[1] = u_nu + u_th + u_xi
 
 
-@njit(cache=True)
+@njit
 def lut_nearest(table, x_range, y_range, x, y):
     """Eq. 2.32: ``table[round((x - x_min) / res_x), round((y - y_min) / res_y)]``, indices clamped.
 

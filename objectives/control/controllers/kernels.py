@@ -70,7 +70,7 @@ PID_PARAM_SIZE = 10
 PID_STATE_SIZE = 7
 
 
-@njit(cache=True)
+@njit
 def _lq_step(p, z0, z1, z2, z3, ref, u_out):
     """u = -K z + Fr r with z = (theta3, nu, omega3, xi) and r = (nu_d, xi_d) (eqs. 2.15, 2.19)."""
     for i in range(2):
@@ -81,7 +81,7 @@ def _lq_step(p, z0, z1, z2, z3, ref, u_out):
         )
 
 
-@njit(cache=True)
+@njit
 def _tustin_pid(kp, ki, kd, ts, e, st, o):
     """One Tustin PID step (eq. 2.38); state st[o:o+3] = (e_prev, integral, derivative).
 
@@ -97,7 +97,7 @@ def _tustin_pid(kp, ki, kd, ts, e, st, o):
     return kp * e + integ + der
 
 
-@njit(cache=True)
+@njit
 def _pid_step(p, s, ref, meas, u_out):
     """PID equivalents of thesis 2.3.2 combined by eq. 2.31.
 

@@ -44,7 +44,7 @@ STATUS_OK, STATUS_DIVERGED = 0, 2
 OPT_SIZE = 10
 
 
-@njit(cache=True)
+@njit
 def _pid_block(cp, o, cs, s, r, y):
     """One PID block: coefficients ``cp[o:o+10]``, state ``cs[s:s+4]``; returns the limited output."""
     k, b, c, ki, ad, bd, aw, kt, umin, umax = (cp[o], cp[o + 1], cp[o + 2], cp[o + 3], cp[o + 4], cp[o + 5],
@@ -68,7 +68,7 @@ def _pid_block(cp, o, cs, s, r, y):
     return u
 
 
-@njit(cache=True)
+@njit
 def _control(kind, cp, cs, r, meas, out_idx, inner_idx, u):
     """Controller output into ``u`` (length m) from reference ``r`` and the measurement vector."""
     u[:] = 0.0
@@ -89,7 +89,7 @@ def _control(kind, cp, cs, r, meas, out_idx, inner_idx, u):
             u[i] = min(max(acc, umin), umax)
 
 
-@njit(cache=True)
+@njit
 def _actuate(u, u_prev, opt, load):
     """Actuator: saturation, rate limit, quantum (in place on ``u``); the load adds to input 0."""
     umin, umax, dmax, q = opt[4], opt[5], opt[6], opt[7]
@@ -104,7 +104,7 @@ def _actuate(u, u_prev, opt, load):
     u[0] += load
 
 
-@njit(cache=True)
+@njit
 def _measure(v, noise_row, q, out):
     for i in range(v.size):
         w = v[i] + noise_row[i]
