@@ -267,34 +267,22 @@ def load_config(path: str | Path, overrides: list[str] | None = None, seed: int 
     return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
 
 
-def _check_optimizer(f: Any, method: str, population: int | None, generations: int | None,
-                     options: Mapping[str, Any]) -> None:
-    """Build the optimiser once on a throwaway problem: bad option values fail here, not in the run."""
-    import numpy as np
+def optimizer_options(method: str, population: int | None, generations: int | None,
+                      options: Mapping[str, Any]) -> dict[str, Any]:
+    """The keyword options optimiser ``method`` is built with (``population`` only when given)."""
+    return {**options, **({} if population is None else {"population": population}), "generations": generations}
 
-    from tuner.optimizers import OPTIMIZERS
 
-    kwargs = {k: v for k, v in options.items() if k != "x0"}  # x0 is encoded against the space later
-    if population is not None:
-        kwargs["population"] = population
-    kwargs["generations"] = generations
+def check_optimizer_options(f: Any, method: str, options: Mapping[str, Any], dim: int | None = None) -> None:
+    """``options`` checked against the optimiser's declaration (:meth:`tuner.optimizers.base.Optimizer.check_options`;
+    the rules needing the dimension when ``dim`` is given); a bad one is a :class:`ConfigError` naming it."""
+    from tuner.optimizers import OPTIMIZERS, OptionError
+
     try:
-        OPTIMIZERS[method](2, np.random.default_rng(0), **kwargs)
-    except (ValueError, TypeError) as exc:
-        msg = str(exc)
-        key = next((k for k in kwargs if msg.startswith(k) or f" {k} " in f" {msg} "), "")
-        for k in kwargs if not key else ():  # the message does not say: find the option that fails alone
-            try:
-                OPTIMIZERS[method](2, np.random.default_rng(0), **{k: kwargs[k], "generations": generations})
-            except (ValueError, TypeError):
-                key = k
-                break
-        if key and isinstance(exc, TypeError):
-            msg = f"expected a number, got {kwargs[key]!r}"
-        if not key and isinstance(exc, TypeError):
-            bad = [f"{k}={v!r}" for k, v in options.items() if isinstance(v, str)]
-            msg = f"an option has the wrong type ({', '.join(bad) or msg}); numbers expected"
-        raise ConfigError(f, f"optimizer.{key}" if key else "optimizer", f"invalid for {method}: {msg}") from None
+        OPTIMIZERS[method].check_options(options, dim)
+    except OptionError as exc:
+        raise ConfigError(f, f"optimizer.{exc.key}" if exc.key else "optimizer",
+                          f"invalid for {method}: {exc.message}") from None
 
 
 def _number(d: Mapping, key: str, f: Any, path: str, low: float, high: float, default: Any,
@@ -415,7 +403,7 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
             raise ConfigError(f, f"optimizer.{k}", f"unknown option for {method}; allowed: {sorted(allowed)}")
     if generations is None and not any(k in options for k in ("max_evals", "target", "patience")):
         generations = 30
-    _check_optimizer(f, method, population, generations, options)
+    check_optimizer_options(f, method, optimizer_options(method, population, generations, options))
     optimizer = OptimizerConfig(method, population, generations, options, RefineConfig(stages, shrink))
 
     par = dict(_get(raw, "parallel", dict, f, "", default={}))

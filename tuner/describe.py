@@ -17,69 +17,25 @@ import math
 import re
 from typing import Any
 
-__all__ = ["UnknownName", "all_names", "describe", "doc_params", "format_text", "optimizer_description"]
+__all__ = ["UnknownName", "all_names", "describe", "format_text", "optimizer_description"]
 
 
 class UnknownName(ValueError):
     """A name nothing declares; the message lists the close matches."""
 
 
-def doc_params(doc: str) -> dict[str, str]:
-    """``{name: text}`` from the ``Parameters`` section of a NumPy-style docstring.
-
-    ``a, b : type`` lines give several names the same text; ``**kwargs`` entries are left out.
-    """
-    out: dict[str, str] = {}
-    lines = inspect.cleandoc(doc or "").splitlines()
-    try:
-        i = next(k for k, ln in enumerate(lines) if ln.strip() == "Parameters") + 2
-    except StopIteration:
-        return out
-    names: list[str] = []
-    for k in range(i, len(lines)):
-        ln = lines[k]
-        if ln and not ln.startswith(" "):
-            if k + 1 < len(lines) and lines[k + 1].startswith("---"):  # the next section (Returns...)
-                break
-            names = [n.strip() for n in ln.split(" :")[0].split(",")]
-            if not all(n.isidentifier() for n in names):
-                names = []
-            for n in names:
-                out[n] = ""
-        elif ln.strip() and names:
-            for n in names:
-                out[n] = (out[n] + " " + ln.strip()).strip()
-    return out
-
-
 def optimizer_description(name: str) -> dict[str, Any]:
-    """Options of optimiser ``name`` with their defaults and the class docstring's text."""
+    """Options of optimiser ``name``: its declaration (:attr:`tuner.optimizers.base.Optimizer.options`)."""
     from tuner.optimizers import OPTIMIZERS
-    from tuner.optimizers.base import Optimizer
 
     cls = OPTIMIZERS[name]
-    docs = {**doc_params(Optimizer.__doc__ or ""), **doc_params(cls.__doc__ or "")}
-    presets = getattr(inspect.getmodule(cls), "PRESETS", None)
-    preset_default = inspect.signature(cls.__init__).parameters.get("preset")
-    # options left None take their value from the default preset (e.g. PSO's "paper" settings)
-    from_preset = presets.get(preset_default.default, {}) if presets and preset_default is not None else {}
-    params = []
-    for klass in cls.__mro__:
-        if "__init__" not in klass.__dict__:
-            continue
-        for p in inspect.signature(klass.__init__).parameters.values():
-            if p.kind is p.KEYWORD_ONLY and p.name not in {q["name"] for q in params}:
-                default = None if p.default is p.empty else p.default
-                if default is None:
-                    default = from_preset.get(p.name)
-                params.append({"name": p.name, "default": default, "bounds": None, "scale": None, "unit": "",
-                               "doc": docs.get(p.name, ""), "eq": ""})
     summary = (cls.__doc__ or "").strip().splitlines()
     mod_doc = inspect.getmodule(cls).__doc__ or ""
     eq = re.search(r"(thesis eq\.? [\d.\-]+|eq\. [\d.\-]+)", mod_doc)
     return {"section": "optimizers", "name": name, "kind": None, "summary": summary[0] if summary else "",
             "class": f"{cls.__module__}.{cls.__qualname__}", "eq": eq.group(1) if eq else "",
-            "usage": f"optimizer: {{method: {name}, population: 20, generations: 50}}", "params": params}
+            "usage": f"optimizer: {{method: {name}, population: 20, generations: 50}}",
+            "params": cls.options.describe()}
 
 
 def _kind_description(kind: str, source: str) -> dict[str, Any]:
@@ -148,7 +104,17 @@ def format_text(d: dict[str, Any]) -> str:
     for section, names in (d.get("names") or {}).items():
         lines.append(f"  {section}: {', '.join(names)}")
     params = d.get("params") or []
-    if params:
+    if params and d["section"] == "optimizers":  # options: what is allowed, not a search range
+        rows = [("name", "default", "allowed", "unit", "eq.", "doc")]
+        for p in params:
+            allowed = _fmt(p.get("allowed")) + (" or null" if p.get("nullable") and p.get("allowed") else "")
+            rows.append((p["name"], _fmt(p.get("default")), allowed, p.get("unit") or "-", p.get("eq") or "-",
+                         p.get("doc") or ""))
+        widths = [max(len(r[i]) for r in rows) for i in range(5)]
+        lines.append("  options:")
+        for r in rows:
+            lines.append("    " + "  ".join(c.ljust(w) for c, w in zip(r[:5], widths)) + "  " + r[5])
+    elif params:
         rows = [("name", "default", "bounds", "scale", "unit", "eq.", "doc")]
         for p in params:
             rows.append((p["name"], _fmt(p.get("default")), _fmt(p.get("bounds")) if p.get("bounds") else "fixed"

@@ -139,6 +139,8 @@ class Param:
     kind : {"number", "bool", "choice", "any"}
         Derived from ``default``/``choices`` unless given; ``any`` skips the type check (the owner's
         own check validates such structured options).
+    nullable : bool
+        ``None`` is a valid value too (an optional budget, an unset option whose value the owner derives).
     """
 
     name: str
@@ -152,6 +154,7 @@ class Param:
     choices: tuple[Any, ...] | None = None
     integer: bool = False
     kind: str = ""
+    nullable: bool = False
 
     def __post_init__(self) -> None:
         if not self.kind:
@@ -181,6 +184,8 @@ class Param:
 
     def check(self, owner: str, value: Any) -> Any:
         """The validated value (float for numbers); ValueError naming ``owner`` and the key."""
+        if value is None and self.nullable:
+            return None
         if self.kind == "number":
             return check_number(owner, self.name, value, self.allowed, self.unit, self.integer)
         if self.kind == "bool":
@@ -216,6 +221,8 @@ class Param:
             d["allowed"] = None
         if self.integer:
             d["integer"] = True
+        if self.nullable:
+            d["nullable"] = True
         return d
 
 

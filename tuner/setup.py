@@ -4,7 +4,8 @@ workers and the map that evaluates a generation.
 One place for what a run (:mod:`tuner.run`), a cross-validation (:mod:`tuner.cv`) and the benchmarks
 build from a :class:`~tuner.config.RunConfig`, so they agree: the same error lines for a bad objective
 or bad optimiser options, the same optimiser seeds (``SeedSequence([run seed, stage])``) and one worker
-rule (:func:`worker_count`: at most the optimiser's population and, for local pools, the CPU count).
+rule (:func:`worker_count`: at most the optimiser's population, computed once by :func:`population`, and, for
+local pools, the CPU count).
 """
 
 from __future__ import annotations
@@ -17,13 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from tuner.config import ConfigError, RunConfig, config_from_dict
+from tuner.config import ConfigError, RunConfig, check_optimizer_options, config_from_dict, optimizer_options
 from tuner.evaluate import EvalRecord, Evaluator, TimedObjective
-from tuner.optimizers import get_optimizer
+from tuner.optimizers import OptionError, get_optimizer
 from tuner.rundir import RunDir
 from tuner.space import Space
 
-__all__ = ["run_config", "run_objective", "build_objective", "build", "new_optimizer", "worker_count", "worker_cap",
+__all__ = ["run_config", "run_objective", "build_objective", "build", "new_optimizer", "population", "worker_count",
            "LiveMap"]
 
 
@@ -87,40 +88,45 @@ def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | Non
     """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``."""
     o = cfg.optimizer
     rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, stage]))
-    kwargs = dict(o.options)
-    if o.population is not None:
-        kwargs["population"] = o.population
-    kwargs["generations"] = o.generations
+    kwargs = optimizer_options(o.method, o.population, o.generations, o.options)
     if x0 is not None:
         kwargs["x0"] = x0
     try:
         if isinstance(kwargs.get("x0"), dict):
             kwargs["x0"] = space.encode(kwargs["x0"])
         return get_optimizer(o.method)(space.dim, rng, **kwargs)
-    except (ValueError, TypeError) as exc:  # OptionError, or e.g. pycma refusing a population of 1
+    except OptionError as exc:
+        raise ConfigError(cfg.source, f"optimizer.{exc.key}" if exc.key else "optimizer",
+                          f"invalid for {o.method}: {exc.message}") from None
+    except (ValueError, TypeError) as exc:  # e.g. a warm start that does not fit the space, pycma refusing
         raise ConfigError(cfg.source, f"optimizer ({o.method})", str(exc)) from None
 
 
-def worker_cap(cfg: RunConfig, population: int) -> tuple[int, list[str]]:
-    """Workers actually used for a population of ``population``: at most the population and, for local
-    pools, the CPU count; the notes say what was capped."""
+def population(cfg: RunConfig, dim: int) -> int:
+    """The population the optimiser of ``cfg`` runs with on ``dim`` free parameters, with its options checked
+    for that dimension (a :class:`ConfigError` naming the option): the one computation, no optimiser built."""
+    o = cfg.optimizer
+    options = optimizer_options(o.method, o.population, o.generations, o.options)
+    check_optimizer_options(cfg.source, o.method, options, dim)
+    return get_optimizer(o.method).population_for(dim, options)
+
+
+def worker_count(cfg: RunConfig, space: Space) -> tuple[int, list[str]]:
+    """Workers a run of ``cfg`` on ``space`` uses, and notes saying what was capped: the one rule, ``n_jobs``
+    at most the :func:`population` and, for local pools, the CPU count (``serial`` takes ``n_jobs`` as is)."""
     p = cfg.parallel
+    pop = population(cfg, space.dim)  # also refuses options that do not fit the dimension, before any run
     n, notes = int(p.n_jobs), []
     if p.backend == "serial":
         return n, notes
     cpus = os.cpu_count() or 1
-    if n > population:
-        notes.append(f"n_jobs {n} capped at the population {population} (more workers would idle)")
-        n = population
+    if n > pop:
+        notes.append(f"n_jobs {n} capped at the population {pop} (more workers would idle)")
+        n = pop
     if not p.address and n > cpus:
         notes.append(f"n_jobs {n} capped at the {cpus} CPUs of this machine")
         n = cpus
     return n, notes
-
-
-def worker_count(cfg: RunConfig, space: Space) -> tuple[int, list[str]]:
-    """:func:`worker_cap` for the population of the optimiser ``cfg`` builds on ``space`` (the one rule)."""
-    return worker_cap(cfg, new_optimizer(cfg, 0, space, None).population)
 
 
 class LiveMap:

@@ -37,13 +37,38 @@ def metric_names() -> list[str]:
     return list(METRICS)
 
 
+def _doc_params(doc: str) -> dict[str, str]:
+    """``{name: text}`` from the ``Parameters`` section of a generator's NumPy-style docstring (the synthetic
+    generators document their keywords there; ``a, b : type`` lines give several names the same text)."""
+    out: dict[str, str] = {}
+    lines = inspect.cleandoc(doc or "").splitlines()
+    try:
+        i = next(k for k, ln in enumerate(lines) if ln.strip() == "Parameters") + 2
+    except StopIteration:
+        return out
+    names: list[str] = []
+    for k in range(i, len(lines)):
+        ln = lines[k]
+        if ln and not ln.startswith(" "):
+            if k + 1 < len(lines) and lines[k + 1].startswith("---"):  # the next section (Returns...)
+                break
+            names = [n.strip() for n in ln.split(" :")[0].split(",")]
+            if not all(n.isidentifier() for n in names):
+                names = []
+            for n in names:
+                out[n] = ""
+        elif ln.strip() and names:
+            for n in names:
+                out[n] = (out[n] + " " + ln.strip()).strip()
+    return out
+
+
 def _generator_keys(name: str) -> list[dict[str, Any]]:
     """Keyword, default and unit hint of every key a synthetic generator accepts."""
     from objectives.attitude.data.cache import GENERATORS, _allowed_keywords
-    from tuner.describe import doc_params
 
     sig = inspect.signature(GENERATORS[name]).parameters
-    docs = doc_params(GENERATORS[name].__doc__ or "")
+    docs = _doc_params(GENERATORS[name].__doc__ or "")
     out = []
     for key in _allowed_keywords(name):
         p = sig.get(key)

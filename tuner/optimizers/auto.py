@@ -41,11 +41,12 @@ from typing import Any
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError, WrapperOptimizer
+from tuner.optimizers.base import AT_LEAST_1, Optimizer, OptionError, WrapperOptimizer, declare
 from tuner.optimizers.cmaes import CMAES
 from tuner.optimizers.cmaes_restart import CMAESRestart
 from tuner.optimizers.pso import PSO
 from tuner.optimizers.trust_region import TrustRegion
+from tuner.params import Param
 
 __all__ = ["Auto", "choose"]
 
@@ -75,18 +76,46 @@ def choose(dim: int, budget: int | None) -> str:
 
 
 class Auto(WrapperOptimizer):
-    """Delegating optimiser; see the module docstring for the rules.
-
-    Parameters
-    ----------
-    population, generations, max_evals, target, patience, tol, x0
-        As for every optimiser; together they set the budget the rules look at.
-    """
+    """Delegating optimiser; see the module docstring for the rules. Its options are those every optimiser
+    has (:attr:`Auto.options`); together they set the budget the rules look at."""
 
     name = "auto"
+    options = declare("auto", (
+        Param("population", None, unit="candidates", allowed=AT_LEAST_1, integer=True, nullable=True, kind="number",
+              doc="Candidates per generation of the chosen method; unset: that method's own (12 for the "
+                  "low-budget PSO), with the budget counted at 20 per generation."),
+    ))
+
+    @staticmethod
+    def _budget(options: Any) -> int | None:
+        """The evaluation budget the rules look at (``max_evals``, else population (20 unset) x generations)."""
+        gens = options.get("generations", 50)
+        if options.get("max_evals") is not None:
+            return int(options["max_evals"])
+        pop = options.get("population")
+        return None if gens is None else (20 if pop is None else int(pop)) * int(gens)
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)
+        if dim is not None and choose(int(dim), cls._budget(v)) == "pso" and v["generations"] is None \
+                and v["max_evals"] is None:
+            raise OptionError("auto picks pso in 1-D, which needs a generations or max_evals budget")
+
+    @classmethod
+    def population_for(cls, dim: int, options: Any) -> int:
+        pop = options.get("population")
+        if pop is not None:
+            return int(pop)
+        chosen = choose(int(dim), cls._budget(options))
+        if chosen == "pso":
+            return PSO_POPULATION
+        return {"trust_region": TrustRegion, "cmaes": CMAES, "cmaes_restart": CMAESRestart}[chosen].population_for(
+            dim, {})
 
     def __init__(self, dim: int, rng: np.random.Generator, **common: Any):
         pop_given = common.get("population")
+        self.check_options(common, dim)
         super().__init__(dim, rng, **common)
         gens, max_evals = self.generations, self.max_evals
         budget = max_evals if max_evals is not None else (None if gens is None else self.population * gens)

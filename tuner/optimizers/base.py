@@ -10,21 +10,67 @@ Stopping
 ``done`` becomes True when ``generations`` tells have happened, when ``max_evals`` evaluations have
 been told, when the best fitness reaches ``target``, or when the best fitness has not improved by
 more than ``tol`` (relative) for ``patience`` generations. ``stop_reason`` says which.
+
+Options
+-------
+Every optimiser declares its options once, as the :class:`~tuner.params.ParamSet` ``options`` (name,
+default, allowed values, unit, doc; :data:`COMMON` for the options every method shares). The config's
+validation (:meth:`Optimizer.check_options`, without the dimension; with it when a run starts), the
+constructor (the same call), ``tuner describe <method>`` and the docs read that declaration; the
+rules that tie options together (``constriction`` needs ``c1 + c2 > 4``, ...) are the class's
+:meth:`Optimizer._combination`. :meth:`Optimizer.population_for` is the one computation of the
+population from the options and the dimension.
 """
 
 from __future__ import annotations
 
 import copy
-import inspect
+from collections.abc import Iterable, Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["Optimizer", "OptionError", "latin_hypercube"]
+from tuner.params import NONNEG, Interval, Param, ParamSet
+
+__all__ = ["Optimizer", "OptionError", "latin_hypercube", "COMMON", "declare"]
 
 
 class OptionError(ValueError):
-    """An optimiser option with a bad name or value."""
+    """An optimiser option with a bad name or value; ``key`` names the option ("" when no single one)."""
+
+    def __init__(self, message: str, key: str = ""):
+        self.key, self.message = key, message
+        super().__init__(f"{key} {message}" if key else message)
+
+
+#: at least one
+AT_LEAST_1 = Interval(1.0)
+
+#: The options every optimiser shares (budget, stopping rules, warm start).
+COMMON: tuple[Param, ...] = (
+    Param("population", 20, unit="candidates", allowed=AT_LEAST_1, integer=True,
+          doc="Candidates per generation (ask returns this many rows)."),
+    Param("generations", 50, unit="generations", allowed=AT_LEAST_1, integer=True, nullable=True,
+          doc="Budget in generations (null for no limit; then give max_evals, target or patience)."),
+    Param("max_evals", None, unit="evaluations", allowed=AT_LEAST_1, integer=True, nullable=True, kind="number",
+          doc="Budget in evaluations; the run stops after the generation that reaches it."),
+    Param("target", None, unit="fitness", nullable=True, kind="number",
+          doc="Stop as soon as the best fitness is <= target."),
+    Param("patience", None, unit="generations", allowed=AT_LEAST_1, integer=True, nullable=True, kind="number",
+          doc="Stop when the best fitness has not improved by more than tol (relative) for this many generations."),
+    Param("tol", 1e-9, unit="1", allowed=NONNEG, doc="Relative improvement that counts for patience."),
+    Param("x0", None, kind="any", nullable=True,
+          doc="Warm start: a point of the unit cube, or a mapping of physical values (how each method uses it is "
+              "documented there)."),
+)
+
+
+def declare(name: str, own: Iterable[Param] = (), common: Iterable[Param] = COMMON) -> ParamSet:
+    """The option declaration of optimiser ``name``: its ``own`` options, then the ``common`` ones (an own
+    option of the same name, e.g. a method's population default, replaces the common one)."""
+    own = tuple(own)
+    mine = {p.name for p in own}
+    return ParamSet(name, own + tuple(p for p in common if p.name not in mine))
 
 
 def latin_hypercube(rng: np.random.Generator, n: int, dim: int) -> np.ndarray:
@@ -62,6 +108,7 @@ class Optimizer:
     """
 
     name: ClassVar[str] = ""
+    options: ClassVar[ParamSet] = declare("optimizer")
 
     def __init__(
         self,
@@ -76,18 +123,8 @@ class Optimizer:
         tol: float = 1e-9,
         x0: Any = None,
     ):
-        if int(dim) < 1:
-            raise OptionError(f"dimension must be >= 1, got {dim} (is every parameter fixed?)")
-        if int(population) < 1:
-            raise OptionError(f"population must be >= 1, got {population}")
-        if generations is not None and int(generations) < 1:
-            raise OptionError(f"generations must be >= 1, got {generations}")
-        if max_evals is not None and int(max_evals) < 1:
-            raise OptionError(f"max_evals must be >= 1, got {max_evals}")
-        if generations is None and max_evals is None and target is None and patience is None:
-            raise OptionError("give a budget: generations, max_evals, target or patience")
-        if patience is not None and int(patience) < 1:
-            raise OptionError(f"patience must be >= 1 generation, got {patience}")
+        Optimizer.check_options(dict(population=population, generations=generations, max_evals=max_evals,
+                                     target=target, patience=patience, tol=tol), dim)
         self.dim = int(dim)
         self.rng = rng
         self.population = int(population)
@@ -107,14 +144,43 @@ class Optimizer:
     # --- options ------------------------------------------------------------------------------
     @classmethod
     def option_names(cls) -> list[str]:
-        """Every keyword the constructor accepts (for config validation)."""
-        names: list[str] = []
-        for klass in cls.__mro__:
-            if "__init__" in klass.__dict__:
-                for p in inspect.signature(klass.__init__).parameters.values():
-                    if p.kind is p.KEYWORD_ONLY and p.name not in names:
-                        names.append(p.name)
-        return names
+        """Every option the method accepts (its declaration's names)."""
+        return cls.options.names()
+
+    @classmethod
+    def check_options(cls, values: Mapping[str, Any], dim: int | None = None) -> dict[str, Any]:
+        """``values`` (the options given) checked against the declaration, then the rules that combine
+        them (:meth:`_combination`; those needing the dimension only when ``dim`` is given).
+
+        Returns the checked values (numbers as float, integers as int); raises :class:`OptionError`
+        naming the option."""
+        decl, out = cls.options, {}
+        for k, v in values.items():
+            if k not in decl.names():
+                raise OptionError(f"unknown option for {cls.name}; allowed: {sorted(decl.names())}", k)
+            try:
+                out[k] = decl[k].check(cls.name, v)
+            except ValueError as exc:
+                text, head = str(exc), f"{cls.name}: {k} "
+                raise OptionError(text[len(head):] if text.startswith(head) else text, k) from None
+        if dim is not None and int(dim) < 1:
+            raise OptionError(f"dimension must be >= 1, got {dim} (is every parameter fixed?)")
+        cls._combination({**decl.defaults(), **{k: v for k, v in values.items()}}, dim, set(values))
+        return out
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        """Rules between options (``v``: every option, defaults filled in; ``given``: the names set
+        explicitly); raise :class:`OptionError`. Subclasses extend it."""
+        if all(v[k] is None for k in ("generations", "max_evals", "target", "patience")):
+            raise OptionError("give a budget: generations, max_evals, target or patience")
+
+    @classmethod
+    def population_for(cls, dim: int, options: Mapping[str, Any]) -> int:
+        """The population the method runs with on ``dim`` free parameters for the given ``options``
+        (the one computation: the constructor, the config and the worker rule use it)."""
+        pop = options.get("population")
+        return int(cls.options["population"].default if pop is None else pop)
 
     def _check_point(self, x: Any, what: str) -> np.ndarray:
         x = np.asarray(x, dtype=float).reshape(-1)

@@ -15,9 +15,38 @@ from typing import Any
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError
+from tuner.optimizers.base import Optimizer, OptionError, declare
+from tuner.params import Interval, Param
 
-__all__ = ["CMAES"]
+__all__ = ["CMAES", "CMA_OPTIONS", "cma_population"]
+
+#: the options pycma-based methods share (the population is pycma's own default unless given)
+CMA_OPTIONS = (
+    Param("sigma0", 0.3, unit="unit cube", allowed=Interval(0.0, 1.0, low_open=True),
+          doc="Initial step size in unit-cube coordinates (0.3: about a third of each range)."),
+    Param("popsize", None, unit="candidates", allowed=Interval(2.0), integer=True, nullable=True, kind="number",
+          doc="Alias of population."),
+    Param("cma_options", None, kind="any", nullable=True,
+          doc="Further pycma options (tolfun, CMA_active, ...), a mapping passed through verbatim."),
+    Param("population", None, unit="candidates", allowed=Interval(2.0), integer=True, nullable=True, kind="number",
+          doc="Candidates per generation (pycma needs >= 2); unset: pycma's 4 + floor(3 ln dim)."),
+)
+
+
+def cma_population(dim: int, options: Any) -> int:
+    """The population of a pycma-based method: ``popsize``, else ``population``, else pycma's default."""
+    for key in ("popsize", "population"):
+        if options.get(key) is not None:
+            return int(options[key])
+    return 4 + int(3 * math.log(max(int(dim), 1)))
+
+
+def check_cma(v: dict[str, Any], dim: int | None) -> None:
+    """The rules pycma adds: a mapping of options, at least 2 free parameters."""
+    if v["cma_options"] is not None and not isinstance(v["cma_options"], dict):
+        raise OptionError(f"must be a mapping of pycma options, got {v['cma_options']!r}", "cma_options")
+    if dim is not None and int(dim) < 2:
+        raise OptionError("cmaes needs at least 2 free parameters (pycma does not do 1-D); use pso or de")
 
 
 class _Randn:
@@ -31,32 +60,28 @@ class _Randn:
 
 
 class CMAES(Optimizer):
-    """Covariance matrix adaptation evolution strategy (pycma).
+    """Covariance matrix adaptation evolution strategy (pycma); options in :attr:`CMAES.options`.
 
-    Parameters
-    ----------
-    sigma0 : float
-        Initial step size in unit-cube coordinates (default 0.3: about a third of each range).
-    popsize : int, optional
-        Alias of ``population``; pycma's default is ``4 + floor(3 ln dim)``.
-    x0 : array, optional
-        Initial mean (default: the centre of the cube).
-    cma_options : dict
-        Further pycma options (``tolfun``, ``CMA_active``, ...), passed through verbatim.
+    ``x0`` is the initial mean (default: the centre of the cube).
     """
 
     name = "cmaes"
+    options = declare("cmaes", CMA_OPTIONS)
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)
+        check_cma(v, dim)
+
+    @classmethod
+    def population_for(cls, dim: int, options: Any) -> int:
+        return cma_population(dim, options)
 
     def __init__(self, dim: int, rng: np.random.Generator, *, sigma0: float = 0.3,
                  popsize: int | None = None, cma_options: dict | None = None, **common: Any):
-        if popsize is not None:
-            common["population"] = popsize
-        common.setdefault("population", 4 + int(3 * math.log(max(int(dim), 1))))
+        self.check_options(dict(sigma0=sigma0, popsize=popsize, cma_options=cma_options, **common), dim)
+        common["population"] = self.population_for(dim, {**common, "popsize": popsize})
         super().__init__(dim, rng, **common)
-        if not 0 < sigma0 <= 1:
-            raise OptionError(f"sigma0 must be in (0, 1] (unit-cube coordinates), got {sigma0}")
-        if self.dim < 2:
-            raise OptionError("cmaes needs at least 2 free parameters (pycma does not do 1-D); use pso or de")
         import cma
 
         opts = {

@@ -24,47 +24,46 @@ the generator passed in, so replaying ``tell`` from the history reproduces the r
 
 from __future__ import annotations
 
-import math
 from typing import Any, Literal
 
 import numpy as np
 
-from tuner.optimizers.base import OptionError, WrapperOptimizer
-from tuner.optimizers.cmaes import CMAES
+from tuner.optimizers.base import WrapperOptimizer, declare
+from tuner.optimizers.cmaes import CMA_OPTIONS, CMAES, check_cma, cma_population
+from tuner.params import NONNEG, Param
 
 __all__ = ["CMAESRestart"]
 
 
 class CMAESRestart(WrapperOptimizer):
-    """CMA-ES restarted with an increasing (IPOP) or bi-population (BIPOP) schedule.
-
-    Parameters
-    ----------
-    strategy : {"ipop", "bipop"}
-        Restart schedule (module docstring).
-    max_restarts : int
-        Restarts after the first run (default 9: up to ``2^9`` times the initial population).
-    sigma0 : float
-        Initial step size in unit-cube coordinates (default 0.3).
-    popsize : int, optional
-        Alias of ``population`` for the first run; pycma's default ``4 + floor(3 ln dim)``.
-    cma_options : dict
-        Further pycma options for every run (``popsize`` is set by the schedule); default ``tolx: 1e-4``.
-    """
+    """CMA-ES restarted with an increasing (IPOP) or bi-population (BIPOP) schedule (options in
+    :attr:`CMAESRestart.options`; ``population`` and ``popsize`` are those of the first run, ``cma_options``
+    apply to every run, whose ``popsize`` the schedule sets, with ``tolx: 1e-4`` unless given)."""
 
     name = "cmaes_restart"
+    options = declare("cmaes_restart", (
+        Param("strategy", "ipop", choices=("ipop", "bipop"), doc="Restart schedule (module docstring)."),
+        Param("max_restarts", 9, unit="restarts", allowed=NONNEG, integer=True,
+              doc="Restarts after the first run (9: up to 2^9 times the initial population)."),
+        *CMA_OPTIONS,
+    ))
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)
+        check_cma(v, dim)
+
+    @classmethod
+    def population_for(cls, dim: int, options: Any) -> int:
+        return cma_population(dim, options)
 
     def __init__(self, dim: int, rng: np.random.Generator, *, strategy: Literal["ipop", "bipop"] = "ipop",
                  max_restarts: int = 9, sigma0: float = 0.3, popsize: int | None = None,
                  cma_options: dict | None = None, **common: Any):
-        if popsize is not None:
-            common["population"] = popsize
-        common.setdefault("population", 4 + int(3 * math.log(max(int(dim), 1))))
+        self.check_options(dict(strategy=strategy, max_restarts=max_restarts, sigma0=sigma0, popsize=popsize,
+                                cma_options=cma_options, **common), dim)
+        common["population"] = self.population_for(dim, {**common, "popsize": popsize})
         super().__init__(dim, rng, **common)
-        if strategy not in ("ipop", "bipop"):
-            raise OptionError(f"strategy must be 'ipop' or 'bipop', got {strategy!r}")
-        if int(max_restarts) < 0:
-            raise OptionError(f"max_restarts must be >= 0, got {max_restarts}")
         self.strategy = strategy
         self.max_restarts = int(max_restarts)
         self.sigma0 = float(sigma0)

@@ -17,30 +17,34 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError, latin_hypercube
+from tuner.optimizers.base import COMMON, Optimizer, OptionError, declare, latin_hypercube
+from tuner.params import NONNEG, UNIT_CLOSED, Interval, Param
 
 __all__ = ["DE"]
 
 
 class DE(Optimizer):
-    """DE/rand/1/bin.
-
-    Parameters
-    ----------
-    F : float
-        Differential weight in (0, 2]. Default 0.7.
-    CR : float
-        Crossover probability in [0, 1]. Default 0.9.
-    dither : float
-        If > 0, F is drawn per generation uniformly in ``[F - dither, F + dither]`` (scipy's
-        ``mutation=(a, b)``), which helps on multimodal problems. Default 0.
-    init : {"lhs", "uniform"}
-        Initial population. Default Latin hypercube.
-    boundary : {"reflect", "random", "clip"}
-        Trial components outside the cube are mirrored back, re-drawn uniformly, or clipped.
-    """
+    """DE/rand/1/bin (options in :attr:`DE.options`, ``tuner describe de``)."""
 
     name = "de"
+    options = declare("de", (
+        Param("F", 0.7, unit="1", allowed=Interval(0.0, 2.0, low_open=True), doc="Differential weight."),
+        Param("CR", 0.9, unit="1", allowed=UNIT_CLOSED, doc="Crossover probability."),
+        Param("dither", 0.0, unit="1", allowed=NONNEG,
+              doc="If > 0, F is drawn per generation uniformly in [F - dither, F + dither] (scipy's "
+                  "mutation=(a, b)), which helps on multimodal problems; below F."),
+        Param("init", "lhs", choices=("lhs", "uniform"), doc="Initial population: Latin hypercube or uniform."),
+        Param("boundary", "reflect", choices=("reflect", "random", "clip"),
+              doc="Trial components outside the cube are mirrored back, re-drawn uniformly, or clipped."),
+        Param("population", 20, unit="candidates", allowed=Interval(4.0), integer=True,
+              doc="Candidates per generation; >= 4 (rand/1 uses 3 others)."),
+    ), COMMON)
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)
+        if v["F"] - v["dither"] <= 0:
+            raise OptionError(f"must be < F, got dither={v['dither']}, F={v['F']}", "dither")
 
     def __init__(
         self,
@@ -54,19 +58,8 @@ class DE(Optimizer):
         boundary: Literal["reflect", "random", "clip"] = "reflect",
         **common: Any,
     ):
+        self.check_options(dict(F=F, CR=CR, dither=dither, init=init, boundary=boundary, **common), dim)
         super().__init__(dim, rng, **common)
-        if self.population < 4:
-            raise OptionError(f"DE needs population >= 4 (rand/1 uses 3 others), got {self.population}")
-        if not 0 < F <= 2:
-            raise OptionError(f"F must be in (0, 2], got {F}")
-        if not 0 <= CR <= 1:
-            raise OptionError(f"CR must be in [0, 1], got {CR}")
-        if dither < 0 or F - dither <= 0:
-            raise OptionError(f"dither must be >= 0 and < F, got dither={dither}, F={F}")
-        if init not in ("lhs", "uniform"):
-            raise OptionError(f"init must be 'lhs' or 'uniform', got {init!r}")
-        if boundary not in ("reflect", "random", "clip"):
-            raise OptionError(f"boundary must be 'reflect', 'random' or 'clip', got {boundary!r}")
         self.F, self.CR, self.dither, self.boundary = float(F), float(CR), float(dither), boundary
         n, d = self.population, self.dim
         self.pop = latin_hypercube(rng, n, d) if init == "lhs" else rng.random((n, d))

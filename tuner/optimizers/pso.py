@@ -38,7 +38,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError, latin_hypercube
+from tuner.optimizers.base import AT_LEAST_1, Optimizer, OptionError, declare, latin_hypercube
+from tuner.params import ANY_REAL, NONNEG, Interval, Param
 
 __all__ = ["PSO", "PRESETS"]
 
@@ -56,48 +57,67 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 
 
+_PAPER = PRESETS["paper"]
+_FROM_PRESET = "Unset: the preset's value (the default shown is paper's)."
+
+
 class PSO(Optimizer):
     """Particle swarm optimiser (ask/tell).
 
-    Parameters
-    ----------
-    preset : {"paper", "lowbudget", "clerc", "spso2011"}
-        Named defaults for the options below (module docstring); options given explicitly win.
-        The defaults quoted below are those of ``paper``.
-    w : float
-        Inertia weight (the start value when ``inertia: linear``). Seed default 0.9.
-    w_end : float
-        Final inertia of the linearly decreasing schedule (``inertia: linear``), reached at the last
-        generation. Default 0.4 (Shi & Eberhart).
-    inertia : {"constant", "linear"}
-        Inertia schedule. ``linear`` spans ``generations`` (or ``max_evals / population`` without it).
-    c1, c2 : float
-        Cognitive and social coefficients. Seed defaults 0.5 and 1.5.
-    constriction : bool
-        Clerc's constriction: ``V <- chi (V + c1 r1 (P - X) + c2 r2 (G - X))`` with
-        ``chi = 2 / |2 - phi - sqrt(phi^2 - 4 phi)|``, ``phi = c1 + c2 > 4``; ``w`` is then ignored.
-        Use e.g. ``c1 = c2 = 2.05`` (chi = 0.7298).
-    topology : {"global", "ring"}
-        Neighbourhood of the social term: the whole swarm, or each particle and its ``neighbors``
-        nearest indices on each side (lbest ring).
-    neighbors : int
-        Ring half-width (default 1).
-    v_max : float
-        Velocity clamp per dimension, as a fraction of the unit range (default 0.5; ``1`` means none).
-    boundary : {"reflect", "clip", "random"}
-        What a particle leaving the cube does: mirror back in (and reverse that velocity
-        component), stop at the bound (velocity component set to 0), or be re-drawn uniformly in
-        that dimension (velocity component set to 0).
-    init : {"uniform", "lhs"}
-        Initial positions: uniform random or Latin hypercube.
-    v_init : float
-        Initial velocities are uniform in ``[-v_init, v_init]`` (fraction of the range; 0 = at rest).
-    init_spread : float
-        With a warm start ``x0``: particle 0 starts at ``x0`` and the others uniformly within
-        ``x0 +- init_spread / 2`` (clipped to the cube); ``1`` keeps them anywhere in the cube.
+    Its options are declared in :attr:`PSO.options` (``tuner describe pso``); those a preset sets
+    (``w``, ``w_end``, ``inertia``, ``c1``, ``c2``, ``constriction``, ``topology``, ``v_max``, ``init``,
+    ``v_init``) take the preset's value when left unset (``None``), and their declared default is paper's.
     """
 
     name = "pso"
+    options = declare("pso", (
+        Param("preset", "paper", choices=tuple(PRESETS),
+              doc="Named defaults for the options a preset sets (module docstring); options given explicitly win."),
+        Param("w", _PAPER["w"], unit="1", allowed=ANY_REAL, nullable=True, eq="thesis eq. 2.40",
+              doc="Inertia weight (the start value when inertia: linear). Seed default 0.9. " + _FROM_PRESET),
+        Param("w_end", _PAPER["w_end"], unit="1", allowed=ANY_REAL, nullable=True,
+              doc="Final inertia of the linear schedule (inertia: linear), reached at the last generation "
+                  "(Shi & Eberhart 0.4). " + _FROM_PRESET),
+        Param("inertia", _PAPER["inertia"], choices=("constant", "linear"), nullable=True,
+              doc="Inertia schedule; linear spans generations (or max_evals / population without it). " + _FROM_PRESET),
+        Param("c1", _PAPER["c1"], unit="1", allowed=NONNEG, nullable=True, eq="thesis eq. 2.40",
+              doc="Cognitive coefficient. Seed default 0.5. " + _FROM_PRESET),
+        Param("c2", _PAPER["c2"], unit="1", allowed=NONNEG, nullable=True, eq="thesis eq. 2.40",
+              doc="Social coefficient. Seed default 1.5. " + _FROM_PRESET),
+        Param("constriction", _PAPER["constriction"], nullable=True,
+              doc="Clerc's constriction V <- chi (V + c1 r1 (P - X) + c2 r2 (G - X)), chi = 2 / |2 - phi - "
+                  "sqrt(phi^2 - 4 phi)|, phi = c1 + c2 > 4 (e.g. c1 = c2 = 2.05, chi = 0.7298); w is then "
+                  "ignored. " + _FROM_PRESET),
+        Param("topology", _PAPER["topology"], choices=("global", "ring"), nullable=True,
+              doc="Neighbourhood of the social term: the whole swarm, or each particle and its neighbors "
+                  "nearest indices on each side (lbest ring). " + _FROM_PRESET),
+        Param("neighbors", 1, unit="particles", allowed=AT_LEAST_1, integer=True,
+              doc="Ring half-width, below the population."),
+        Param("v_max", _PAPER["v_max"], unit="fraction of the range", allowed=Interval(0.0, 1.0, low_open=True),
+              nullable=True, doc="Velocity clamp per dimension (1 means none). " + _FROM_PRESET),
+        Param("boundary", "reflect", choices=("reflect", "clip", "random"),
+              doc="A particle leaving the cube is mirrored back in (that velocity component reversed), stopped "
+                  "at the bound, or re-drawn uniformly in that dimension (velocity component set to 0)."),
+        Param("init", _PAPER["init"], choices=("uniform", "lhs"), nullable=True,
+              doc="Initial positions: uniform random or Latin hypercube. " + _FROM_PRESET),
+        Param("v_init", _PAPER["v_init"], unit="fraction of the range", allowed=NONNEG, nullable=True,
+              doc="Initial velocities are uniform in [-v_init, v_init] (0 = at rest). " + _FROM_PRESET),
+        Param("init_spread", 1.0, unit="fraction of the range", allowed=NONNEG,
+              doc="With a warm start x0: particle 0 starts at x0 and the others uniformly within "
+                  "x0 +- init_spread / 2 (clipped to the cube); 1 keeps them anywhere in the cube."),
+    ))
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)
+        o = {k: (PRESETS[v["preset"]][k] if k in PRESETS[v["preset"]] and (k not in given or v[k] is None)
+                 else v[k]) for k in v}
+        if o["inertia"] == "linear" and o["generations"] is None and o["max_evals"] is None:
+            raise OptionError(f"linear (preset {v['preset']!r}) needs a generations or max_evals budget", "inertia")
+        if o["constriction"] and o["c1"] + o["c2"] <= 4:
+            raise OptionError(f"needs c1 + c2 > 4, got {o['c1'] + o['c2']} (try c1 = c2 = 2.05)", "constriction")
+        if o["topology"] == "ring" and not int(o["neighbors"]) < max(2, cls.population_for(dim or 1, v)):
+            raise OptionError(f"must be in [1, population), got {o['neighbors']}", "neighbors")
 
     def __init__(
         self,
@@ -120,34 +140,16 @@ class PSO(Optimizer):
         init_spread: float = 1.0,
         **common: Any,
     ):
-        super().__init__(dim, rng, **common)
-        if preset not in PRESETS:
-            raise OptionError(f"preset must be one of {sorted(PRESETS)}, got {preset!r}")
         given = dict(w=w, w_end=w_end, inertia=inertia, c1=c1, c2=c2, constriction=constriction, topology=topology,
                      v_max=v_max, init=init, v_init=v_init)
+        self.check_options(dict(preset=preset, **given, neighbors=neighbors, boundary=boundary,
+                                init_spread=init_spread, **common), dim)
+        super().__init__(dim, rng, **common)
         opts = {k: (PRESETS[preset][k] if v is None else v) for k, v in given.items()}
         w, w_end, inertia, c1, c2 = opts["w"], opts["w_end"], opts["inertia"], opts["c1"], opts["c2"]
         constriction, topology, v_max, init, v_init = (opts["constriction"], opts["topology"], opts["v_max"],
                                                        opts["init"], opts["v_init"])
         self.preset = preset
-        if inertia not in ("constant", "linear"):
-            raise OptionError(f"inertia must be 'constant' or 'linear', got {inertia!r}")
-        if inertia == "linear" and self.generations is None and self.max_evals is None:
-            raise OptionError(f"inertia: linear (preset {preset!r}) needs a generations or max_evals budget")
-        if topology not in ("global", "ring"):
-            raise OptionError(f"topology must be 'global' or 'ring', got {topology!r}")
-        if boundary not in ("reflect", "clip", "random"):
-            raise OptionError(f"boundary must be 'reflect', 'clip' or 'random', got {boundary!r}")
-        if init not in ("uniform", "lhs"):
-            raise OptionError(f"init must be 'uniform' or 'lhs', got {init!r}")
-        if not 0 < v_max <= 1:
-            raise OptionError(f"v_max must be in (0, 1] (fraction of the range), got {v_max}")
-        if c1 < 0 or c2 < 0:
-            raise OptionError(f"c1 and c2 must be >= 0, got c1={c1}, c2={c2}")
-        if constriction and c1 + c2 <= 4:
-            raise OptionError(f"constriction needs c1 + c2 > 4, got {c1 + c2} (try c1 = c2 = 2.05)")
-        if topology == "ring" and not 1 <= int(neighbors) < max(2, self.population):
-            raise OptionError(f"neighbors must be in [1, population), got {neighbors}")
         self.w, self.w_end, self.inertia = float(w), float(w_end), inertia
         self.c1, self.c2 = float(c1), float(c2)
         self.constriction = bool(constriction)

@@ -6,27 +6,25 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tuner.optimizers.base import Optimizer, OptionError, latin_hypercube
+from tuner.optimizers.base import Optimizer, declare, latin_hypercube
+from tuner.params import Param
 
 __all__ = ["RandomSearch"]
 
 
 class RandomSearch(Optimizer):
-    """Independent batches of ``population`` points.
-
-    Parameters
-    ----------
-    sampler : {"uniform", "lhs"}
-        Uniform in the cube, or a Latin hypercube per batch (better coverage for small batches).
-    """
+    """Independent batches of ``population`` points (options in :attr:`RandomSearch.options`)."""
 
     name = "random"
+    options = declare("random", (
+        Param("sampler", "uniform", choices=("uniform", "lhs"),
+              doc="Uniform in the cube, or a Latin hypercube per batch (better coverage for small batches)."),
+    ))
 
     def __init__(self, dim: int, rng: np.random.Generator, *,
                  sampler: Literal["uniform", "lhs"] = "uniform", **common: Any):
+        self.check_options(dict(sampler=sampler, **common), dim)
         super().__init__(dim, rng, **common)
-        if sampler not in ("uniform", "lhs"):
-            raise OptionError(f"sampler must be 'uniform' or 'lhs', got {sampler!r}")
         self.sampler = sampler
         self.batch: np.ndarray | None = None
 

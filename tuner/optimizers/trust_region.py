@@ -55,7 +55,8 @@ from typing import Any
 import numpy as np
 
 from tuner.objective import PENALTY
-from tuner.optimizers.base import Optimizer, OptionError, latin_hypercube
+from tuner.optimizers.base import AT_LEAST_1, Optimizer, OptionError, declare, latin_hypercube
+from tuner.params import NONNEG, Interval, Param
 
 __all__ = ["TrustRegion", "quadratic_features"]
 
@@ -107,59 +108,67 @@ def _box_coordinate_descent(coef: np.ndarray, d: int, full: bool, z: np.ndarray,
 class TrustRegion(Optimizer):
     """Latin-hypercube start, then a batched quadratic-model trust region (module docstring).
 
-    Parameters
-    ----------
-    population : int
-        Points per batch after the start (default ``max(3, dim + 1)``: in 2-D a batch of 3 reached 1 % on
-        madgwick_broad in 38.5 evaluations against 52.5 with 4, median of seeds 0-19, and won 5 of the 8 2-D
-        test-function rows of ``benchmarks/results/auto_rules.md``).
-    n_init : int, optional
-        Size of the starting Latin hypercube and of each restart's, a multiple of ``population`` (default: the
-        smallest multiple not under the number of model coefficients + ``dim``).
-    r0 : float
-        Initial trust radius, a half-width in unit-cube coordinates (default 0.1: at 120 evaluations in 2-4
-        dimensions it beat 0.2 on 9 of the 12 test-function rows of ``benchmarks/results/auto_rules.md`` and
-        reached 1 % on madgwick_broad in 59.5 evaluations (median of 10 seeds) against 73, both measured
-        with the start in a single batch, before it was split into whole batches).
-    r_min, r_max : float
-        Radius under which the search restarts (default 1e-3) and the largest radius (default 0.5).
-    full_dim : int
-        Largest dimension with a full curvature matrix; above it the model is separable (default 5).
-    n_candidates : int
-        Uniform samples of the box on which the model's minimiser is picked (default 2000).
-    pattern : float
-        Length of the pattern move in last improvements (default 2; 0 turns it off; 1 reached 1 % on pid_wmp in
-        53 % of seeds 10-69, 2 in 57 %, 0.5 in 50 %, none in 50 %).
-    shaped : float
-        Largest standard deviation, in radii, of the exploring points drawn along the model's flat directions
-        (default 1; 0: isotropic ``r / 2`` as in batches of 3; with ``pattern`` 2, 1 reached 65 % of seeds 10-69
-        on pid_wmp and 43 % of seeds 70-169, 0.5 58 %, 2 37 %).
-    x0 : array, optional
-        Warm start: the first point of the starting hypercube.
-    """
+    Options in :attr:`TrustRegion.options`; a warm start ``x0`` is the first point of the starting hypercube."""
 
     name = "trust_region"
+    options = declare("trust_region", (
+        Param("population", None, unit="candidates", allowed=AT_LEAST_1, integer=True, nullable=True, kind="number",
+              doc="Points per batch after the start; unset: max(3, dim + 1) (in 2-D a batch of 3 reached 1 % on "
+                  "madgwick_broad in 38.5 evaluations against 52.5 with 4, median of seeds 0-19, and won 5 of the "
+                  "8 2-D test-function rows of benchmarks/results/auto_rules.md)."),
+        Param("n_init", None, unit="points", allowed=AT_LEAST_1, integer=True, nullable=True, kind="number",
+              doc="Size of the starting Latin hypercube and of each restart's, a multiple of population (unset: "
+                  "the smallest multiple not under the number of model coefficients + dim)."),
+        Param("r0", 0.1, unit="unit cube", allowed=Interval(0.0, 1.0, low_open=True),
+              doc="Initial trust radius, a half-width in unit-cube coordinates (0.1: at 120 evaluations in 2-4 "
+                  "dimensions it beat 0.2 on 9 of the 12 test-function rows of benchmarks/results/auto_rules.md "
+                  "and reached 1 % on madgwick_broad in 59.5 evaluations (median of 10 seeds) against 73, both "
+                  "measured with the start in a single batch, before it was split into whole batches)."),
+        Param("r_min", 1e-3, unit="unit cube", allowed=Interval(0.0, 1.0, low_open=True),
+              doc="Radius under which the search restarts; 0 < r_min < r0 <= r_max <= 1."),
+        Param("r_max", 0.5, unit="unit cube", allowed=Interval(0.0, 1.0, low_open=True),
+              doc="Largest radius."),
+        Param("full_dim", 5, unit="parameters", allowed=NONNEG, integer=True,
+              doc="Largest dimension with a full curvature matrix; above it the model is separable."),
+        Param("n_candidates", 2000, unit="points", allowed=AT_LEAST_1, integer=True,
+              doc="Uniform samples of the box on which the model's minimiser is picked."),
+        Param("pattern", 2.0, unit="last improvements", allowed=NONNEG,
+              doc="Length of the pattern move (0 turns it off; 1 reached 1 % on pid_wmp in 53 % of seeds 10-69, "
+                  "2 in 57 %, 0.5 in 50 %, none in 50 %)."),
+        Param("shaped", 1.0, unit="radii", allowed=NONNEG,
+              doc="Largest standard deviation of the exploring points drawn along the model's flat directions "
+                  "(0: isotropic r / 2 as in batches of 3; with pattern 2, 1 reached 65 % of seeds 10-69 on "
+                  "pid_wmp and 43 % of seeds 70-169, 0.5 58 %, 2 37 %)."),
+    ))
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)
+        if not v["r_min"] < v["r0"] <= v["r_max"]:
+            raise OptionError(f"trust radii must satisfy 0 < r_min < r0 <= r_max <= 1, got r_min={v['r_min']}, "
+                              f"r0={v['r0']}, r_max={v['r_max']}", "r0")
+        if dim is not None and v["n_init"] is not None and int(v["n_init"]) % cls.population_for(dim, v):
+            raise OptionError(f"must be a positive multiple of the population {cls.population_for(dim, v)}, "
+                              f"got {v['n_init']}", "n_init")
+
+    @classmethod
+    def population_for(cls, dim: int, options: Any) -> int:
+        pop = options.get("population")
+        return max(3, int(dim) + 1) if pop is None else int(pop)
 
     def __init__(self, dim: int, rng: np.random.Generator, *, n_init: int | None = None, r0: float = 0.1,
                  r_min: float = 1e-3, r_max: float = 0.5, full_dim: int = 5, n_candidates: int = 2000,
                  pattern: float = 2.0, shaped: float = 1.0, **common: Any):
-        common.setdefault("population", max(3, int(dim) + 1))
+        self.check_options(dict(n_init=n_init, r0=r0, r_min=r_min, r_max=r_max, full_dim=full_dim,
+                                n_candidates=n_candidates, pattern=pattern, shaped=shaped, **common), dim)
+        common["population"] = self.population_for(dim, common)
         super().__init__(dim, rng, **common)
-        if not 0 < r_min < r0 <= r_max <= 1:
-            raise OptionError(f"trust radii must satisfy 0 < r_min < r0 <= r_max <= 1, got r_min={r_min}, "
-                              f"r0={r0}, r_max={r_max}")
-        if int(n_candidates) < 1:
-            raise OptionError(f"n_candidates must be >= 1, got {n_candidates}")
         self.full = self.dim <= int(full_dim)
         self.n_coef = quadratic_features(np.zeros((1, self.dim)), self.full).shape[1]
         pop = self.population
         self.n_init = int(n_init) if n_init is not None else pop * -(-(self.n_coef + self.dim) // pop)
-        if self.n_init < 1 or self.n_init % pop:
-            raise OptionError(f"n_init must be a positive multiple of the population {pop}, got {n_init}")
         self.r0, self.r_min, self.r_max = float(r0), float(r_min), float(r_max)
         self.full_dim, self.n_candidates = int(full_dim), int(n_candidates)
-        if float(pattern) < 0 or float(shaped) < 0:
-            raise OptionError(f"pattern and shaped must be >= 0, got pattern={pattern}, shaped={shaped}")
         self.pattern, self.shaped = float(pattern), float(shaped)
         self.radius = self.r0
         self.restarts = 0
