@@ -42,12 +42,39 @@ def test_parameters_equal_the_declaration(section):
             assert p["unit"] == q.unit and p["eq"] == q.eq
 
 
-def test_optimizer_options_are_the_constructor_keywords():
+def _keywords(cls):
+    """``{name: default}`` of every keyword-only argument of the constructors along the class's MRO."""
+    import inspect
+
+    out = {}
+    for klass in cls.__mro__:
+        if "__init__" in klass.__dict__:
+            for p in inspect.signature(klass.__init__).parameters.values():
+                if p.kind is p.KEYWORD_ONLY and p.name not in out:
+                    out[p.name] = p.default
+    return out
+
+
+def test_optimizer_options_are_the_declaration_and_the_constructor_keywords():
+    from tuner.optimizers.pso import PRESETS
+
     for name, cls in OPTIMIZERS.items():
         (d,) = describe(name)
-        assert [p["name"] for p in d["params"]] == cls.option_names()
+        assert [p["name"] for p in d["params"]] == cls.option_names() == cls.options.names()
+        decl = cls.options
+        if name != "auto":  # auto takes the common options as **common
+            assert set(_keywords(cls)) == set(decl.names()), name
+        for key, default in _keywords(cls).items():
+            declared = decl[key].default
+            if default is None and name == "pso" and key in PRESETS["paper"]:
+                assert declared == PRESETS["paper"][key], key   # unset: the preset's; paper's is shown
+            elif key == "population":
+                assert declared in (default, None), (name, key)  # None: the method derives it (population_for)
+            else:
+                assert declared == default, (name, key)
     pso = {p["name"]: p for p in describe("pso")[0]["params"]}
     assert pso["c2"]["default"] == 1.5 and "social" in pso["c2"]["doc"]   # thesis section 2.4 defaults
+    assert pso["inertia"]["allowed"] == ["constant", "linear"] and pso["v_max"]["allowed"] == "in (0, 1]"
 
 
 def test_unknown_name_lists_close_matches(capsys):
@@ -98,8 +125,8 @@ def test_data_source_keys_are_what_the_loader_accepts():
     assert rec.gyr.shape == (50, 3)
 
 
-def test_doc_params_reads_numpy_sections():
-    from tuner.describe import doc_params
+def test_generator_keys_are_read_from_the_generators_docstrings():
+    from objectives.attitude.catalog import _doc_params as doc_params
 
     doc = """Summary.
 

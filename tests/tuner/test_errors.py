@@ -19,14 +19,31 @@ tuner = functools.partial(run_tuner, timeout=180)
 
 
 @pytest.mark.parametrize("sets, expected", [
-    (["optimizer.method=cmaes", "optimizer.population=1"], ["optimizer.population", "cmaes", ">=2, was 1"]),
-    (["optimizer.method=de", "optimizer.population=2"], ["optimizer.population", "de", ">= 4", "got 2"]),
+    (["optimizer.method=cmaes", "optimizer.population=1"], ["optimizer.population", "cmaes", "in [2, inf)",
+                                                            "got 1"]),
+    (["optimizer.method=de", "optimizer.population=2"], ["optimizer.population", "de", "in [4, inf)", "got 2"]),
     (["optimizer.method=de", "optimizer.population=3"], ["optimizer.population", "got 3"]),
-    (["optimizer.inertia=bogus"], ["optimizer.inertia", "'bogus'", "'constant' or 'linear'"]),
-    (["optimizer.c1=abc"], ["optimizer.c1", "expected a number, got 'abc'"]),
+    (["optimizer.inertia=bogus"], ["optimizer.inertia", "'bogus'", "['constant', 'linear']"]),
+    (["optimizer.c1=abc"], ["optimizer.c1", "must be a number in [0, inf)", "got 'abc'"]),
+    (["optimizer.constriction=true"], ["optimizer.constriction", "c1 + c2 > 4", "got 2.0"]),
+    (["optimizer.method=cmaes", "optimizer.cma_options=3"], ["optimizer.cma_options", "mapping", "got 3"]),
     (["optimizer.no_such_option=1"], ["optimizer.no_such_option", "unknown option for pso", "inertia"]),
 ])
 def test_invalid_optimizer_options_fail_at_config_load(tmp_path, sets, expected):
+    p = tmp_path / "job.yaml"
+    p.write_text(yaml.safe_dump({**BASE, "output": str(tmp_path / "runs")}))
+    out = tuner("run", str(p), *[x for s in sets for x in ("--set", s)])
+    one_error_line(out, str(p), *expected)
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize("sets, expected", [
+    (["objective.dim=1", "optimizer.method=cmaes"], ["optimizer:", "invalid for cmaes", "at least 2 free parameters"]),
+    (["optimizer.method=trust_region", "optimizer.n_init=7"], ["optimizer.n_init", "multiple of the population 4",
+                                                              "got 7"]),
+])
+def test_options_that_do_not_fit_the_dimension_fail_before_the_run_directory(tmp_path, sets, expected):
+    """Rules that need the number of free parameters are checked once the space is known, with the same line."""
     p = tmp_path / "job.yaml"
     p.write_text(yaml.safe_dump({**BASE, "output": str(tmp_path / "runs")}))
     out = tuner("run", str(p), *[x for s in sets for x in ("--set", s)])

@@ -156,7 +156,7 @@ def test_bad_options_are_rejected():
         PSO(2, rng, topology="star")
     with pytest.raises(OptionError, match="c1 \\+ c2 > 4"):
         PSO(2, rng, constriction=True)
-    with pytest.raises(OptionError, match="population >= 4"):
+    with pytest.raises(OptionError, match=r"population must be in \[4, inf\) candidates, got 3"):
         DE(2, rng, population=3)
     with pytest.raises(OptionError, match="sigma0"):
         CMAES(2, rng, sigma0=2.0)
@@ -167,5 +167,37 @@ def test_bad_options_are_rejected():
 @pytest.mark.parametrize("max_evals", [0, -3])
 def test_a_budget_below_one_evaluation_is_refused(method, max_evals):
     """``max_evals`` < 1 used to 'finish' a run after no evaluation with best fitness inf."""
-    with pytest.raises(OptionError, match=f"max_evals must be >= 1, got {max_evals}"):
+    with pytest.raises(OptionError, match=rf"max_evals must be in \[1, inf\) evaluations, got {max_evals}"):
         OPTIMIZERS[method](dim=2, rng=np.random.default_rng(0), population=4, max_evals=max_evals)
+
+
+@pytest.mark.parametrize("method", sorted(OPTIMIZERS))
+def test_population_is_computed_once_without_building(method):
+    """``population_for`` (what the config and the worker rule use) is the population the constructor runs with,
+    for every method, dimension and budget, and the options are checked against the declaration alone."""
+    cls = OPTIMIZERS[method]
+    for dim in (2, 3, 5, 9, 14):
+        for opts in ({"generations": 3}, {"generations": 40}, {"generations": None, "max_evals": 400},
+                     {"generations": 5, "population": 6}, {"generations": None, "max_evals": 5000},
+                     {"generations": 2, "popsize": 7} if "popsize" in cls.option_names() else {"generations": 2}):
+            cls.check_options(opts, dim)
+            built = cls(dim, np.random.default_rng(0), **opts)
+            assert cls.population_for(dim, opts) == built.population == len(built.ask()) or method == "trust_region" \
+                and cls.population_for(dim, opts) == built.population, (method, dim, opts)
+
+
+def test_options_are_checked_against_the_declaration_with_the_key_named():
+    with pytest.raises(OptionError, match="unknown option for de") as e:
+        DE.check_options({"w": 0.5})
+    assert e.value.key == "w"
+    with pytest.raises(OptionError) as e:
+        PSO.check_options({"v_max": 0.0})
+    assert e.value.key == "v_max" and e.value.message == "must be in (0, 1] fraction of the range, got 0.0"
+    with pytest.raises(OptionError) as e:   # a combination rule, under the preset's coefficients
+        PSO.check_options({"preset": "clerc", "c1": 1.0})
+    assert e.value.key == "constriction" and "c1 + c2 > 4, got 3.05" in e.value.message
+    PSO.check_options({"preset": "clerc"})   # the preset's own c1 = c2 = 2.05 are fine
+    with pytest.raises(OptionError, match="at least 2 free parameters"):   # only once the dimension is known
+        CMAES.check_options({"sigma0": 0.2}, dim=1)
+    CMAES.check_options({"sigma0": 0.2})
+    assert DE.check_options({"F": 1, "population": 8}) == {"F": 1.0, "population": 8}

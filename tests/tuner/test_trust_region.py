@@ -300,5 +300,5 @@ def test_shaped_exploration_spreads_along_the_flat_directions():
 def test_small_batches_keep_their_exploring_point():
     # with batches of 3 (1-3 parameters) the valley moves would take the only exploring point: they are off there
     np.testing.assert_array_equal(_asked(2, 5, 90), _asked(2, 5, 90, pattern=0.0, shaped=0.0))
-    with pytest.raises(OptionError, match="pattern and shaped"):
+    with pytest.raises(OptionError, match=r"pattern must be in \[0, inf\) last improvements, got -1.0"):
         TrustRegion(2, np.random.default_rng(0), max_evals=10, pattern=-1.0)

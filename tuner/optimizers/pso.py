@@ -81,9 +81,9 @@ class PSO(Optimizer):
         Param("inertia", _PAPER["inertia"], choices=("constant", "linear"), nullable=True,
               doc="Inertia schedule; linear spans generations (or max_evals / population without it). " + _FROM_PRESET),
         Param("c1", _PAPER["c1"], unit="1", allowed=NONNEG, nullable=True, eq="thesis eq. 2.40",
-              doc="Cognitive coefficient. Seed default 0.5. " + _FROM_PRESET),
+              doc="The cognitive coefficient. Seed default 0.5. " + _FROM_PRESET),
         Param("c2", _PAPER["c2"], unit="1", allowed=NONNEG, nullable=True, eq="thesis eq. 2.40",
-              doc="Social coefficient. Seed default 1.5. " + _FROM_PRESET),
+              doc="The social coefficient. Seed default 1.5. " + _FROM_PRESET),
         Param("constriction", _PAPER["constriction"], nullable=True,
               doc="Clerc's constriction V <- chi (V + c1 r1 (P - X) + c2 r2 (G - X)), chi = 2 / |2 - phi - "
                   "sqrt(phi^2 - 4 phi)|, phi = c1 + c2 > 4 (e.g. c1 = c2 = 2.05, chi = 0.7298); w is then "
