@@ -267,9 +267,8 @@ def load_config(path: str | Path, overrides: list[str] | None = None, seed: int 
     return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
 
 
-def optimizer_options(method: str, population: int | None, generations: int | None,
-                      options: Mapping[str, Any]) -> dict[str, Any]:
-    """The keyword options optimiser ``method`` is built with (``population`` only when given)."""
+def optimizer_options(population: int | None, generations: int | None, options: Mapping[str, Any]) -> dict[str, Any]:
+    """The keyword options an optimiser is built with (``population`` only when given)."""
     return {**options, **({} if population is None else {"population": population}), "generations": generations}
 
 
@@ -403,7 +402,7 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
             raise ConfigError(f, f"optimizer.{k}", f"unknown option for {method}; allowed: {sorted(allowed)}")
     if generations is None and not any(k in options for k in ("max_evals", "target", "patience")):
         generations = 30
-    check_optimizer_options(f, method, optimizer_options(method, population, generations, options))
+    check_optimizer_options(f, method, optimizer_options(population, generations, options))
     optimizer = OptimizerConfig(method, population, generations, options, RefineConfig(stages, shrink))
 
     par = dict(_get(raw, "parallel", dict, f, "", default={}))

@@ -88,7 +88,7 @@ def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | Non
     """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``."""
     o = cfg.optimizer
     rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, stage]))
-    kwargs = optimizer_options(o.method, o.population, o.generations, o.options)
+    kwargs = optimizer_options(o.population, o.generations, o.options)
     if x0 is not None:
         kwargs["x0"] = x0
     try:
@@ -106,7 +106,7 @@ def population(cfg: RunConfig, dim: int) -> int:
     """The population the optimiser of ``cfg`` runs with on ``dim`` free parameters, with its options checked
     for that dimension (a :class:`ConfigError` naming the option): the one computation, no optimiser built."""
     o = cfg.optimizer
-    options = optimizer_options(o.method, o.population, o.generations, o.options)
+    options = optimizer_options(o.population, o.generations, o.options)
     check_optimizer_options(cfg.source, o.method, options, dim)
     return get_optimizer(o.method).population_for(dim, options)
 

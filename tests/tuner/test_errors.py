@@ -27,6 +27,8 @@ tuner = functools.partial(run_tuner, timeout=180)
     (["optimizer.c1=abc"], ["optimizer.c1", "must be a number in [0, inf)", "got 'abc'"]),
     (["optimizer.constriction=true"], ["optimizer.constriction", "c1 + c2 > 4", "got 2.0"]),
     (["optimizer.method=cmaes", "optimizer.cma_options=3"], ["optimizer.cma_options", "mapping", "got 3"]),
+    (["optimizer.method=cmaes_restart", "optimizer.cma_options={tolx: 1e-3, bogus: 1}"],
+     ["optimizer.cma_options", "not pycma options: ['bogus']"]),
     (["optimizer.no_such_option=1"], ["optimizer.no_such_option", "unknown option for pso", "inertia"]),
 ])
 def test_invalid_optimizer_options_fail_at_config_load(tmp_path, sets, expected):

@@ -45,6 +45,12 @@ def check_cma(v: dict[str, Any], dim: int | None) -> None:
     """The rules pycma adds: a mapping of options, at least 2 free parameters."""
     if v["cma_options"] is not None and not isinstance(v["cma_options"], dict):
         raise OptionError(f"must be a mapping of pycma options, got {v['cma_options']!r}", "cma_options")
+    if v["cma_options"]:
+        import cma
+
+        bad = sorted(k for k in v["cma_options"] if k not in cma.CMAOptions())
+        if bad:
+            raise OptionError(f"not pycma options: {bad} (cma.CMAOptions() lists them)", "cma_options")
     if dim is not None and int(dim) < 2:
         raise OptionError("cmaes needs at least 2 free parameters (pycma does not do 1-D); use pso or de")
 
