@@ -29,7 +29,7 @@ import yaml
 
 from tuner import safe_yaml
 from tuner.objective import hook
-from tuner.space import Space, SpaceError
+from tuner.space import Real, Space, SpaceError
 
 __all__ = ["ConfigError", "RunConfig", "OptimizerConfig", "ParallelConfig", "RefineConfig", "ValidationConfig",
            "SelectConfig", "load_config", "read_yaml", "config_from_dict", "apply_overrides"]
@@ -175,10 +175,8 @@ class RunConfig:
             declared = default_space() if default_space is not None else None
             if declared is None:
                 return space
-            import dataclasses
-
-            return Space([dataclasses.replace(p, unit=p.unit or declared[p.name].unit,
-                                              doc=p.doc or declared[p.name].doc)
+            return Space([Real.from_dict(p.name, {**p.to_dict(), "unit": p.unit or declared[p.name].unit,
+                                                  "doc": p.doc or declared[p.name].doc})
                           if p.name in declared else p for p in space.params])
         if default_space is not None:
             return default_space()

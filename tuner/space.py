@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 
-__all__ = ["Real", "Space", "SpaceError"]
+__all__ = ["Real", "Space", "SpaceError", "Param", "Interval", "ANY_REAL", "NONNEG", "POSITIVE", "UNIT_OPEN",
+           "UNIT_CLOSED", "check_number", "check_bool", "check_choice"]
 
 
 class SpaceError(ValueError):
@@ -32,9 +33,287 @@ class SpaceError(ValueError):
 _MISSING = object()
 
 
+def _check_name(name: Any) -> None:
+    if not isinstance(name, str) or not name.isidentifier():
+        raise SpaceError(f"parameter name must be an identifier, got {name!r}")
+
+
 @dataclass(frozen=True)
-class Real:
-    """One named parameter.
+class Interval:
+    """Allowed values of a number: ``low <= x <= high`` (strict where ``*_open``), finite unless
+    ``allow_inf``."""
+
+    low: float = -math.inf
+    high: float = math.inf
+    low_open: bool = False
+    high_open: bool = False
+    allow_inf: bool = False
+
+    def contains(self, x: float) -> bool:
+        if math.isnan(x) or (math.isinf(x) and not self.allow_inf):
+            return False
+        if x < self.low or (self.low_open and x == self.low):
+            return False
+        return not (x > self.high or (self.high_open and x == self.high))
+
+    def __str__(self) -> str:
+        """``in [0, inf)``: brackets say which ends are allowed (inf only with ``allow_inf``)."""
+        lo = "(" if self.low_open or (math.isinf(self.low) and not self.allow_inf) else "["
+        hi = ")" if self.high_open or (math.isinf(self.high) and not self.allow_inf) else "]"
+        return f"in {lo}{self.low:g}, {self.high:g}{hi}"
+
+
+ANY_REAL = Interval()
+NONNEG = Interval(0.0)
+POSITIVE = Interval(0.0, low_open=True)
+UNIT_OPEN = Interval(0.0, 1.0, low_open=True, high_open=True)
+UNIT_CLOSED = Interval(0.0, 1.0)
+
+
+def _is_number(x: Any) -> bool:
+    return not isinstance(x, (bool, np.bool_)) and isinstance(x, (int, float, np.integer, np.floating))
+
+
+def check_number(owner: str, key: str, x: Any, allowed: Interval = ANY_REAL, unit: str = "",
+                 integer: bool = False) -> float | int:
+    """``x`` as a float (int when ``integer``); ValueError naming owner, key, value and range otherwise."""
+    what = "an integer" if integer else "a number"
+    u = f" {unit}" if unit and unit != "1" else ""
+    if not _is_number(x) or (integer and not float(x).is_integer()):
+        raise ValueError(f"{owner}: {key} must be {what} {allowed}{u}, got {x!r}")
+    if not allowed.contains(float(x)):
+        raise ValueError(f"{owner}: {key} must be {allowed}{u}, got {x!r}")
+    return int(x) if integer else float(x)
+
+
+def check_bool(owner: str, key: str, x: Any) -> bool:
+    """``x`` as a bool; ValueError unless it is ``true`` or ``false``."""
+    if not isinstance(x, (bool, np.bool_)):
+        raise ValueError(f"{owner}: {key} must be true or false, got {x!r}")
+    return bool(x)
+
+
+def check_choice(owner: str, key: str, x: Any, choices: Iterable[Any]) -> Any:
+    """``x`` unchanged when it is one of ``choices``; ValueError listing them otherwise."""
+    choices = tuple(choices)
+    if isinstance(x, (list, dict, np.ndarray)) or x not in choices:
+        raise ValueError(f"{owner}: {key} must be one of {list(choices)}, got {x!r}")
+    return x
+
+
+@dataclass(frozen=True)
+class Param:
+    """Declaration of one named parameter; with ``bounds`` it is a search dimension too.
+
+    A :class:`Space` is built from Params: one with ``bounds`` is searched there (:meth:`to_unit` /
+    :meth:`from_unit` map it to the unit interval, on its ``scale``), one without is fixed at its
+    ``default``. :class:`Real` writes the same object by its bounds, as a job's ``parameters:`` does.
+
+    Parameters
+    ----------
+    name : str
+        The one name of the parameter, from YAML to the kernel call.
+    default : any
+        Default value (a number, a bool, a string...).
+    bounds : (low, high) or None
+        Default search bounds in physical units; ``None`` makes the parameter a fixed option of the
+        default search space.
+    scale : {"linear", "log"}
+        Scale of the search.
+    unit : str
+        Physical unit (``"rad/s"``, ``"1"`` for dimensionless, ``""`` for options without a unit).
+    doc : str
+        One line describing the parameter.
+    eq : str
+        The seed paper's equation (or table) the parameter appears in, e.g. ``"report eq. 33"``.
+    allowed : Interval
+        Valid values of a number (checked at construction).
+    choices : tuple or None
+        Valid values of an option (strings); ``bool`` defaults make a true/false option.
+    integer : bool
+        Integer-valued (searched and validated as an integer).
+    kind : {"number", "bool", "choice", "any"}
+        Derived from ``default``/``choices`` unless given; ``any`` skips the type check (the owner's
+        own check validates such structured options).
+    nullable : bool
+        ``None`` is a valid value too (an optional budget, an unset option whose value the owner derives).
+    """
+
+    name: str
+    default: Any
+    bounds: tuple[float, float] | None = None
+    scale: Literal["linear", "log"] = "linear"
+    unit: str = ""
+    doc: str = ""
+    eq: str = ""
+    allowed: Interval = ANY_REAL
+    choices: tuple[Any, ...] | None = None
+    integer: bool = False
+    kind: str = ""
+    nullable: bool = False
+
+    def __post_init__(self) -> None:
+        _check_name(self.name)
+        if not self.kind:
+            if self.choices is not None:
+                kind = "choice"
+            elif isinstance(self.default, (bool, np.bool_)):
+                kind = "bool"
+            elif _is_number(self.default):
+                kind = "number"
+            else:
+                kind = "any"
+            object.__setattr__(self, "kind", kind)
+        if self.kind not in ("number", "bool", "choice", "any"):
+            raise ValueError(f"{self.name}: kind must be number, bool, choice or any, got {self.kind!r}")
+        if self.choices is not None:
+            object.__setattr__(self, "choices", tuple(self.choices))
+        # the declaration itself must be consistent: default valid, bounds inside the allowed range
+        self.check("declaration", self.default)
+        if self.bounds is not None:
+            lo, hi = self._dimension()
+            if not (self.allowed.contains(lo) and self.allowed.contains(hi)):
+                raise ValueError(f"{self.name}: search bounds {self.bounds} outside the allowed range {self.allowed}")
+
+    def _dimension(self) -> tuple[float, float]:
+        """The bounds as floats, checked as a search dimension (:class:`SpaceError` naming the bad values)."""
+        if self.scale not in ("linear", "log"):
+            raise SpaceError(f"{self.name}: scale must be 'linear' or 'log', got {self.scale!r}")
+        low, high = self.bounds
+        try:
+            low, high = float(low), float(high)
+        except (TypeError, ValueError):
+            raise SpaceError(f"{self.name}: low and high must be numbers, got low={low!r}, high={high!r}") from None
+        if not (math.isfinite(low) and math.isfinite(high) and low < high):
+            raise SpaceError(f"{self.name}: need finite low < high, got low={low}, high={high}")
+        if self.scale == "log" and low <= 0:
+            raise SpaceError(f"{self.name}: log scale needs low > 0, got low={low}")
+        if self.integer and math.floor(high) < math.ceil(low):
+            raise SpaceError(f"{self.name}: integer parameter has no integer in [{low}, {high}]")
+        return low, high
+
+    @property
+    def searched(self) -> bool:
+        return self.bounds is not None
+
+    # --- as a search dimension -----------------------------------------------------------------
+    @property
+    def is_fixed(self) -> bool:
+        """Not searched: the parameter always takes its ``default`` (:attr:`fixed`)."""
+        return self.bounds is None
+
+    @property
+    def fixed(self) -> Any:
+        """The value of a fixed parameter (a sentinel for a searched one)."""
+        return self.default if self.bounds is None else _MISSING
+
+    @property
+    def low(self) -> float:
+        return math.nan if self.bounds is None else float(self.bounds[0])
+
+    @property
+    def high(self) -> float:
+        return math.nan if self.bounds is None else float(self.bounds[1])
+
+    def to_unit(self, value: float) -> float:
+        """Physical value -> unit interval (clipped into [0, 1])."""
+        v = float(value)
+        if self.scale == "log":
+            if v <= 0:
+                raise SpaceError(f"{self.name}: log-scale value must be > 0, got {value!r}")
+            u = (math.log10(v) - math.log10(self.low)) / (math.log10(self.high) - math.log10(self.low))
+        else:
+            u = (v - self.low) / (self.high - self.low)
+        return min(1.0, max(0.0, u))
+
+    def from_unit(self, u: float) -> float | int:
+        """Unit interval -> physical value (``u`` is clipped into [0, 1] first)."""
+        u = min(1.0, max(0.0, float(u)))
+        lo_, hi_ = self.low, self.high
+        if self.scale == "log":
+            lo, hi = math.log10(lo_), math.log10(hi_)
+            v = 10.0 ** (lo + u * (hi - lo))
+        else:
+            v = lo_ + u * (hi_ - lo_)
+        v = min(hi_, max(lo_, v))
+        if self.integer:
+            return int(min(math.floor(hi_), max(math.ceil(lo_), round(v))))
+        return v
+
+    def contains(self, value: Any) -> bool:
+        """Whether ``value`` lies in the search bounds (equals the fixed value)."""
+        if self.is_fixed:
+            return value == self.fixed
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            return False
+        return self.low <= v <= self.high and (not self.integer or float(v).is_integer())
+
+    def to_dict(self) -> dict[str, Any]:
+        """YAML-native form of the dimension, the inverse of :meth:`Real.from_dict`."""
+        if self.is_fixed:
+            d: dict[str, Any] = {"fixed": _plain(self.fixed)}
+        else:
+            d = {"low": self.low, "high": self.high}
+            if self.scale != "linear":
+                d["scale"] = self.scale
+            if self.integer:
+                d["integer"] = True
+        if self.unit:
+            d["unit"] = self.unit
+        if self.doc:
+            d["doc"] = self.doc
+        return d
+
+    def check(self, owner: str, value: Any) -> Any:
+        """The validated value (float for numbers); ValueError naming ``owner`` and the key."""
+        if value is None and self.nullable:
+            return None
+        if self.kind == "number":
+            return check_number(owner, self.name, value, self.allowed, self.unit, self.integer)
+        if self.kind == "bool":
+            return check_bool(owner, self.name, value)
+        if self.kind == "choice":
+            return check_choice(owner, self.name, value, self.choices)
+        return value
+
+    def real(self) -> Real:
+        """This parameter as the dimension of a default search space (its bounds and text, not the declaration's
+        default, allowed range and equation): the :class:`Real` a job's ``parameters:`` would write."""
+        if self.bounds is None:
+            return Real(self.name, fixed=self.default, unit=self.unit, doc=self.doc)
+        return Real(self.name, self.bounds[0], self.bounds[1], scale=self.scale, integer=self.integer,
+                    unit=self.unit, doc=self.doc)
+
+    def describe(self) -> dict[str, Any]:
+        """Structured description (plain Python values)."""
+        d: dict[str, Any] = {"name": self.name, "default": self.default, "kind": self.kind,
+                             "unit": self.unit, "doc": self.doc, "eq": self.eq}
+        if self.bounds is not None:
+            d["bounds"] = (float(self.bounds[0]), float(self.bounds[1]))
+            d["scale"] = self.scale
+        else:
+            d["bounds"] = None
+            d["scale"] = None
+        if self.kind == "number":
+            d["allowed"] = str(self.allowed)
+        elif self.kind == "choice":
+            d["allowed"] = list(self.choices)
+        elif self.kind == "bool":
+            d["allowed"] = [True, False]
+        else:
+            d["allowed"] = None
+        if self.integer:
+            d["integer"] = True
+        if self.nullable:
+            d["nullable"] = True
+        return d
+
+
+class Real(Param):
+    """One search dimension written by its bounds (or a fixed value): a :class:`Param` whose default is
+    its fixed value (``None`` when searched), as a job's ``parameters:`` section writes it.
 
     Parameters
     ----------
@@ -55,90 +334,27 @@ class Real:
         One line describing the parameter.
     """
 
-    name: str
-    low: float = math.nan
-    high: float = math.nan
-    scale: Literal["linear", "log"] = "linear"
-    integer: bool = False
-    fixed: Any = field(default=_MISSING)
-    unit: str = ""
-    doc: str = ""
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name.isidentifier():
-            raise SpaceError(f"parameter name must be an identifier, got {self.name!r}")
-        if self.is_fixed:
+    def __init__(self, name: str, low: float = math.nan, high: float = math.nan,
+                 scale: Literal["linear", "log"] = "linear", integer: bool = False, fixed: Any = _MISSING,
+                 unit: str = "", doc: str = ""):
+        _check_name(name)
+        if fixed is not _MISSING:
+            super().__init__(name, fixed, None, scale, unit, doc, integer=integer, kind="any")
             return
-        if self.scale not in ("linear", "log"):
-            raise SpaceError(f"{self.name}: scale must be 'linear' or 'log', got {self.scale!r}")
+        if scale not in ("linear", "log"):
+            raise SpaceError(f"{name}: scale must be 'linear' or 'log', got {scale!r}")
         try:
-            low, high = float(self.low), float(self.high)
+            low, high = float(low), float(high)
         except (TypeError, ValueError):
-            raise SpaceError(
-                f"{self.name}: low and high must be numbers, got low={self.low!r}, high={self.high!r}"
-            ) from None
-        object.__setattr__(self, "low", low)
-        object.__setattr__(self, "high", high)
-        if not (math.isfinite(low) and math.isfinite(high) and low < high):
-            raise SpaceError(f"{self.name}: need finite low < high, got low={low}, high={high}")
-        if self.scale == "log" and low <= 0:
-            raise SpaceError(f"{self.name}: log scale needs low > 0, got low={low}")
-        if self.integer and math.floor(high) < math.ceil(low):
-            raise SpaceError(f"{self.name}: integer parameter has no integer in [{low}, {high}]")
+            raise SpaceError(f"{name}: low and high must be numbers, got low={low!r}, high={high!r}") from None
+        super().__init__(name, None, (low, high), scale, unit, doc, integer=integer, kind="any")
 
-    @property
-    def is_fixed(self) -> bool:
-        return self.fixed is not _MISSING
-
-    # --- scalar maps -------------------------------------------------------------------------
-    def to_unit(self, value: float) -> float:
-        """Physical value -> unit interval (clipped into [0, 1])."""
-        v = float(value)
-        if self.scale == "log":
-            if v <= 0:
-                raise SpaceError(f"{self.name}: log-scale value must be > 0, got {value!r}")
-            u = (math.log10(v) - math.log10(self.low)) / (math.log10(self.high) - math.log10(self.low))
-        else:
-            u = (v - self.low) / (self.high - self.low)
-        return min(1.0, max(0.0, u))
-
-    def from_unit(self, u: float) -> float | int:
-        """Unit interval -> physical value (``u`` is clipped into [0, 1] first)."""
-        u = min(1.0, max(0.0, float(u)))
-        if self.scale == "log":
-            lo, hi = math.log10(self.low), math.log10(self.high)
-            v = 10.0 ** (lo + u * (hi - lo))
-        else:
-            v = self.low + u * (self.high - self.low)
-        v = min(self.high, max(self.low, v))
-        if self.integer:
-            return int(min(math.floor(self.high), max(math.ceil(self.low), round(v))))
-        return v
-
-    def contains(self, value: Any) -> bool:
+    def __repr__(self) -> str:
         if self.is_fixed:
-            return value == self.fixed
-        try:
-            v = float(value)
-        except (TypeError, ValueError):
-            return False
-        return self.low <= v <= self.high and (not self.integer or float(v).is_integer())
-
-    def to_dict(self) -> dict[str, Any]:
-        """YAML-native form, the inverse of :meth:`from_dict`."""
-        if self.is_fixed:
-            d: dict[str, Any] = {"fixed": _plain(self.fixed)}
-        else:
-            d = {"low": self.low, "high": self.high}
-            if self.scale != "linear":
-                d["scale"] = self.scale
-            if self.integer:
-                d["integer"] = True
-        if self.unit:
-            d["unit"] = self.unit
-        if self.doc:
-            d["doc"] = self.doc
-        return d
+            return f"Real({self.name!r}, fixed={self.fixed!r})"
+        extra = f", scale={self.scale!r}" if self.scale != "linear" else ""
+        extra += ", integer=True" if self.integer else ""
+        return f"Real({self.name!r}, {self.low!r}, {self.high!r}{extra})"
 
     @classmethod
     def from_dict(cls, name: str, spec: Any) -> Real:

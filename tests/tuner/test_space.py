@@ -105,3 +105,24 @@ def test_narrowed_space_contains_center_and_shrinks():
     assert n["b"].low < 1e-3 < n["b"].high
     assert math.log10(n["b"].high / n["b"].low) == pytest.approx(1.2)
     assert n.fixed == {"k": 2}
+
+
+def test_a_param_with_bounds_is_a_search_dimension():
+    """``Real`` is a ``Param`` written by its bounds; a ``Space`` takes declared Params as they are."""
+    from tuner.params import Param, ParamSet
+
+    decl = ParamSet("demo", (Param("beta", 0.1, (1e-3, 1.0), "log", "rad/s"), Param("n", 3, (1, 9), integer=True),
+                             Param("variant", "paper", choices=("paper", "c"))))
+    space = Space(decl)
+    assert space.dim == 2 and space.fixed == {"variant": "paper"} and space.free_names == ["beta", "n"]
+    for u in ([0.5, 1.0], [0.0, 0.3], [0.77, 0.5]):
+        assert space.decode(u) == decl.space().decode(u)
+    assert space.decode([0.5, 1.0]) == {"beta": 10 ** -1.5, "n": 9, "variant": "paper"}
+    assert space.to_dict() == decl.space().to_dict()
+    assert isinstance(Real("x", 0, 1), Param) and Real("x", 0, 1).is_fixed is False
+    assert Real.from_dict("beta", decl["beta"].to_dict()) == decl["beta"].real()
+    assert decl["beta"].to_unit(0.1) == pytest.approx(2 / 3)
+    with pytest.raises(SpaceError, match="log scale needs low > 0, got low=0.0"):
+        Param("b", 0.1, (0.0, 1.0), "log")
+    with pytest.raises(SpaceError, match="integer parameter has no integer"):
+        Param("k", 1, (0.2, 0.8), integer=True)
