@@ -3,6 +3,11 @@
 Optimisers only ever see points of the unit cube ``[0, 1]^d`` where ``d`` is the number of free
 parameters; :class:`Space` alone knows physical units, log scales, integers and fixed values.
 
+One class declares a parameter and is a search dimension: :class:`Param` (name, default, bounds, scale,
+unit, doc, allowed values; validated at construction). A Param with ``bounds`` is searched, one without is
+fixed at its default; :class:`Real` is the Param written by its bounds, as a job's ``parameters:`` section
+writes it. :mod:`tuner.params` groups Params into declarations (``ParamSet``).
+
 Example
 -------
 >>> space = Space([Real("beta", 1e-3, 1.0, scale="log"), Real("n", 1, 9, integer=True),
