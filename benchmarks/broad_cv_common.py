@@ -65,7 +65,7 @@ def broad_config(filter_name: str, data: str | Path, search: dict | None = None,
     data = Path(data).resolve()
     names = list(trials) if trials is not None else [p.stem for p in sorted(data.glob("*.mat"))]
     if not names:
-        raise SystemExit(f"{data}: no BROAD .mat files")
+        raise ValueError(f"{data}: no BROAD .mat files")
     own = {p.name: p for p in filter_class(filter_name).space().params}
     params = None
     if search is not None:

@@ -47,6 +47,13 @@ def test_bad_option_is_one_error_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error: ") and "nope" in err[0]
     assert not (tmp_path / "o.md").exists()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["mahony", "--data", str(empty), "--out", str(tmp_path / "o.md")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no BROAD .mat files" in err[0]
+    with pytest.raises(ConfigError, match="optimizer"):  # a config error names its key
+        broad_config("mahony", tmp_path, population=0)
 
 
 @pytest.mark.broad
