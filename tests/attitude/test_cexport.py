@@ -182,6 +182,23 @@ def test_tilt_kf_as_the_model(name, frame, tmp_path):
         assert angle(q, res.quat).max() < tol
 
 
+def test_each_helper_is_defined_in_one_template():
+    """A helper two filters need lives in one shared part (common.c, robust.c, trig.c, angle.c, ...), not in a
+    copy per filter template; only the streaming API and each filter's own set_rate have one per filter."""
+    import re
+    from importlib import resources
+
+    where: dict[str, set[str]] = {}
+    for f in resources.files("objectives.attitude.cexport").joinpath("templates").iterdir():
+        if f.name.endswith(".c"):
+            for fn in re.findall(r"^(?:static )?(?:inline )?\w+ \**(\w+)\(", f.read_text(), re.MULTILINE):
+                where.setdefault(fn, set()).add(f.name)
+    assert {"robust_init", "robust_rate", "floor_", "sincos_", "qmul"} <= set(where)
+    twice = {fn: sorted(files) for fn, files in where.items()
+             if len(files) > 1 and not fn.startswith("PFX_") and fn != "set_rate"}
+    assert not twice, twice
+
+
 def test_render_refuses_what_it_cannot_port():
     from objectives.attitude.filters.ekf import FAEKF
 

@@ -19,7 +19,10 @@ quaternion step and the complementary filters' Euler angles, are a series; the H
 ``precision="float"`` writes every literal and call in single precision for MCUs without a double FPU.
 
 The templates (``templates/*.c``, ``*.h``) name public identifiers ``PFX_`` and use ``real``, ``SQRT``,
-``EXP``, ``ASIN``, ``ATAN2``, ``fabs``; :func:`render_c_filter` replaces them.
+``EXP``, ``ASIN``, ``ATAN2``, ``fabs``; :func:`render_c_filter` replaces them. A source is the parts
+``common.c``; ``robust.c`` (the filters with the robust blocks: their init and rate coefficients too);
+``bias_prologue.c`` (Madgwick, Mahony) or ``trig.c``; ``angle.c`` (the filters that wrap angles); the filter's
+own template; ``run.c``, in that order, so a piece two filters need is written once, in the first part both get.
 """
 
 from __future__ import annotations
@@ -343,6 +346,8 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define WORK_TO_OUT {_quat_literal(rot)}",
            f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}", *_akf_defines(flt, rate_hz), ""]
     extra = ["bias_prologue.c"] if name in ("madgwick", "mahony") else ["trig.c"]
+    if name in (*_TILT, "lcf", "ncf", "ccf"):
+        extra.append("angle.c")  # floor_ for the angle wrapping (a static function no filter uses would warn)
     parts = ["common.c", *(["robust.c"] if name not in (*_TILT, "realtime") else []), *extra, C_FILTERS[name],
              "run.c"]
     body = _API_DEF.sub(r"static void PFX_\1_(", "\n".join(_template(p) for p in parts[:-1]))

@@ -15,11 +15,7 @@ static int unit3(real *x, real *y, real *z)
 
 static void set_rate(PFX_filter *f, real dt)
 {
-    const PFX_params *p = &f->p;
-    f->dt_s = dt;
-    mag_dist_coefficients(f->mc, dt, p->mag_norm_th, p->mag_dip_th_deg, p->mag_max_rejection_s);
-    rest_coefficients(f->rc, dt, 0.5 / 9.81, p->rest_bias_tau_s);
-    f->alp_k = lp_gain(p->acc_lp_tau_s > 0.0 ? p->acc_lp_tau_s : 0.0, dt);
+    robust_rate(f, dt, 0.5 / 9.81, f->p.rest_bias_tau_s);
 }
 
 /* h = q v q*: _scalar.rotate_sensor_to_earth */
@@ -127,17 +123,11 @@ static int prologue(PFX_filter *f, const real *gyr, const real *acc, const real 
 static void bias_init(PFX_filter *f, const PFX_params *p)
 {
     int i;
-    f->p = *p;
-    f->started = 0;
+    robust_init(f, p);
     for (i = 0; i < 4; i++)
         f->q[i] = i == 0 ? 1.0 : 0.0;
     for (i = 0; i < 3; i++)
         f->b[i] = 0.0;
-    mag_dist_state(f->ms);
-    for (i = 0; i < 12; i++)
-        f->rs[i] = 0.0;
-    for (i = 0; i < 4; i++)
-        f->as[i] = 0.0;
     set_rate(f, p->dt_s);
 }
 

@@ -1,16 +1,5 @@
 /* ---- LCF / NCF / CCF on ZYX Euler angles (ported from objectives/attitude/filters/complementary.py and
         _cf_robust.py; Narkhede et al. 2021, eqs. (1)-(14)) -------------------------------------------- */
-#define TWO_PI_ (2.0 * PI_)
-
-/* floor without libm (exact for |x| < 2^52; larger doubles are integers already) */
-static real floor_(real x)
-{
-    real t;
-    if (!(fabs(x) < 4.0e15))
-        return x;
-    t = (real)(long long)x;
-    return t > x ? t - 1.0 : t;
-}
 
 /* angle wrapped to [-pi, pi): complementary._wrap */
 static real wrap_(real a)
@@ -55,7 +44,6 @@ static void set_rate(PFX_filter *f, real dt)
 {
     const PFX_params *p = &f->p;
     real alpha = p->alpha, kp = p->Kp;
-    f->dt_s = dt;
     if (p->alpha_mode == 1) { /* tau: tau_gains */
         alpha = p->tau_s / (p->tau_s + dt);
         kp = one_minus_exp_neg(kp * dt) / dt;
@@ -65,26 +53,18 @@ static void set_rate(PFX_filter *f, real dt)
     }
     f->alpha = alpha;
     f->kp = kp;
-    mag_dist_coefficients(f->mc, dt, p->mag_norm_th, p->mag_dip_th_deg, p->mag_max_rejection_s);
-    rest_coefficients(f->rc, dt, 0.5 * p->g / 9.81, 2.0);
-    f->alp_k = lp_gain(p->acc_lp_tau_s > 0.0 ? p->acc_lp_tau_s : 0.0, dt);
+    robust_rate(f, dt, 0.5 * p->g / 9.81, 2.0);
 }
 
 void PFX_init(PFX_filter *f, const PFX_params *p)
 {
     int i;
-    f->p = *p;
-    f->started = 0;
+    robust_init(f, p);
     for (i = 0; i < 3; i++) {
         f->x[i] = 0.0;
         f->integ[i] = 0.0;
         f->out[i] = 0.0;
     }
-    mag_dist_state(f->ms);
-    for (i = 0; i < 12; i++)
-        f->rs[i] = 0.0;
-    for (i = 0; i < 4; i++)
-        f->as[i] = 0.0;
     set_rate(f, p->dt_s);
 }
 

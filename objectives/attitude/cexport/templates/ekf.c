@@ -2,11 +2,7 @@
         FAEKF paper eqs. 11-22, 36) -------------------------------------------------------------------- */
 static void set_rate(PFX_filter *f, real dt)
 {
-    const PFX_params *p = &f->p;
-    f->dt_s = dt;
-    mag_dist_coefficients(f->mc, dt, p->mag_norm_th, p->mag_dip_th_deg, p->mag_max_rejection_s);
-    rest_coefficients(f->rc, dt, 0.5 * p->g / 9.81, 2.0);
-    f->alp_k = lp_gain(p->acc_lp_tau_s > 0.0 ? p->acc_lp_tau_s : 0.0, dt);
+    robust_rate(f, dt, 0.5 * f->p.g / 9.81, 2.0);
 }
 
 /* time update (eqs. 16, 20, 21) with the gyro sample w: _ekf_kernel._predict */
@@ -217,8 +213,7 @@ static void rest_bias_update(PFX_filter *f)
 void PFX_init(PFX_filter *f, const PFX_params *p)
 {
     int i, j;
-    f->p = *p;
-    f->started = 0;
+    robust_init(f, p);
     for (i = 0; i < 7; i++) {
         f->x[i] = i == 0 ? 1.0 : 0.0;
         for (j = 0; j < 7; j++)
@@ -226,11 +221,6 @@ void PFX_init(PFX_filter *f, const PFX_params *p)
     }
     for (i = 0; i < 3; i++)
         f->prev_gyr[i] = 0.0;
-    mag_dist_state(f->ms);
-    for (i = 0; i < 12; i++)
-        f->rs[i] = 0.0;
-    for (i = 0; i < 4; i++)
-        f->as[i] = 0.0;
     set_rate(f, p->dt_s);
 }
 

@@ -1,17 +1,6 @@
 /* ---- the thesis's 2-state tilt Kalman filter (ported from objectives/attitude/filters/_kf1d_kernels.py,
         thesis eqs. 3.9-3.13, 3.17): the tilt about the sensor y axis from gyr[1], acc[0] and acc[2] ------ */
-#define TWO_PI_ (2.0 * PI_)
 #define TILT_RUN 1 /* run.c: the state is the angle th alone */
-
-/* floor without libm (exact for |x| < 2^52; larger doubles are integers already) */
-static real floor_(real x)
-{
-    real t;
-    if (!(fabs(x) < 4.0e15))
-        return x;
-    t = (real)(long long)x;
-    return t > x ? t - 1.0 : t;
-}
 
 #if AKF
 /* ---- AKF1D (thesis 3.1.4): R_k = K_k rho, K_k the Sugeno system of eq. 3.24 / Table 3.2 over the packet

@@ -147,38 +147,31 @@ static void rt_inv3(const real *m, real *o)
     o[6] = c02 / det; o[7] = (b * g - a * h) / det; o[8] = (a * e - b * d) / det;
 }
 
-static void rt_bias_update(real *s, const real *r, const real *e, const real *w)
+/* o = a b (bt 0) or a b^T (bt 1), 3x3 row-major, each entry summed over m = 0, 1, 2 in that order */
+static void rt_mul3(const real *a, const real *b, int bt, real *o)
 {
-    real t1[9], t2[9], t3[9], acc;
-    const real *p = s + S_BIAS_P;
+    real acc;
     int i, j, m;
     for (i = 0; i < 3; i++)
         for (j = 0; j < 3; j++) {
-            for (acc = 0.0, m = 0; m < 3; m++) acc += p[3 * i + m] * r[3 * j + m];
-            t1[3 * i + j] = acc;
+            for (acc = 0.0, m = 0; m < 3; m++) acc += a[3 * i + m] * (bt ? b[3 * j + m] : b[3 * m + j]);
+            o[3 * i + j] = acc;
         }
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) {
-            for (acc = 0.0, m = 0; m < 3; m++) acc += r[3 * i + m] * t1[3 * m + j];
-            t2[3 * i + j] = acc + (i == j ? w[i] : 0.0);
-        }
+}
+
+static void rt_bias_update(real *s, const real *r, const real *e, const real *w)
+{
+    real t1[9], t2[9], t3[9];
+    const real *p = s + S_BIAS_P;
+    int i;
+    rt_mul3(p, r, 1, t1);  /* P R^T */
+    rt_mul3(r, t1, 0, t2); /* R P R^T + W */
+    for (i = 0; i < 3; i++) t2[4 * i] += w[i];
     rt_inv3(t2, t3);
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) {
-            for (acc = 0.0, m = 0; m < 3; m++) acc += t1[3 * i + m] * t3[3 * m + j];
-            t2[3 * i + j] = acc;
-        }
+    rt_mul3(t1, t3, 0, t2); /* the gain K = P R^T (R P R^T + W)^-1 */
     for (i = 0; i < 3; i++) s[S_BIAS + i] += t2[3 * i] * e[0] + t2[3 * i + 1] * e[1] + t2[3 * i + 2] * e[2];
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) {
-            for (acc = 0.0, m = 0; m < 3; m++) acc += t2[3 * i + m] * r[3 * m + j];
-            t3[3 * i + j] = acc;
-        }
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) {
-            for (acc = 0.0, m = 0; m < 3; m++) acc += t3[3 * i + m] * s[S_BIAS_P + 3 * m + j];
-            t1[3 * i + j] = acc;
-        }
+    rt_mul3(t2, r, 0, t3);  /* K R */
+    rt_mul3(t3, p, 0, t1);  /* K R P, subtracted from P */
     for (i = 0; i < 9; i++) s[S_BIAS_P + i] -= t1[i];
 }
 

@@ -162,3 +162,28 @@ static void acc_lp_update(real *s, real k, const real *q, real ax, real ay, real
     s[3] += 1.0;
     rot_(q[0], q[1], q[2], q[3], s[0], s[1], s[2], -1.0, out);
 }
+
+/* ---- the blocks' part of the init and set_rate of every filter that has them (members ms, rs, as, mc, rc,
+        alp_k, dt_s, started, p of the struct) ---------------------------------------------------------- */
+/* the params and the blocks' start state; the filter zeroes its own state and then calls its set_rate */
+static void robust_init(PFX_filter *f, const PFX_params *p)
+{
+    int i;
+    f->p = *p;
+    f->started = 0;
+    mag_dist_state(f->ms);
+    for (i = 0; i < 12; i++)
+        f->rs[i] = 0.0;
+    for (i = 0; i < 4; i++)
+        f->as[i] = 0.0;
+}
+
+/* the blocks' coefficients at dt; rest detection with acc threshold th_acc and bias time constant tau_bias_s */
+static void robust_rate(PFX_filter *f, real dt, real th_acc, real tau_bias_s)
+{
+    const PFX_params *p = &f->p;
+    f->dt_s = dt;
+    mag_dist_coefficients(f->mc, dt, p->mag_norm_th, p->mag_dip_th_deg, p->mag_max_rejection_s);
+    rest_coefficients(f->rc, dt, th_acc, tau_bias_s);
+    f->alp_k = lp_gain(p->acc_lp_tau_s > 0.0 ? p->acc_lp_tau_s : 0.0, dt);
+}
