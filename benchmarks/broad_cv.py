@@ -1,10 +1,13 @@
 """Leave-one-group-out cross-validation of a filter's tuning on the 16 shared BROAD trials.
 
 Folds: the level-2 motion/disturbance groups of BROAD's ``trials.json`` (rotation, translation,
-tapping, vibration, stationary_magnet, attached_magnet), each trial held out exactly once. For each
-fold the filter is tuned on the other groups' trials and scored on the held-out group; the table
-puts defaults, the tuning score on all 16 and the held-out score side by side. The Markdown table is
-appended to ``--out`` (default ``benchmarks/results/broad_cv.md``) with the command line.
+tapping, vibration, stationary_magnet, attached_magnet), each trial held out exactly once. The job
+(filter, searched parameters, optimiser, aggregation, prior, start) is written as a config
+(:func:`benchmarks.broad_cv_common.broad_config`) and cross-validated by the engine, as ``tuner cv``
+does (:func:`tuner.cv.cross_validate`): for each fold the filter is tuned on the other groups' trials
+and scored on the held-out group (BROAD total RMSE, deg, mean over held-out trials); the table puts
+defaults, the tuning on all 16 (tuning score) and the held-out score side by side. The Markdown table
+is appended to ``--out`` (default ``benchmarks/results/broad_cv.md``) with the command line.
 
 Examples::
 
@@ -23,12 +26,26 @@ from pathlib import Path
 from typing import Any
 
 try:
-    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, ROOT, append, broad_folds, pairs
+    from benchmarks.broad_cv_common import BROAD_DIR, RESULTS_MD, ROOT, append, broad_config, pairs
 except ImportError:  # run as a script: benchmarks/ is on the path (broad_cv_common puts the checkout there)
-    from broad_cv_common import BROAD_DIR, RESULTS_MD, ROOT, append, broad_folds, pairs
+    from broad_cv_common import BROAD_DIR, RESULTS_MD, ROOT, append, broad_config, pairs
 
 from objectives.attitude.aggregate import AGGREGATIONS  # noqa: E402
-from objectives.attitude.cv import TuneOptions, cross_validate, search_space  # noqa: E402
+
+
+def _search(items: list[str] | None) -> dict[str, Any] | None:
+    """``--search`` items: NAME (the filter's bounds) or NAME=LOW:HIGH[:log]."""
+    if items is None:
+        return None
+    out: dict[str, Any] = {}
+    for s in items:
+        if "=" in s:
+            name, rng = s.split("=", 1)
+            lo, hi, *sc = rng.split(":")
+            out[name] = {"low": float(lo), "high": float(hi), "scale": sc[0] if sc else "linear"}
+        else:
+            out[s] = None
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -36,6 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("filter")
     ap.add_argument("--data", default=str(BROAD_DIR),
                     help="BROAD directory with the .mat files and trials.json")
+    ap.add_argument("--trials", nargs="*", default=None, help="trial names (default: every .mat in --data)")
     ap.add_argument("--search", nargs="*", default=None,
                     help="parameters to search (filter's bounds, or NAME=LOW:HIGH[:log]); default: the filter's space")
     ap.add_argument("--fixed", nargs="*", default=[], help="NAME=VALUE options passed to the filter")
@@ -54,29 +72,25 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--title", default="")
     a = ap.parse_args(argv)
 
-    paths, groups, folds = broad_folds(a.data)
-    search = None
-    if a.search is not None:
-        search = {}
-        for s in a.search:
-            if "=" in s:
-                name, rng = s.split("=", 1)
-                lo, hi, *sc = rng.split(":")
-                search[name] = {"low": float(lo), "high": float(hi), "scale": sc[0] if sc else "linear"}
-            else:
-                search[s] = None
-    space = search_space(a.filter, search, pairs(a.fixed, "--fixed"))
+    from tuner.config import ConfigError
+    from tuner.cv import cross_validate, cv_texts
+
     pop, gen = (int(x) for x in a.pso.lower().split("x"))
-    opts = TuneOptions(method=a.method, population=pop, generations=gen, seed=a.seed, aggregation=a.aggregation,
-                       k=a.k, alpha=a.alpha, group_balanced=a.group_balanced, prior_strength=a.prior,
-                       init=a.init, n_jobs=a.n_jobs)
+    try:
+        cfg = broad_config(a.filter, a.data, _search(a.search), pairs(a.fixed, "--fixed"), trials=a.trials,
+                           method=a.method, population=pop, generations=gen, seed=a.seed,
+                           aggregation=a.aggregation, k=a.k, alpha=a.alpha, group_balanced=a.group_balanced,
+                           prior=a.prior, init=a.init, n_jobs=a.n_jobs)
+    except (ConfigError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     t0 = time.perf_counter()
-    res = cross_validate(a.filter, paths, folds, groups, space, opts, full=not a.no_full,
-                         progress=lambda m: print(m, flush=True))
+    res = cross_validate(cfg, full=not a.no_full, progress=lambda m: print(m, flush=True))
     secs = time.perf_counter() - t0
     cmd = "python benchmarks/broad_cv.py " + " ".join(shlex.quote(x) for x in (argv or sys.argv[1:]))
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    text = f"\n### {a.title or a.filter}\n\n`{cmd}` ({secs:.0f} s, {when})\n\n{res.to_markdown()}"
+    table = cv_texts(res, cfg.validation)[0].split("\n", 2)[2]  # without its H1
+    text = f"\n### {a.title or a.filter}\n\n`{cmd}` ({secs:.0f} s, {when})\n\n{table}"
     print(text)
     append(a.out, text)
     s = res.summary()

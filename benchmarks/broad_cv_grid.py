@@ -28,7 +28,7 @@ except ImportError:  # run as a script: benchmarks/ is on the path (broad_cv_com
     from broad_cv_common import BROAD_DIR, RESULTS_MD, broad_folds, pairs, publish
 
 from objectives.attitude.aggregate import aggregate, group_weights, prior_penalty  # noqa: E402
-from objectives.attitude.cv import filter_class, score_trials, search_space  # noqa: E402
+from objectives.attitude.trials import filter_class, score_trials, search_space  # noqa: E402
 
 #: (label, aggregation, options, group_balanced, prior strength in deg)
 SETUPS = [

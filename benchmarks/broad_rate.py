@@ -94,14 +94,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-vqf", action="store_true", help="skip VQF's defaults as a reference row")
     a = ap.parse_args(argv)
 
-    from objectives.attitude.cv import _recording
+    from objectives.attitude.trials import load_trial
 
     name, values = (config_values(a.config) if a.config else (a.filter, {}))
     values.update(pairs(a.values, "--values"))
     paths, groups, _ = broad_folds(a.data)
     names = list(paths)
     order = list(dict.fromkeys(groups[n] for n in names))
-    base = [_recording(str(paths[n])) for n in names]
+    base = [load_trial(paths[n]) for n in names]
     rates = [float(r) for r in a.rates.split(",") if r]
     setups = [(f"{name} {a.label}", name, values)]
     if not a.no_vqf:

@@ -2,8 +2,9 @@
 
 Tuning on a handful of recordings with the plain mean lets a few easy, similar recordings decide
 the parameters and lets the optimiser trade one bad recording for several slightly better ones.
-These pure functions give the alternatives an objective (or the cross-validation driver in
-:mod:`objectives.attitude.cv`) can use; all take per-recording scores where lower is better.
+These pure functions give the alternatives the filter objective (:mod:`objectives.attitude.objective`,
+also inside the engine's cross-validation, :mod:`tuner.cv`) uses; all take per-recording scores where
+lower is better.
 
 Aggregations (``aggregate(scores, method, ...)``), each optionally weighted by ``weights`` (>= 0,
 normalised to sum 1; equal weights if omitted):
@@ -123,7 +124,7 @@ def group_weights(names: Sequence[str], groups: Mapping[str, str]) -> np.ndarray
     names : sequence of str
         Recording names, in the order of the scores they will weight.
     groups : mapping
-        Recording name -> group name (e.g. :func:`objectives.attitude.cv.broad_trial_groups`).
+        Recording name -> group name (e.g. :func:`objectives.attitude.trials.broad_trial_groups`).
 
     Raises
     ------

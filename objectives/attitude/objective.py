@@ -542,6 +542,7 @@ class FilterObjective:
         the engine scores it with ``score`` (no prior).
         """
         from objectives.attitude.objective_options import recording_groups
+        from objectives.attitude.trials import kfold_folds, logo_folds
 
         recs = list(self.recordings("train"))
         names = [r.name for r in recs]
@@ -557,13 +558,10 @@ class FilterObjective:
             except ValueError:
                 groups = None
         if groups is not None and len(set(groups.values())) >= 2:
-            order = list(dict.fromkeys(groups[n] for n in names))
-            parts = [(g, [n for n in names if groups[n] == g]) for g in order]
+            folds = logo_folds(names, groups)
         else:
-            kk = min(5, len(recs)) if k is None else int(k)
-            if not 2 <= kk <= len(recs):
-                raise ValueError(f"cv: need 2 <= k <= {len(recs)} (recordings), got k={k}")
-            parts = [(f"fold-{i}", [n for j, n in enumerate(names) if j % kk == i]) for i in range(kk)]
+            folds = kfold_folds(names, min(5, len(recs)) if k is None else int(k))
+        parts = [(f.name, list(f.test)) for f in folds]
         specs = list(self.train_specs)
         plain = {k: v for k, v in self.metric_options.items() if k not in AGG_KEYS}
         by_name = dict(zip(names, recs))

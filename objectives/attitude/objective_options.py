@@ -114,7 +114,7 @@ def recording_groups(recs: Sequence[Any], groups: Any) -> dict[str, str]:
         if missing:
             raise ValueError(f"objective.metric_options.groups: no group for recording(s) {missing}")
         return {n: groups[n] for n in names}
-    from objectives.attitude.cv import broad_trial_groups
+    from objectives.attitude.trials import broad_trial_groups
 
     out: dict[str, str] = {}
     for r in recs:

@@ -509,7 +509,8 @@ class ClosedLoopObjective:
     # --- report ---------------------------------------------------------------------------------
     def save_response(self, params: Mapping[str, Any] | None, path: str | pathlib.Path) -> pathlib.Path:
         """The closed loop at ``params`` as ``.npz`` (t s, references (N, 2), outputs (N, 5), voltages
-        (N, 2), controller name, F): what :mod:`objectives.control.compare` overlays across a sweep."""
+        (N, 2), controller name, F): the tuned closed loop kept with the run (``response_best.npz``); a sweep
+        overlays its controllers' responses through :meth:`traces` (the engine's sweep figure)."""
         s = self.simulate(params)
         path = pathlib.Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -145,7 +145,7 @@ def test_on_broad_the_blocks_lower_the_fast_translation_and_magnet_errors():
     # measured (total RMSE, deg): trial 15 59.99 -> 2.90 with the low-pass; trial 28 45.69 -> 9.85 with the
     # low-pass (its heading error came from tilt compensation with accelerating-frame angles) -> 8.55 with
     # the magnetic rejection as well
-    from objectives.attitude.cv import score_trials
+    from objectives.attitude.trials import score_trials
 
     base = {"alpha_mode": "tau", "tau_s": 2.0, "Kp": 0.3, "Ki": 0.001}
     paths = [str(BROAD / f) for f in ("15_undisturbed_fast_translation_A.mat", "28_disturbed_stationary_magnet_A.mat")]

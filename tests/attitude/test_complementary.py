@@ -193,8 +193,9 @@ def test_alpha_rate_keeps_the_lcf_time_constant():
 # --- alpha_mode: the seed's per-sample blend unchanged, the time-constant and eq. (14) readings ---------------
 # Computed with the kernel of commit a77527f (before the kernel's shared blocks became inline helpers and
 # alpha_mode was added), on the recordings below, and recomputed once when the kernels dropped fastmath
-# (objectives.jit; the paper kernel is now the robust kernel with its blocks off, the same bits); they hold for the pinned NumPy/numba on x86-64 (see
-# tests/attitude/test_synthetic_identity.py for what to do after an upgrade).
+# (objectives.jit; the paper kernel is now the robust kernel with its blocks off, the same bits); they hold
+# for the pinned NumPy/numba on x86-64 (see tests/attitude/test_synthetic_identity.py for what to do after an
+# upgrade).
 PER_SAMPLE_DIGESTS = {
     "lcf_rate": "ee37f977fd94dc49fb40e85f7ba65833d240cf1719ae2013381aaf73aef7dbe7",
     "ncf": "c144c234f4a38a341fe0e9d47b1057cb19d2bcd5d07a97e6526f6b2171773666",

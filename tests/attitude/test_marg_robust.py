@@ -26,9 +26,9 @@ Q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])
 
 # Computed with the kernels of commit 743dcad (before the robust blocks existed), on the recordings below, and
 # recomputed once when the kernels dropped fastmath (objectives.jit; the merged kernels of today give the same
-# bits as the separate paper loops did under strict arithmetic); they hold for the pinned NumPy/numba on x86-64 (see tests/attitude/test_synthetic_identity.py after an upgrade). The two
-# ``*_imu`` digests are kept for the record only: those outputs differ in the last bits between x86-64 CPUs, and
-# the test checks them against the slow reference.
+# bits as the separate paper loops did under strict arithmetic); they hold for the pinned NumPy/numba on x86-64
+# (see tests/attitude/test_synthetic_identity.py after an upgrade). The two ``*_imu`` digests are kept for the
+# record only: they are checked against the slow reference (they differed between x86-64 CPUs under fastmath).
 PAPER_DIGESTS = {
     "madgwick": "6c9aca20817d39a69d74b706e16a6c10fa63a388d99cbf4b9c98524602a7b1ec",
     "madgwick_zeta_c": "9c4537605a1e9dd700b5cb918b6d6370185726f208b68af210f20582ee5c305e",

@@ -1,5 +1,6 @@
 """Eq. 2.39 in SI units against the thesis's numbers, rise times against Table 2.4, the shared
-tracking requirements, a short PSO under them, and the controller comparison of a sweep."""
+tracking requirements and a short PSO under them (the controller comparison of a sweep:
+test_controller_comparison.py)."""
 
 import math
 import pathlib
@@ -8,7 +9,6 @@ import numpy as np
 import pytest
 import yaml
 
-from objectives.control.compare import collect_runs, comparison_table, write_comparison
 from objectives.control.controllers.fuzzy import THESIS_OPTIMISED
 from objectives.control.metrics import mae_weighted_cost, rise_time_s
 from objectives.control.objective import THESIS_REQUIREMENTS, ClosedLoopObjective
@@ -164,18 +164,6 @@ def test_short_pso_improves_f_under_the_requirements(pid_run):
     assert row["rise_time_nu_s"] == pytest.approx(pid_run.best_metrics["rise_time_nu_s"])
     # a run does not look at its siblings: the sweep's figure comparing controllers is the engine's
     assert not (pid_run.run_dir / "figures" / "controllers.png").exists()
-
-
-@pytest.mark.slow
-def test_comparison_table_and_figure_from_runs(pid_run):
-    sweep_dir = pid_run.run_dir.parents[1]
-    (res,) = collect_runs(sweep_dir)
-    assert res.controller == "pid" and res.fitness == pytest.approx(pid_run.best_fitness)
-    assert res.peak_current_A == pytest.approx(pid_run.best_metrics["peak_current_A"])
-    table = comparison_table([res])
-    assert "| pid |" in table and "peak current" in table
-    out = write_comparison(sweep_dir)
-    assert out.exists() and (sweep_dir / "figures" / "responses.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_settling_time_closed_form_first_order_decay():
