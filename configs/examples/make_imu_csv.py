@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from objectives.attitude.data.synthetic import simulate_imu
+from objectives.attitude.quaternion import quat_from_euler_zyx
 
 RATE_HZ = 50.0
 
@@ -17,12 +18,7 @@ RATE_HZ = 50.0
 def trajectory(t: np.ndarray) -> np.ndarray:
     """(N, 4) quaternions: at rest until 1 s, then roll, pitch and yaw swings (ZYX Euler angles)."""
     s = np.clip(t - 1.0, 0.0, None)
-    h = 0.5 * np.stack([0.5 * np.sin(1.9 * s), 0.35 * np.sin(1.3 * s), 1.5 * np.sin(0.6 * s)], 1)
-    c, n = np.cos(h), np.sin(h)
-    return np.stack([c[:, 0] * c[:, 1] * c[:, 2] + n[:, 0] * n[:, 1] * n[:, 2],
-                     n[:, 0] * c[:, 1] * c[:, 2] - c[:, 0] * n[:, 1] * n[:, 2],
-                     c[:, 0] * n[:, 1] * c[:, 2] + n[:, 0] * c[:, 1] * n[:, 2],
-                     c[:, 0] * c[:, 1] * n[:, 2] - n[:, 0] * n[:, 1] * c[:, 2]], 1)
+    return quat_from_euler_zyx(np.stack([0.5 * np.sin(1.9 * s), 0.35 * np.sin(1.3 * s), 1.5 * np.sin(0.6 * s)], 1))
 
 
 def main(path: Path | None = None) -> Path:

@@ -23,6 +23,7 @@ from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.data.synthetic import simulate_imu
 from objectives.attitude.filters import filter_names, get_filter
 from objectives.attitude.objective import FilterObjective
+from objectives.attitude.quaternion import quat_from_euler_zyx
 from tests.conftest import REPO as ROOT
 from tests.conftest import one_error_line
 from tests.conftest import run_tuner as tuner
@@ -32,13 +33,9 @@ DT = 0.01
 
 
 def _quat(t, rest_s=0.0):
+    """(N, 4) quaternions: at rest until ``rest_s``, then roll, pitch and yaw swings (ZYX Euler angles)."""
     s = np.clip(t - rest_s, 0.0, None)
-    h = 0.5 * np.stack([0.6 * np.sin(1.7 * s), 0.4 * np.sin(1.1 * s), 2.0 * np.sin(0.5 * s)], 1)
-    c, n = np.cos(h), np.sin(h)
-    return np.stack([c[:, 0] * c[:, 1] * c[:, 2] + n[:, 0] * n[:, 1] * n[:, 2],
-                     n[:, 0] * c[:, 1] * c[:, 2] - c[:, 0] * n[:, 1] * n[:, 2],
-                     c[:, 0] * n[:, 1] * c[:, 2] + n[:, 0] * c[:, 1] * n[:, 2],
-                     c[:, 0] * c[:, 1] * n[:, 2] - n[:, 0] * n[:, 1] * c[:, 2]], 1)
+    return quat_from_euler_zyx(np.stack([0.6 * np.sin(1.7 * s), 0.4 * np.sin(1.1 * s), 2.0 * np.sin(0.5 * s)], 1))
 
 
 @pytest.fixture(scope="module")

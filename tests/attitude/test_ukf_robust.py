@@ -4,6 +4,8 @@ on, each block does its job on a recording built to need it."""
 from __future__ import annotations
 
 import hashlib
+import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,9 +17,12 @@ from objectives.attitude.filters._ukf_robust import ukf_robust_run
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.attitude.fused_errors import error_sums
 from tests.attitude.robust_cases import rest_recording
-from tests.attitude.ukf_recorded import RECORDED, STEP
 
 QRAUKF = get_filter("qraukf")
+#: recorded rows (provenance in the file's "about"): every STEP-th sample, quaternion then bias
+_RECORDED = json.loads(Path(__file__).with_name("ukf_recorded.json").read_text())
+RECORDED, STEP = _RECORDED["rows"], _RECORDED["step"]
+
 
 def _digest(res) -> str:
     return hashlib.sha256(np.ascontiguousarray(res.quat).tobytes()
@@ -27,7 +32,7 @@ def _digest(res) -> str:
 @pytest.mark.parametrize("name", sorted(RECORDED))
 def test_blocks_off_is_the_recorded_paper_filter(name):
     """Every 100th sample of the defaults' run equals the one recorded with the kernel of commit c7e2d30
-    (tests/attitude/ukf_recorded.py; those arrays matched that commit's SHA-256 digests) to 1e-9 rad: the
+    (tests/attitude/ukf_recorded.json; those arrays matched that commit's SHA-256 digests) to 1e-9 rad: the
     kernels since then differ in rounding only (vectorised sigma-point passes, reciprocal Cholesky)."""
     res = get_filter(name)().run_detailed(bench6dof(duration_s=5, seed=7), "accmag")
     rows = np.array(RECORDED[name])

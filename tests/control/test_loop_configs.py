@@ -74,6 +74,15 @@ BAD = {
                             "scenario": {"duration_s": 1.0, "load": [{"t": 1.5, "value": 1.0}]}},
                            "objective.scenario.load[0].t: 1.5 s is after the end of the scenario"),
     "plant a list": ({"plant": [1, 2]}, "objective.plant: 'wmp' or a mapping (tf, zpk, ss, python, fmu), got [1, 2]"),
+    # each plant type's own key set (checked before the builder opens anything: no fmpy needed)
+    "lti unknown key": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}, "n_sub": 4}},
+                        "objective.plant.n_sub: unknown key; allowed: ['delay_s', 'dt', 'inner_output', 'method', "
+                        "'output', 'ss', 'tf', 'x0', 'zpk']"),
+    "python unknown key": ({"plant": {"python": "dyn:linear", "x0": [0.0, 0.0], "method": "zoh"}},
+                           "objective.plant.method: unknown key; allowed: ['delay_s', 'inner_output'"),
+    "fmu unknown key": ({"plant": {"fmu": "nowhere.fmu", "x0": [0.0]}},
+                        "objective.plant.x0: unknown key; allowed: ['delay_s', 'fmu', 'inner_output', 'inputs', "
+                        "'output', 'outputs', 'parameters']"),
 }
 
 

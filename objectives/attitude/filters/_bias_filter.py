@@ -20,6 +20,11 @@ With a block on, the coefficient array is the filter's own padded to :data:`ROBU
 flags and the blocks' coefficients (:func:`with_robust`), and the state is :data:`STATE_LEN` long (the
 blocks' states after q and bias, :func:`initial_state`); the shared per-sample prologue is
 :func:`robust_sample`.
+
+Each filter keeps its own short loop over :func:`sample_inputs`: the loops differ in the update's gains
+and in where and how the bias output is written (Madgwick before its update, ``b + offset``; Mahony after
+it, ``offset - I``). One loop for both would take the update as a function argument, outside the inlining
+the rules of :mod:`objectives.jit` rely on, for about eight shared lines.
 """
 
 from __future__ import annotations

@@ -311,6 +311,20 @@ def _clip(x, lim):
     return min(max(x, -lim), lim)
 
 
+@njit(cache=True, inline="always")
+def _rest_deviation_sq(s, off, v0, v1, v2, x, y, c, dt):
+    """Rest detection of one sensor: low-pass ``v`` with the rest filter (state at ``s[off]``; ``y`` gets the
+    low-passed value, ``x`` is scratch) and return the squared deviation ``|v - y|^2``."""
+    x[0] = v0
+    x[1] = v1
+    x[2] = v2
+    _lp(s, off, 3, x, y, c, C_REST_LP, c[C_REST_TAU], dt)
+    d0 = v0 - y[0]
+    d1 = v1 - y[1]
+    d2 = v2 - y[2]
+    return d0 * d0 + d1 * d1 + d2 * d2
+
+
 @njit(cache=True)
 def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
     """The filter over whole arrays (see the module docstring).
@@ -348,14 +362,7 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         # --- gyroscope: rest detection on the low-passed rate, then strapdown integration
         g0, g1, g2 = gyr[i, 0], gyr[i, 1], gyr[i, 2]
         if rest_bias or mag_rej:
-            x[0] = g0
-            x[1] = g1
-            x[2] = g2
-            _lp(s, S_REST_GYR_LP, 3, x, y, c, C_REST_LP, c[C_REST_TAU], dt)
-            d0 = g0 - y[0]
-            d1 = g1 - y[1]
-            d2 = g2 - y[2]
-            sq = d0 * d0 + d1 * d1 + d2 * d2
+            sq = _rest_deviation_sq(s, S_REST_GYR_LP, g0, g1, g2, x, y, c, dt)
             if sq >= c[C_REST_TH_GYR] ** 2 or max(abs(y[0]), max(abs(y[1]), abs(y[2]))) > clip:
                 s[S_REST_T] = 0.0
                 s[S_REST] = 0.0
@@ -378,14 +385,7 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         a0, a1, a2 = acc[i, 0], acc[i, 1], acc[i, 2]
         if not (a0 == 0.0 and a1 == 0.0 and a2 == 0.0):
             if rest_bias:
-                x[0] = a0
-                x[1] = a1
-                x[2] = a2
-                _lp(s, S_REST_ACC_LP, 3, x, y, c, C_REST_LP, c[C_REST_TAU], dt)
-                d0 = a0 - y[0]
-                d1 = a1 - y[1]
-                d2 = a2 - y[2]
-                if d0 * d0 + d1 * d1 + d2 * d2 >= c[C_REST_TH_ACC] ** 2:
+                if _rest_deviation_sq(s, S_REST_ACC_LP, a0, a1, a2, x, y, c, dt) >= c[C_REST_TH_ACC] ** 2:
                     s[S_REST_T] = 0.0
                     s[S_REST] = 0.0
                 else:

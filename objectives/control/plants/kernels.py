@@ -128,6 +128,17 @@ def _controller_period(k, fb, sig, cp, cs, opt, meas, u, u_prev, line, u_applied
 
 
 @njit(cache=True, inline="always")
+def _loop_buffers(opt, n, m, p):
+    """The work arrays of both loops for ``n`` states, ``m`` inputs, ``p`` outputs: ``y`` (p),
+    ``meas`` (n with state feedback, else p), ``u``, ``u_prev``, ``u_applied`` (m, zero), the
+    input-delay ``line`` (delay + 1, m, zero) and the controller state ``cs`` (zero)."""
+    delay = int(opt[1])
+    meas = np.empty(n if int(opt[0]) == KIND_SF else p)
+    return (np.empty(p), meas, np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((delay + 1, m)),
+            np.zeros(2 * PID_STATE))
+
+
+@njit(cache=True, inline="always")
 def _diverged(xn, div):
     """Whether any state is not below ``div`` in magnitude (NaN included)."""
     bad = False
@@ -135,6 +146,18 @@ def _diverged(xn, div):
         if not (abs(xn[i]) < div):
             bad = True
     return bad
+
+
+@njit(cache=True, inline="always")
+def _affine(a, x, b, u, out):
+    """``out = a x + b u`` (summed in the order of ``x`` then ``u``)."""
+    for i in range(out.size):
+        acc = 0.0
+        for j in range(x.size):
+            acc += a[i, j] * x[j]
+        for j in range(u.size):
+            acc += b[i, j] * u[j]
+        out[i] = acc
 
 
 @njit(cache=True)
@@ -146,36 +169,16 @@ def _loop_lti(ad, bd, cd, dd, x0, sig, cp, opt, y_out, u_out, x_out):
     """
     n_steps = sig.shape[0]
     n, m, p = ad.shape[0], bd.shape[1], cd.shape[0]
-    kind, delay = int(opt[0]), int(opt[1])
-    div = opt[9]
+    kind, div = int(opt[0]), opt[9]
     x = x0.copy()
     xn = np.empty(n)
-    y = np.empty(p)
-    u = np.zeros(m)
-    u_prev = np.zeros(m)
-    u_applied = np.zeros(m)
-    line = np.zeros((delay + 1, m))
-    cs = np.zeros(2 * PID_STATE)
-    n_meas = n if kind == 3 else p
-    meas = np.empty(n_meas)
+    y, meas, u, u_prev, u_applied, line, cs = _loop_buffers(opt, n, m, p)
     for k in range(n_steps):
-        for i in range(p):
-            acc = 0.0
-            for j in range(n):
-                acc += cd[i, j] * x[j]
-            for j in range(m):
-                acc += dd[i, j] * u_applied[j]
-            y[i] = acc
+        _affine(cd, x, dd, u_applied, y)
         y_out[k] = y
         x_out[k] = x
         _controller_period(k, x if kind == 3 else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += ad[i, j] * x[j]
-            for j in range(m):
-                acc += bd[i, j] * u_applied[j]
-            xn[i] = acc
+        _affine(ad, x, bd, u_applied, xn)
         if _diverged(xn, div):
             return STATUS_DIVERGED, k + 1
         x[:] = xn
@@ -201,16 +204,9 @@ def _loop_nl(f, rk4, params, x0, sig, cp, opt, period, n_sub, y_idx, n_in, y_out
     ``py_func`` for the pure-Python run of a function numba cannot compile). Not cached: compiled per ``f``."""
     n_steps = sig.shape[0]
     n, p = x0.size, y_idx.size
-    kind, delay = int(opt[0]), int(opt[1])
-    div = opt[9]
+    kind, div = int(opt[0]), opt[9]
     x = x0.copy()
-    y = np.empty(p)
-    u = np.zeros(n_in)
-    u_prev = np.zeros(n_in)
-    u_applied = np.zeros(n_in)
-    line = np.zeros((delay + 1, n_in))
-    cs = np.zeros(2 * PID_STATE)
-    meas = np.empty(n if kind == 3 else p)
+    y, meas, u, u_prev, u_applied, line, cs = _loop_buffers(opt, n, n_in, p)
     h = period / n_sub
     for k in range(n_steps):
         for i in range(p):

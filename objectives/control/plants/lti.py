@@ -22,6 +22,7 @@ new input acts, so a feedthrough ``D`` never makes an algebraic loop).
 from __future__ import annotations
 
 import math
+import pathlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -184,13 +185,13 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
     return kind, control.ss(a, b, c, d, cdt)
 
 
-def lti_from_spec(spec: Mapping[str, Any], period_s: float, key: str = "objective.plant") -> LTIPlant:
-    """Build and discretise the plant of ``spec`` at ``period_s``; ``ValueError`` naming the key otherwise."""
+def lti_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Path | None = None,
+                  key: str = "objective.plant") -> LTIPlant:
+    """Build and discretise the plant of ``spec`` (its keys among :data:`LTI_KEYS`, checked by
+    :func:`~objectives.control.plants.build_plant`) at ``period_s``; ``ValueError`` naming the key otherwise.
+    ``base_dir`` is unused (a model given inline reads no file): the signature of every plant builder."""
     import control
 
-    unknown = sorted(set(spec) - LTI_KEYS)
-    if unknown:
-        raise ValueError(f"{key}.{unknown[0]}: unknown key; allowed: {sorted(LTI_KEYS)}")
     dt = spec.get("dt")
     if dt is not None and not (isinstance(dt, (int, float)) and dt > 0):
         raise ValueError(f"{key}.dt: the discrete model's period must be > 0 s, got {dt!r}")
