@@ -165,7 +165,7 @@ class Optimizer:
                 raise OptionError(text[len(head):] if text.startswith(head) else text, k) from None
         if dim is not None and int(dim) < 1:
             raise OptionError(f"dimension must be >= 1, got {dim} (is every parameter fixed?)")
-        cls._combination({**decl.defaults(), **{k: v for k, v in values.items()}}, dim, set(values))
+        cls._combination({**decl.defaults(), **values}, dim, set(values))
         return out
 
     @classmethod
