@@ -59,14 +59,13 @@ def recordings() -> dict:
             "tilt1d": synthetic("tilt1d", duration_s=4.0, rate_hz=200.0, seed=5, disk_cache=False)}
 
 
-def filter_digests(reverse: bool = False) -> dict[str, str]:
-    """``{case label: sha256 prefix of the (N, 4) output quaternions}`` for every case of FILTER_CASES (run in
-    reverse order with ``reverse``: the kernels are then compiled in another order)."""
+def filter_digests() -> dict[str, str]:
+    """``{case label: sha256 prefix of the (N, 4) output quaternions}`` for every case of FILTER_CASES."""
     from objectives.attitude.filters import get_filter
 
     recs = recordings()
     out = {}
-    for label, name, params, gen in (FILTER_CASES[::-1] if reverse else FILTER_CASES):
+    for label, name, params, gen in FILTER_CASES:
         out[label] = _sha(get_filter(name)(**params).run(recs[gen]))
     return out
 
