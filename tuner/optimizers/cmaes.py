@@ -18,7 +18,7 @@ import numpy as np
 from tuner.optimizers.base import Optimizer, OptionError, declare
 from tuner.params import Interval, Param
 
-__all__ = ["CMAES", "CMA_OPTIONS", "cma_population"]
+__all__ = ["CMAES", "CMARules", "CMA_OPTIONS", "cma_population"]
 
 #: the options pycma-based methods share (the population is pycma's own default unless given)
 CMA_OPTIONS = (
@@ -65,7 +65,20 @@ class _Randn:
         return self.rng.standard_normal(shape)
 
 
-class CMAES(Optimizer):
+class CMARules:
+    """The option rules and population of the pycma-based optimisers (:class:`CMAES`, ``CMAESRestart``)."""
+
+    @classmethod
+    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
+        super()._combination(v, dim, given)  # type: ignore[misc]
+        check_cma(v, dim)
+
+    @classmethod
+    def population_for(cls, dim: int, options: Any) -> int:
+        return cma_population(dim, options)
+
+
+class CMAES(CMARules, Optimizer):
     """Covariance matrix adaptation evolution strategy (pycma); options in :attr:`CMAES.options`.
 
     ``x0`` is the initial mean (default: the centre of the cube).
@@ -73,15 +86,6 @@ class CMAES(Optimizer):
 
     name = "cmaes"
     options = declare("cmaes", CMA_OPTIONS)
-
-    @classmethod
-    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
-        super()._combination(v, dim, given)
-        check_cma(v, dim)
-
-    @classmethod
-    def population_for(cls, dim: int, options: Any) -> int:
-        return cma_population(dim, options)
 
     def __init__(self, dim: int, rng: np.random.Generator, *, sigma0: float = 0.3,
                  popsize: int | None = None, cma_options: dict | None = None, **common: Any):

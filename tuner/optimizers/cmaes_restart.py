@@ -29,13 +29,13 @@ from typing import Any, Literal
 import numpy as np
 
 from tuner.optimizers.base import WrapperOptimizer, declare
-from tuner.optimizers.cmaes import CMA_OPTIONS, CMAES, check_cma, cma_population
+from tuner.optimizers.cmaes import CMA_OPTIONS, CMAES, CMARules
 from tuner.params import NONNEG, Param
 
 __all__ = ["CMAESRestart"]
 
 
-class CMAESRestart(WrapperOptimizer):
+class CMAESRestart(CMARules, WrapperOptimizer):
     """CMA-ES restarted with an increasing (IPOP) or bi-population (BIPOP) schedule (options in
     :attr:`CMAESRestart.options`; ``population`` and ``popsize`` are those of the first run, ``cma_options``
     apply to every run, whose ``popsize`` the schedule sets, with ``tolx: 1e-4`` unless given)."""
@@ -47,15 +47,6 @@ class CMAESRestart(WrapperOptimizer):
               doc="Restarts after the first run (9: up to 2^9 times the initial population)."),
         *CMA_OPTIONS,
     ))
-
-    @classmethod
-    def _combination(cls, v: dict[str, Any], dim: int | None, given: set[str]) -> None:
-        super()._combination(v, dim, given)
-        check_cma(v, dim)
-
-    @classmethod
-    def population_for(cls, dim: int, options: Any) -> int:
-        return cma_population(dim, options)
 
     def __init__(self, dim: int, rng: np.random.Generator, *, strategy: Literal["ipop", "bipop"] = "ipop",
                  max_restarts: int = 9, sigma0: float = 0.3, popsize: int | None = None,
