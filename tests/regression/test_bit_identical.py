@@ -6,7 +6,8 @@ The digests once depended on what numba's on-disk cache held when a kernel was c
 both packages to them and :func:`test_digests_do_not_depend_on_the_cache` checks the outcome. A refactoring
 that changes one of these digests changed a result, not only where code lives. The digests are of float64
 bytes from numba kernels, so they hold for the platform they were computed on (x86-64 Linux, the CI
-machine); a change of numba or NumPy version that changes rounding shows up here too. The filters without
+machine); a change of numba or NumPy version that changes rounding shows up here too. The run histories
+also go through OpenBLAS, whose kernels depend on the CPU; they are computed under its Haswell kernels. The filters without
 ``fastmath`` (Madgwick, Mahony, complementary and UKF kernels, see objectives.jit) were re-pinned then.
 """
 
@@ -14,14 +15,16 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
 from objectives.jit import package_modules, rule_violations
-from tests.regression.digests import FILTER_CASES, PINNED, filter_digests, run_digests
+from tests.regression.digests import FILTER_CASES, PINNED, filter_digests
 
 EXPECTED = json.loads(PINNED.read_text())
 
@@ -75,8 +78,26 @@ def test_rules_find_their_breaches(tmp_path, monkeypatch):
     assert rule_violations([mod]) == ["cache_rule_probe.caller uses fastmath", "cache_rule_probe.leaf <- caller"]
 
 
+def _has_avx2() -> bool:
+    try:
+        return " avx2 " in Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return False
+
+
 @pytest.mark.slow
+@pytest.mark.skipif(not _has_avx2(), reason="the pinned histories need OpenBLAS's Haswell kernels (x86-64 with AVX2)")
 def test_run_histories_bit_identical(tmp_path):
-    got = run_digests(tmp_path)
+    """Computed in a child with ``OPENBLAS_CORETYPE=Haswell``: OpenBLAS picks its kernels by CPU (SkylakeX on an
+    AVX-512 Intel, Haswell on AVX2 and on AMD Zen), and the EKF's, CMA-ES's and the trust region's small
+    solves round differently under each, so the same code gives other histories on another CPU family.
+    Pinning the kernel family makes the guard about the code, not about the machine it runs on."""
+    code = ("import json, sys; from pathlib import Path; from tests.regression.digests import run_digests; "
+            "print(json.dumps(run_digests(Path(sys.argv[1]))))")
+    env = {**os.environ, "OPENBLAS_CORETYPE": "Haswell"}
+    out = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True,
+                         timeout=900, cwd=PINNED.parents[2], env=env)
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout.strip().splitlines()[-1])
     changed = {k: (EXPECTED["runs"][k], v) for k, v in got.items() if EXPECTED["runs"][k] != v}
     assert not changed, f"run histories changed (pinned, now): {changed}"
