@@ -22,12 +22,13 @@ $(STAMP): pyproject.toml
 demo: setup
 	$(BIN)/tuner run configs/demo.yaml
 
+# two pytest workers (pytest-xdist): the suite is mostly single-threaded, so this halves CI time on 2 cores
 test: setup
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n 2
 
 # everything but the tests marked slow (tunings, subprocess runs, whole BROAD trials): under 2 min
 test-fast: setup
-	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m pytest -m "not slow"
+	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m pytest -n 2 -m "not slow"
 
 bench: setup
 	$(BIN)/python -m pip install --quiet -e ".[$(EXTRAS),bench]"   # the peers measured side by side
