@@ -7,8 +7,9 @@ both packages to them and :func:`test_digests_do_not_depend_on_the_cache` checks
 that changes one of these digests changed a result, not only where code lives. The digests are of float64
 bytes from numba kernels, so they hold for the platform they were computed on (x86-64 Linux, the CI
 machine); a change of numba or NumPy version that changes rounding shows up here too. The run histories
-also go through OpenBLAS, whose kernels depend on the CPU; they are computed under its Haswell kernels. The filters without
-``fastmath`` (Madgwick, Mahony, complementary and UKF kernels, see objectives.jit) were re-pinned then.
+also go through OpenBLAS, whose kernels depend on the CPU; they are computed under its Haswell kernels.
+The filters without ``fastmath`` (Madgwick, Mahony, complementary and UKF kernels, see objectives.jit) were
+re-pinned then.
 """
 
 from __future__ import annotations
