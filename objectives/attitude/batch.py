@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -31,7 +32,7 @@ from numba import njit, prange
 from numba.typed import List
 
 from objectives.attitude.disturbance import CONTEXT_KEYS
-from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict
+from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict, recording_failure
 from objectives.attitude.filters._bias_filter import initial_state, robust_coef
 from objectives.attitude.filters._ekf_kernel import ekf_kernel_inner
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel_inner
@@ -290,22 +291,15 @@ def _sums(out: np.ndarray) -> ErrorSums:
     return ErrorSums(n, int(out[10]), out[0:3] / n, out[3:6] / n, out[6:9] / n)
 
 
-def _score(obj: Any, recs: list, sums: list[ErrorSums], mse_1d: list | None = None,
-           segments: list | None = None) -> Score:
+def _score(obj: Any, recs: list, sums: list[ErrorSums], mse_1d: list | None, segments: list) -> Score:
     """:meth:`FilterObjective.score` on the train data from the error sums (every recording has truth);
     ``mse_1d``: the 1-D filters' ``mse_1d`` per recording (computed in the kernel); ``segments``: each
     recording's growth segments (mean squares, counts) for the divergence check."""
     per: dict[str, dict[str, float]] = {}
     failed = ""
-    for i, (rec, es) in enumerate(zip(recs, sums)):
-        if es.n == 0:
-            raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
-        if es.n_nonfinite and not failed:
-            failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
-        elif not failed and segments is not None:  # finite but running away (objectives.attitude.divergence)
-            ms, count = segments[i]
-            why = growth_verdict(np.degrees(np.sqrt(ms)), count.astype(np.int64))
-            failed = f"filter diverged on {rec.name}: {why}" if why else ""
+    for i, (rec, es, (ms, count)) in enumerate(zip(recs, sums, segments)):
+        failed = recording_failure(rec.name, es, failed,
+                                   partial(growth_verdict, np.degrees(np.sqrt(ms)), count.astype(np.int64)))
         per[rec.name] = dict(es.as_dict())
         if obj.metric == "mse_1d":
             per[rec.name]["mse_1d"] = float(mse_1d[i])

@@ -23,6 +23,8 @@ with fewer than ``4 * MIN_SEGMENT`` scored samples are not judged.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -30,7 +32,7 @@ from numba import njit
 from objectives.jit import uncached
 
 __all__ = ["N_SEGMENTS", "GROWTH_RATIO", "GROWTH_LIMIT_DEG", "MIN_SEGMENT", "segment_rms_deg", "unbounded_growth",
-           "growth_verdict"]
+           "growth_verdict", "recording_failure"]
 
 N_SEGMENTS = 4
 GROWTH_RATIO = 3.0
@@ -120,3 +122,20 @@ def growth_verdict(rms: np.ndarray, count: np.ndarray, limit_deg: float = GROWTH
         return ("attitude error grows without bound (RMS per quarter of the recording "
                 + ", ".join(f"{v:.1f}" for v in rms) + f" deg; last > {limit_deg:g} deg and >= {ratio:g} x first)")
     return ""
+
+
+def recording_failure(name: str, sums: Any, failed: str, growth: Callable[[], str]) -> str:
+    """The evaluation's failure text after recording ``name``, one rule for the serial and the batch scoring.
+
+    ``sums``: the recording's :class:`~objectives.attitude.fused_errors.ErrorSums`; ``failed``: the text so far
+    (the first failing recording is the one named); ``growth()``: :func:`growth_verdict` of its segments, asked
+    only when every sample is finite. A recording without a scored sample is a data error, not a failure.
+    """
+    if sums.n == 0:
+        raise ValueError(f"{name}: no sample with finite truth inside the motion mask")
+    if failed:
+        return failed
+    if sums.n_nonfinite:
+        return f"filter diverged on {name}: {sums.n_nonfinite} non-finite samples"
+    why = growth()
+    return f"filter diverged on {name}: {why}" if why else ""

@@ -43,6 +43,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -54,7 +55,7 @@ from objectives.attitude.cexport import hooks as _c_hooks
 from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.disturbance import CONTEXT_KEYS as _CONTEXT_KEYS
-from objectives.attitude.divergence import unbounded_growth
+from objectives.attitude.divergence import recording_failure, unbounded_growth
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective_options import (
     AGG_KEYS,
@@ -421,13 +422,7 @@ class FilterObjective:
             m: dict[str, float] = {}
             if rec.quat is not None:
                 es = error_sums(q, rec.quat, mask)
-                if es.n == 0:
-                    raise ValueError(f"{rec.name}: no sample with finite truth inside the motion mask")
-                if es.n_nonfinite and not failed:
-                    failed = f"filter diverged on {rec.name}: {es.n_nonfinite} non-finite samples"
-                elif not failed:  # finite but running away: a failure too (objectives.attitude.divergence)
-                    why = unbounded_growth(q, rec.quat, mask)
-                    failed = f"filter diverged on {rec.name}: {why}" if why else ""
+                failed = recording_failure(rec.name, es, failed, partial(unbounded_growth, q, rec.quat, mask))
                 m.update(es.as_dict())
                 sums.append(es)
             elif not np.isfinite(q).all() and not failed:
