@@ -33,12 +33,11 @@ from numba.typed import List
 
 from objectives.attitude.disturbance import CONTEXT_KEYS
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict, recording_failure
-from objectives.attitude.filters._bias_filter import initial_state, robust_coef
 from objectives.attitude.filters._ekf_kernel import ekf_kernel_inner
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel_inner
 from objectives.attitude.filters.base import initial_quaternion
 from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale_inner, gravity_in_units
-from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt_inner, _up_sign, tilt_from_quat
+from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt_inner, _up_sign
 from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel_inner
 from objectives.attitude.filters.mahony import Mahony, _mahony_kernel_inner
 from objectives.attitude.fused_errors import ErrorSums, _error_sums_inner
@@ -308,30 +307,22 @@ def _score(obj: Any, recs: list, sums: list[ErrorSums], mse_1d: list | None, seg
 
 
 def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str, Any]], results: list):
-    """Per pair: coefficients, initial state, magnetometer use (and fuzzy tables); failures into ``results``."""
+    """Per pair: the filter's :meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup` (coefficients
+    and initial state, as its serial run builds them), magnetometer use (and fuzzy tables); failures into
+    ``results``."""
     rows: list[tuple[int, int, np.ndarray, np.ndarray, int, Any]] = []
     for ci, params in enumerate(params_list):
         try:
             flt = obj.make_filter(params)
-            v = flt.values
             pairs = []
             for ri, rec in enumerate(data.recs):
                 q0 = data.initial(obj, flt, ri)
-                use_mag = bool(v.get("use_mag", False)) and rec.mag is not None
-                state = np.zeros(7)
-                state[:4] = q0
-                if fam == 4:
-                    coef = flt._coef(rec.dt)
-                    state = flt._state0(tilt_from_quat(q0, rec.frame, flt.working_frame))
-                elif fam <= 1:  # with a robust block on, the longer coefficients and state of _bias_filter
-                    coef = flt.coef(v, rec.dt, use_mag)
-                    state = initial_state(q0, robust_coef(coef))
-                else:
-                    coef = flt.coefficients(rec.dt, use_mag, data.gravity[ri])
+                use_mag = bool(flt.values.get("use_mag", False)) and rec.mag is not None
+                setup = flt.kernel_setup(rec.dt, use_mag, q0, rec.frame, data.gravity[ri])
                 fz = None
                 if fam == 3:
                     fz = (flt.membership_table(), faekf_rules(flt.singletons())[1], flt.values)
-                pairs.append((ci, ri, coef, state, int(use_mag), fz))
+                pairs.append((ci, ri, setup.coef, setup.state, int(use_mag), fz))
             rows += pairs
         except Exception as exc:  # this candidate fails as it would serially; the others go on
             results[ci] = exc

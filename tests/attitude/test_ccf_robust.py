@@ -42,7 +42,7 @@ def test_output_with_the_options_off_is_the_seed_output(rec, opts, digest):
 def test_robust_kernel_with_blocks_off_computes_the_plain_kernel(rec, opts):
     flt = CCF(**opts)
     g = gravity_in_units(rec)
-    coef = flt._coef(True, g, rec.dt)
+    coef = flt.kernel_setup(rec.dt, True, np.array([1.0, 0.0, 0.0, 0.0]), rec.frame, g).coef
     gyr, acc, mag = (np.ascontiguousarray(a, dtype=np.float64) for a in (rec.gyr, rec.acc, rec.mag))
     s1, s2 = np.array([0.1, -0.05, 0.3, 0.0, 0.0, 0.0]), np.array([0.1, -0.05, 0.3, 0.0, 0.0, 0.0])
     q1, e1, b1 = np.empty((rec.n, 4)), np.empty((rec.n, 3)), np.empty((rec.n, 3))

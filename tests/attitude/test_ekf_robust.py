@@ -32,7 +32,7 @@ def test_robust_kernel_with_blocks_off_is_the_plain_kernel(rec, per_sample_scale
     flt = EKF(**BASE)
     gyr, acc, mag, use_mag = flt._inputs(rec)
     g = gravity_in_units(rec)
-    coef = flt.coefficients(rec.dt, use_mag, g)
+    coef = flt.kernel_setup(rec.dt, use_mag, np.array([1.0, 0.0, 0.0, 0.0]), rec.frame, g).coef
     kscale = (1.0 + np.abs(np.sin(np.arange(rec.n) * 0.01))) if per_sample_scale else np.ones(1)
     x0 = np.array([1.0, 0.02, -0.01, 0.3, 0.0, 0.0, 0.0])
     q1, b1 = np.empty((rec.n, 4)), np.empty((rec.n, 3))

@@ -8,7 +8,7 @@ import pytest
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import get_filter
-from objectives.attitude.filters._realtime_kernel import STATE_LEN, initial_state, realtime_kernel
+from objectives.attitude.filters._realtime_kernel import STATE_LEN, realtime_kernel
 from objectives.attitude.filters.realtime import Realtime
 from objectives.attitude.metrics import broad_errors
 
@@ -119,11 +119,11 @@ def test_unit_norm_and_finite_on_hard_input():
 def test_split_run_resumes_from_state():
     rec = scenario(duration_s=25.0)
     f = Realtime(mag_first_at_rest=True, mag_recover_tau_s=3.0)
-    c = f.coef(rec.dt, True)
+    c = f.kernel_setup(rec.dt, True, np.array([1.0, 0.0, 0.0, 0.0]), "ENU").coef
     n = rec.gyr.shape[0]
     outs = []
     for parts in ([slice(0, n)], [slice(0, 1234), slice(1234, n)]):
-        s = initial_state(c)
+        s = f.kernel_setup(rec.dt, True, np.array([1.0, 0.0, 0.0, 0.0]), "ENU").state  # start: self, the identity
         assert s.shape == (STATE_LEN,)
         q = np.empty((n, 4))
         for sl in parts:
@@ -177,7 +177,7 @@ def test_registered_and_validated():
     with pytest.raises(ValueError, match="mag_rejection_factor"):
         Realtime(mag_rejection_factor=0.5)
     with pytest.raises(ValueError, match="dt"):
-        Realtime().coef(0.0, True)
+        Realtime().kernel_setup(0.0, True, np.array([1.0, 0.0, 0.0, 0.0]), "ENU")
     assert {"tau_acc_s", "tau_mag_s"} <= set(Realtime.space().free_names)
 
 

@@ -1,7 +1,9 @@
 """What Madgwick and Mahony share: a kernel ``kernel(gyr, acc, mag, coef, state, out, bias_out)`` whose
 state is the quaternion and a gyro bias (``state`` (7,): q (4,), bias (3,)), called on whole arrays by
 ``run`` and on one sample at a time by ``stream``. Each filter supplies its kernel, the function that
-builds its coefficient array, and the name of the parameter that switches the bias estimate on.
+builds its coefficient array, and the name of the parameter that switches the bias estimate on; the
+coefficients and start state reach ``run``, ``stream`` and the population batch through
+:meth:`BiasKernelFilter.kernel_setup` (:func:`bias_setup`).
 
 The robust blocks (:mod:`objectives.attitude.filters.robust`) are options of both filters, all off by
 default (the kernels then run the papers' algorithms, bit for bit):
@@ -38,7 +40,7 @@ from numba import njit
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import _scalar as sc
 from objectives.attitude.filters._scalar import read_unit
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.robust import (
     ACC_STATE,
     MAG_STATE,
@@ -56,8 +58,8 @@ from objectives.attitude.filters.stream import StateStream
 from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
-           "with_robust", "robust_coef", "initial_state", "robust_sample", "sample_inputs", "robust_on", "ROBUST_AT",
-           "COEF_LEN", "STATE_LEN", "ROBUST_NAMES"]
+           "with_robust", "robust_coef", "initial_state", "bias_setup", "robust_sample", "sample_inputs", "robust_on",
+           "ROBUST_AT", "COEF_LEN", "STATE_LEN", "ROBUST_NAMES"]
 
 # --- layouts of the robust blocks in the coefficient and state arrays ----------------------------------------
 #: index of the first robust coefficient (the filters' own coefficients fit before it)
@@ -127,6 +129,12 @@ def initial_state(q0: np.ndarray, robust: bool) -> np.ndarray:
     if robust:
         state[_MS:_RS] = mag_dist_state()
     return state
+
+
+def bias_setup(coef: np.ndarray, q0: np.ndarray) -> KernelSetup:
+    """``coef`` and the kernels' start state at ``q0`` (:func:`initial_state`, the blocks' states too when
+    ``coef`` switches a robust block on)."""
+    return KernelSetup(coef, initial_state(q0, robust_coef(coef)))
 
 
 @njit(cache=True, inline="always")
@@ -217,14 +225,14 @@ def read_mag(mag, i, use_mag):
     return 0.0, 0.0, 0.0, False
 
 
-def run_bias_kernel(kernel: Any, coef: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,
-                    q0: np.ndarray, with_bias: bool):
-    """One kernel call on checked contiguous arrays: (N, 4) quaternions, and the (N, 3) bias if asked."""
+def run_bias_kernel(kernel: Any, setup: KernelSetup, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,
+                    with_bias: bool):
+    """One kernel call from ``setup`` on checked contiguous arrays: (N, 4) quaternions, and the (N, 3) bias
+    if asked."""
     n = gyr.shape[0]
-    state = initial_state(q0, robust_coef(coef))
     out = np.empty((n, 4))
     bias = np.empty((n if with_bias else 0, 3))
-    kernel(gyr, acc, mag, coef, state, out, bias)
+    kernel(gyr, acc, mag, setup.coef, setup.state, out, bias)
     return (out, bias) if with_bias else out
 
 
@@ -235,15 +243,16 @@ def batch_on_arrays(decl: ParamSet, kernel: Any, coef: Any, values: dict, gyr, a
     v = decl.validate(values)
     gyr, acc, mag = imu_arrays(name, gyr, acc, mag)
     dt = check_number(name, "dt", dt, POSITIVE, "s")
-    return run_bias_kernel(kernel, coef(v, dt, mag.shape[0] > 0), gyr, acc, mag, unit_quaternion(name, "q0", q0),
-                           with_bias)
+    setup = bias_setup(coef(v, dt, mag.shape[0] > 0), unit_quaternion(name, "q0", q0))
+    return run_bias_kernel(kernel, setup, gyr, acc, mag, with_bias)
 
 
 class BiasKernelFilter(AttitudeFilter):
     """Base of Madgwick and Mahony (NWU working frame, ``gyr_bias`` diagnostic when the bias is on).
 
-    Subclasses name, as class keywords, their ``kernel``, ``coef`` (``coef(values, dt, has_mag) -> array``)
-    and ``bias_param``, the parameter whose positive value turns the bias estimate on::
+    Subclasses name, as class keywords, their ``kernel``, ``coef`` (``coef(values, dt, has_mag) -> array``,
+    what :meth:`kernel_setup` builds the coefficients with) and ``bias_param``, the parameter whose positive
+    value turns the bias estimate on::
 
         class Madgwick(BiasKernelFilter, kernel=_madgwick_kernel, coef=_coef, bias_param="zeta"): ...
     """
@@ -251,22 +260,28 @@ class BiasKernelFilter(AttitudeFilter):
     working_frame = "NWU"
     needs_mag = True
     kernel: ClassVar[Any]
-    coef: ClassVar[Any]
+    _coef_of: ClassVar[Any]
     bias_param: ClassVar[str]
 
     def __init_subclass__(cls, kernel: Any = None, coef: Any = None, bias_param: str | None = None,
                           **kwargs: Any) -> None:
         if kernel is not None:
             cls.kernel = staticmethod(kernel)
-            cls.coef = staticmethod(coef)
+            cls._coef_of = staticmethod(coef)
             cls.bias_param = bias_param
         super().__init_subclass__(**kwargs)
+
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The filter's coefficients (with a robust block on, the longer layout of :func:`with_robust`) and the
+        start state at ``q0`` (:func:`bias_setup`); ``frame`` and ``g_ref`` do not enter (unit vectors, NWU)."""
+        return bias_setup(self._coef_of(self.values, dt, use_mag), q0)
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         v = self.values
         gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if v["use_mag"] else None)
         with_bias = v[self.bias_param] > 0 or bool(v.get("rest_bias", False))
-        res = run_bias_kernel(self.kernel, self.coef(v, rec.dt, mag.shape[0] > 0), gyr, acc, mag, q0, with_bias)
+        res = run_bias_kernel(self.kernel, self.kernel_setup(rec.dt, mag.shape[0] > 0, q0, rec.frame), gyr, acc, mag,
+                              with_bias)
         if with_bias:
             return FilterResult(res[0], self.working_frame, {"gyr_bias": res[1]})
         return FilterResult(res, self.working_frame)
@@ -281,11 +296,12 @@ class _BiasKernelStream(StateStream):
     def _init_state(self, q0: np.ndarray) -> np.ndarray:
         flt = self.filter
         self._kernel = flt.kernel
-        self._coefs = {m: flt.coef(flt.values, self.dt, m) for m in (False, True)}
+        setup = flt.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
+        self._coef = setup.coef
         self._out = np.empty((1, 4))
         self._bias = np.empty((0, 3))
-        return initial_state(q0, robust_coef(self._coefs[True]))
+        return setup.state
 
     def _step(self, state, gyr, acc, mag):
-        self._kernel(gyr, acc, mag, self._coefs[mag.shape[0] > 0], state, self._out, self._bias)
+        self._kernel(gyr, acc, mag, self._coef, state, self._out, self._bias)
         return self._out[0]

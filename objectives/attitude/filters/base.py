@@ -14,6 +14,11 @@ that declares its parameters and calls the kernel. Subclasses set
 and implement ``_run(rec, q0) -> FilterResult`` with ``q0`` already in the filter's working frame.
 Output quaternions are sensor-to-earth ``(w, x, y, z)`` in the recording's frame (``rec.frame``).
 
+A filter whose numba kernel takes a coefficient array and a start state builds both in one method,
+:meth:`AttitudeFilter.kernel_setup` (a :class:`KernelSetup`), which its serial ``_run``, its ``stream()``
+and the population batch (:mod:`objectives.attitude.batch`) all call; ``batch_kernel``, set on the class
+itself, names the population kernel that runs the class (None: evaluated serially only).
+
 Every filter runs on a :class:`Recording` or on plain arrays (``run(gyr, acc, mag, rate_hz=...)``) and
 offers a per-sample :meth:`AttitudeFilter.stream`; see :mod:`objectives.attitude.filters.stream`.
 """
@@ -32,13 +37,32 @@ from objectives.attitude.filters.start import initial_quaternion, quat_from_acc_
 from objectives.params import Declared, Param, ParamSet
 from tuner.space import Real, Space
 
-__all__ = ["AttitudeFilter", "FilterResult", "INIT", "quat_from_rotmat", "quat_from_acc_mag", "initial_quaternion"]
+__all__ = ["AttitudeFilter", "FilterResult", "KernelSetup", "G_SI", "INIT", "quat_from_rotmat", "quat_from_acc_mag",
+           "initial_quaternion"]
 
 #: the start option every declared filter gets (YAML ``init: broad`` in ``fixed`` or a ``--params`` file)
 INIT = Param("init", "auto", choices=("auto", "accmag", "truth", "broad"),
              doc="initial orientation: auto (the run's q0, objective.q0: accmag by default), accmag (first "
                  "acc/mag sample), truth (first finite truth sample) or broad (BROAD's quatFromAccMag, "
                  "as in its published results)")
+
+
+#: standard gravity, m/s^2: ``g_ref`` of :meth:`AttitudeFilter.kernel_setup` for an accelerometer in m/s^2
+G_SI = 9.80665
+
+
+@dataclass(frozen=True)
+class KernelSetup:
+    """What a filter's numba kernel starts from on one recording (:meth:`AttitudeFilter.kernel_setup`).
+
+    coef : (k,) the kernel's coefficient array (its layout: the kernel's docstring).
+    state : (m,) the kernel's state before the first sample: the start orientation in the kernel's own
+        form (quaternion, ZYX Euler angles or tilt angle), then what the kernel carries from sample to
+        sample (bias, covariance, the robust blocks' states).
+    """
+
+    coef: np.ndarray
+    state: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -67,6 +91,9 @@ class AttitudeFilter(Declared):
     #: earth frame the kernel works in; the output is converted to the recording's frame
     working_frame: ClassVar[str] = "ENU"
     needs_mag: ClassVar[bool] = False
+    #: the population kernel of :mod:`objectives.attitude.batch` that runs this class (None: serial only);
+    #: read from the class's own namespace, so a subclass (which may change ``_run``) declares its own
+    batch_kernel: ClassVar[str | None] = None
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -215,6 +242,28 @@ class AttitudeFilter(Declared):
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:  # pragma: no cover - abstract
         raise NotImplementedError
+
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The coefficient array and start state of this filter's kernel on a recording: the one place the
+        serial run, the stream and the population batch get them.
+
+        Parameters
+        ----------
+        dt : float
+            Sample time, s.
+        use_mag : bool
+            The run uses the magnetometer (the filter's ``use_mag`` and a magnetometer present).
+        q0 : (4,) array
+            Start quaternion, sensor-to-earth in the filter's working frame.
+        frame : str
+            The recording's earth frame (the 1-D filters' tilt angle follows its convention).
+        g_ref : float
+            Standard gravity in the accelerometer's unit (:func:`~objectives.attitude.filters.ekf.gravity_in_units`);
+            :data:`G_SI` for m/s^2, as :meth:`run` on arrays and :meth:`stream` take it.
+
+        Filters without such a kernel raise ``NotImplementedError``.
+        """
+        raise NotImplementedError(f"{self.name}: no kernel with a coefficient array and a start state")
 
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self.values.items())

@@ -102,7 +102,7 @@ from numba import njit
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._cf_robust import cf_robust_inner, cf_robust_kernel, robust_states
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.robust_params import robust_decl
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, UNIT_CLOSED, Interval, Param, ParamSet, check_number, imu_arrays
@@ -212,7 +212,7 @@ def complementary_batch(gyr, acc, mag, dt: float, euler0, alpha: float = 1.0, kp
     if x0.shape != (3,) or not np.all(np.isfinite(x0)):
         raise ValueError(f"{own}: euler0 must be a finite (3,) array of radians, got {euler0!r}")
     return _run_arrays(gyr, acc, mag, _coef(dt, alpha, kp, ki, mag.shape[0] > 0, acc_gate, g_ref, bool(static)),
-                       x0, detailed)
+                       _start(x0), detailed)
 
 
 def _coef(dt: float, alpha: float, kp: float, ki: float, has_mag: bool, acc_gate: float, g_ref: float,
@@ -221,11 +221,16 @@ def _coef(dt: float, alpha: float, kp: float, ki: float, has_mag: bool, acc_gate
     return np.array([dt, alpha, kp, ki, 1.0 if has_mag else 0.0, acc_gate, g_ref, 1.0 if static else 0.0])
 
 
-def _run_arrays(gyr, acc, mag, coef: np.ndarray, euler0: np.ndarray, detailed: bool):
-    """Kernel call on checked contiguous arrays."""
-    n = gyr.shape[0]
+def _start(euler0: np.ndarray) -> np.ndarray:
+    """The kernel's start state (6,): the Euler angles ``euler0`` (rad) and zero integrals."""
     state = np.zeros(6)
     state[:3] = euler0
+    return state
+
+
+def _run_arrays(gyr, acc, mag, coef: np.ndarray, state: np.ndarray, detailed: bool):
+    """Kernel call from ``state`` (written: the state after the last sample) on checked contiguous arrays."""
+    n = gyr.shape[0]
     out = np.empty((n, 4))
     m = n if detailed else 0
     euler = np.empty((m, 3))
@@ -293,7 +298,10 @@ class _ComplementaryBase(AttitudeFilter):
     def _gains(self) -> tuple[float, float, float]:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def _coef(self, has_mag: bool, g_ref: float, dt: float) -> np.ndarray:
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's coefficient array (:func:`_coef`: the gains at ``dt`` per ``alpha_mode``, ``g_ref`` for
+        ``acc_gate``) and the start state: the ZYX Euler angles of ``q0`` (NED), zero integrals; ``frame`` does
+        not enter. ValueError for ``alpha_rate_hz`` with an ``alpha_mode`` other than per_sample."""
         alpha, kp, ki = self._gains()
         mode = self.values.get("alpha_mode", "per_sample")
         rate_hz = float(self.values.get("alpha_rate_hz", 0.0))
@@ -304,8 +312,9 @@ class _ComplementaryBase(AttitudeFilter):
             alpha, kp = tau_gains(float(self.values["tau_s"]), kp, dt)
         else:
             alpha = alpha_at_rate(alpha, rate_hz, dt)
-        return _coef(dt, alpha, kp, ki, has_mag, float(self.values.get("acc_gate", math.inf)), g_ref,
+        coef = _coef(dt, alpha, kp, ki, use_mag, float(self.values.get("acc_gate", math.inf)), g_ref,
                      static=mode == "static")
+        return KernelSetup(coef, _start(euler_zyx_from_quat(q0)))
 
     @property
     def robust(self) -> bool:
@@ -331,14 +340,13 @@ class _ComplementaryBase(AttitudeFilter):
 
         gyr, acc, mag = imu_arrays(self.name, rec.gyr, rec.acc, rec.mag if self.values["use_mag"] else None)
         g = gravity_in_units(rec)
-        coef = self._coef(mag.shape[0] > 0, g, rec.dt)
+        setup = self.kernel_setup(rec.dt, mag.shape[0] > 0, q0, rec.frame, g)
+        coef, state = setup.coef, setup.state
         if not self.robust:
-            q, euler, bias = _run_arrays(gyr, acc, mag, coef, euler_zyx_from_quat(q0), detailed=True)
+            q, euler, bias = _run_arrays(gyr, acc, mag, coef, state, detailed=True)
             return FilterResult(q, self.working_frame, {"euler": euler, "gyr_bias": bias})
 
         n = gyr.shape[0]
-        state = np.zeros(6)
-        state[:3] = euler_zyx_from_quat(q0)
         q, euler, bias, gain = np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n)
         cf_robust_kernel(gyr, acc, mag, coef, *self._blocks(g, rec.dt), state, *robust_states(), q, euler, bias,
                          gain)
@@ -352,20 +360,19 @@ class _ComplementaryBase(AttitudeFilter):
 
 class _CFStream(StateStream):
     def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        self._coefs = {m: self.filter._coef(m, 9.80665, self.dt) for m in (False, True)}
+        setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
+        self._coef = setup.coef
         self._out = np.empty((1, 4))
         self._none = np.empty((0, 3))
         self._none1 = np.empty(0)
         self._robust = None
         if self.filter.robust:  # the blocks' coefficients and states, carried between samples
 
-            self._robust = (*self.filter._blocks(9.80665, self.dt), *robust_states())
-        state = np.zeros(6)
-        state[:3] = euler_zyx_from_quat(q0)
-        return state
+            self._robust = (*self.filter._blocks(G_SI, self.dt), *robust_states())
+        return setup.state
 
     def _step(self, state, gyr, acc, mag):
-        coef = self._coefs[mag.shape[0] > 0]
+        coef = self._coef
         if self._robust is None:
             _cf_kernel(gyr, acc, mag, coef, state, self._out, self._none, self._none)
         else:

@@ -96,7 +96,7 @@ from numba import njit
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_robust_kernel, ekf_steps
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.attitude.filters.robust_params import ROBUST_SWITCHES, robust_decl
 from objectives.attitude.filters.stream import StateStream
@@ -310,12 +310,17 @@ class EKF(AttitudeFilter):
     working_frame: ClassVar[str] = "NED"
     needs_mag: ClassVar[bool] = True
 
-    def coefficients(self, dt: float, use_mag: bool, g_ref: float = 1.0) -> np.ndarray:
-        """The kernel's (10,) coefficient array (see :func:`ekf_kernel`); ``g_ref``: g in acc units."""
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's (12,) coefficient array (see :func:`ekf_kernel`; ``g_ref``: g in acc units, for
+        ``acc_gate``) and the start state ``x = (q0, 0, 0, 0)`` (eq. 18: zero bias); ``frame`` does not enter
+        (NED)."""
         v = self.values
-        return np.array([dt, v["q_q"], v["q_w"], v["rho"], v["p0_q"], v["p0_b"], 1.0 if use_mag else 0.0,
+        coef = np.array([dt, v["q_q"], v["q_w"], v["rho"], v["p0_q"], v["p0_b"], 1.0 if use_mag else 0.0,
                          1.0 if v["integration"] == "exact" else 0.0, v["acc_gate"], g_ref,
                          math.radians(v["huber_deg"]), 1.0 if v["gyro_sample"] == "current" else 0.0])
+        x0 = np.zeros(7)
+        x0[:4] = q0
+        return KernelSetup(coef, x0)
 
     def _inputs(self, rec: Recording) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
         gyr = np.ascontiguousarray(rec.gyr, dtype=np.float64)
@@ -336,10 +341,9 @@ class EKF(AttitudeFilter):
         n = rec.n
         out_q = np.empty((n, 4))
         out_b = np.empty((n, 3))
-        x0 = np.zeros(7)
-        x0[:4] = q0
         g = gravity_in_units(rec)
-        coef = self.coefficients(rec.dt, use_mag, g)
+        setup = self.kernel_setup(rec.dt, use_mag, q0, rec.frame, g)
+        coef, x0 = setup.coef, setup.state
         if not self.robust:
             ekf_kernel(gyr, acc, mag, coef, kscale, x0, out_q, out_b)
             return out_q, out_b, {}
@@ -374,14 +378,14 @@ class _EKFStream(StateStream):
     the (previous, current) pair, which is what the batch kernel does at that sample."""
 
     def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        self._coef = self.filter.coefficients(self.dt, bool(self.use_mag), 9.80665)
+        setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
+        self._coef = setup.coef
         self._P = np.zeros((7, 7))
         for i in range(4):
             self._P[i, i] = self._coef[4]
         for i in range(4, 7):
             self._P[i, i] = self._coef[5]
-        x = np.zeros(7)
-        x[:4] = q0
+        x = setup.state
         nq = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3])
         x[:4] = [x[0] / nq, x[1] / nq, x[2] / nq, x[3] / nq]
         self._pair = (np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3)))

@@ -80,7 +80,7 @@ from numba import njit
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel, madgwick1d_kernel, mahony1d_kernel, tilt_state
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.stream import StateStream
 from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
 from objectives.jit import uncached
@@ -184,20 +184,21 @@ class KF1D(AttitudeFilter):
         (0.008, 0.45), (7e-9, 2e-6), (1e-13, 2e-8), (0.05, 5e-7, 5e-9),
         "accelerometer-angle noise variance R (eq. 3.17)") + _P0_OPTIONS)
 
-    def _coef(self, dt: float) -> np.ndarray:
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's ``(Ts, q00, q11, rho)`` (eqs. 3.11, 3.17) and start state ``(theta_0, 0, P_0)``
+        (:func:`~objectives.attitude.filters._kf1d_kernels.kf1d_kernel`'s layout), ``theta_0`` the tilt of
+        ``q0`` in ``frame``'s convention (:func:`tilt_from_quat`); ``use_mag`` and ``g_ref`` do not enter."""
         v = self.values
-        return np.array([dt, v["q00"], v["q11"], v["rho"]])
-
-    def _state0(self, theta0: float) -> np.ndarray:
-        v = self.values
-        return np.array([theta0, 0.0, v["p0_theta"], 0.0, v["p0_bias"]])
+        theta0 = tilt_from_quat(q0, frame, self.working_frame)
+        return KernelSetup(np.array([dt, v["q00"], v["q11"], v["rho"]]),
+                           np.array([theta0, 0.0, v["p0_theta"], 0.0, v["p0_bias"]]))
 
     def _kf(self, rec: Recording, q0: np.ndarray, kscale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         b = np.empty(rec.n)
-        state = self._state0(tilt_from_quat(q0, rec.frame, self.working_frame))
-        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), self._coef(rec.dt), kscale, state, 1, th, b)
+        setup = self.kernel_setup(rec.dt, False, q0, rec.frame)
+        kf1d_kernel(gy, ax, az, _up_sign(rec.frame), setup.coef, kscale, setup.state, 1, th, b)
         return th, b
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
@@ -360,24 +361,27 @@ class Mahony1D(AttitudeFilter):
         th = np.empty(rec.n)
         b = np.empty(rec.n)
         v = self.values
-        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
-        th[0], b[0] = theta0, 0.0
-        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), v["Kp"], v["Ki"], rec.dt, self._state0(theta0),
-                        bool(v["exact_step"]), th, b)
+        setup = self.kernel_setup(rec.dt, False, q0, rec.frame)
+        th[0], b[0] = tilt_from_quat(q0, rec.frame, self.working_frame), 0.0
+        c = setup.coef
+        mahony1d_kernel(gy, ax, az, _up_sign(rec.frame), c[1], c[2], c[0], setup.state, bool(v["exact_step"]), th, b)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
 
-    def _state0(self, theta0: float) -> np.ndarray:
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's gains ``(Ts, Kp, Ki)`` (it takes them as scalars) and start state: the half-angle
+        quaternion ``(cos, sin)`` of the tilt of ``q0`` in ``frame``'s convention (:func:`tilt_from_quat`,
+        :func:`~objectives.attitude.filters._kf1d_kernels.tilt_state`) and a zero integral; ``use_mag`` and
+        ``g_ref`` do not enter."""
         state = np.empty(3)
-        tilt_state(theta0, state)
-        return state
+        tilt_state(tilt_from_quat(q0, frame, self.working_frame), state)
+        return KernelSetup(np.array([dt, self.values["Kp"], self.values["Ki"]], dtype=np.float64), state)
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
         """O(1) per-sample filter (the kernel carries the quaternion and integral in ``state``)."""
         return _TiltStream(self, rate_hz, dt, q0, frame)
 
-    def _pair_step(self, state, gy, ax, az, up_sign, dt, th, b) -> None:
-        v = self.values
-        mahony1d_kernel(gy, ax, az, up_sign, v["Kp"], v["Ki"], dt, state, bool(v["exact_step"]), th, b)
+    def _pair_step(self, state, gy, ax, az, up_sign, coef, th, b) -> None:
+        mahony1d_kernel(gy, ax, az, up_sign, coef[1], coef[2], coef[0], state, bool(self.values["exact_step"]), th, b)
 
 
 class Madgwick1D(AttitudeFilter):
@@ -404,18 +408,23 @@ class Madgwick1D(AttitudeFilter):
         gy, ax, az = _inputs(rec)
         th = np.empty(rec.n)
         v = self.values
-        theta0 = tilt_from_quat(q0, rec.frame, self.working_frame)
-        th[0] = theta0
-        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), v["beta"], rec.dt, self._state0(theta0),
-                          bool(v["exact_step"]), th)
+        setup = self.kernel_setup(rec.dt, False, q0, rec.frame)
+        th[0] = tilt_from_quat(q0, rec.frame, self.working_frame)
+        c = setup.coef
+        madgwick1d_kernel(gy, ax, az, _up_sign(rec.frame), c[1], c[0], setup.state, bool(v["exact_step"]), th)
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th})
 
-    _state0 = Mahony1D._state0
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's gains ``(Ts, beta)`` (it takes them as scalars) and start state, as
+        :meth:`Mahony1D.kernel_setup`'s."""
+        state = np.empty(3)
+        tilt_state(tilt_from_quat(q0, frame, self.working_frame), state)
+        return KernelSetup(np.array([dt, self.values["beta"]], dtype=np.float64), state)
+
     stream = Mahony1D.stream
 
-    def _pair_step(self, state, gy, ax, az, up_sign, dt, th, b) -> None:
-        v = self.values
-        madgwick1d_kernel(gy, ax, az, up_sign, v["beta"], dt, state, bool(v["exact_step"]), th)
+    def _pair_step(self, state, gy, ax, az, up_sign, coef, th, b) -> None:
+        madgwick1d_kernel(gy, ax, az, up_sign, coef[1], coef[0], state, bool(self.values["exact_step"]), th)
 
 
 class _TiltStream(StateStream):
@@ -431,9 +440,9 @@ class _TiltStream(StateStream):
         self._b = np.empty(2)
         self._one = np.ones(1)
         self._theta = tilt_from_quat(q0, self.frame, f.working_frame)
-        if isinstance(f, KF1D):
-            self._coef = f._coef(self.dt)
-        return f._state0(self._theta)
+        setup = f.kernel_setup(self.dt, False, q0, self.frame)
+        self._coef = setup.coef
+        return setup.state
 
     def _step(self, state, gyr, acc, mag):
         f = self.filter
@@ -444,7 +453,7 @@ class _TiltStream(StateStream):
             if isinstance(f, KF1D):
                 kf1d_kernel(gy, ax, az, self._up, self._coef, self._one, state, 1, self._th, self._b)
             else:
-                f._pair_step(state, gy, ax, az, self._up, self.dt, self._th, self._b)
+                f._pair_step(state, gy, ax, az, self._up, self._coef, self._th, self._b)
             self._theta = self._th[1]
         return quat_from_tilt(np.array([self._theta]))[0]
 

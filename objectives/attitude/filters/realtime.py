@@ -35,7 +35,7 @@ import numpy as np
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters._realtime_kernel import coefficients, initial_state, realtime_kernel
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
+from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
@@ -104,16 +104,20 @@ class Realtime(AttitudeFilter):
     needs_mag = True
     decl = DECL
 
-    def coef(self, dt: float, use_mag: bool) -> np.ndarray:
-        """The kernel's coefficient array at sample time ``dt`` s."""
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's coefficient array at sample time ``dt`` s (:func:`coefficients`) and its start state
+        (:func:`initial_state`: the strapdown quaternion starts at ``q0`` with ``start: q0``, else at the
+        identity); ``frame`` and ``g_ref`` do not enter (ENU, unit vectors). ValueError for a non-positive ``dt``.
+        """
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"realtime: dt must be a positive number of seconds, got {dt!r}")
-        return coefficients(self.values, float(dt), use_mag)
+        c = coefficients(self.values, float(dt), use_mag)
+        return KernelSetup(c, initial_state(c, q0 if self.values["start"] == "q0" else None))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         use_mag = bool(self.values["use_mag"]) and rec.mag is not None
-        c = self.coef(rec.dt, use_mag)
-        s = initial_state(c, q0 if self.values["start"] == "q0" else None)
+        setup = self.kernel_setup(rec.dt, use_mag, q0, rec.frame)
+        c, s = setup.coef, setup.state
         n = rec.gyr.shape[0]
         out = np.empty((n, 4))
         bias = np.empty((n, 3))
@@ -135,11 +139,12 @@ class Realtime(AttitudeFilter):
 
 class _RealtimeStream(StateStream):
     def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        self._coef = self.filter.coef(self.dt, bool(self.use_mag))
+        setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
+        self._coef = setup.coef
         self._out = np.empty((1, 4))
         self._bias = np.empty((1, 3))
         self._flags = np.empty((1, 3))
-        return initial_state(self._coef, q0 if self.filter.values["start"] == "q0" else None)
+        return setup.state
 
     def _step(self, state, gyr, acc, mag):
         realtime_kernel(gyr, acc, mag, self._coef, state, self._out, self._bias, self._flags)
