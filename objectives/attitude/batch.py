@@ -10,6 +10,9 @@ for every pair, the filter's own per-recording kernel, the frame conversion of
 objective's own code (``_combine`` and ``_evaluation``), so each result equals what ``__call__``
 returns for the same parameters, bit for bit (tests/attitude/test_filter_batch.py).
 
+A filter class names the population kernel that runs it in its own ``batch_kernel`` (a key of
+:data:`_KERNELS`; a subclass, which may change ``_run``, declares its own), and every pair starts from the
+filter's :meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup`, as its serial run does.
 Batched: Madgwick and Mahony (any options), EKF / FAEKF without the robust blocks and the thesis
 1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
 have truth. For any other configuration :func:`evaluate_batch` returns None and the engine evaluates
@@ -23,7 +26,8 @@ process, on the first batch.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
@@ -36,10 +40,10 @@ from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth
 from objectives.attitude.filters._ekf_kernel import ekf_kernel_inner
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel_inner
 from objectives.attitude.filters.base import initial_quaternion
-from objectives.attitude.filters.ekf import EKF, FAEKF, faekf_rules, fuzzy_scale_inner, gravity_in_units
-from objectives.attitude.filters.kf1d import KF1D, _quat_from_tilt_inner, _up_sign
-from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel_inner
-from objectives.attitude.filters.mahony import Mahony, _mahony_kernel_inner
+from objectives.attitude.filters.ekf import faekf_rules, fuzzy_scale_inner, gravity_in_units
+from objectives.attitude.filters.kf1d import _quat_from_tilt_inner, _up_sign
+from objectives.attitude.filters.madgwick import _madgwick_kernel_inner
+from objectives.attitude.filters.mahony import _mahony_kernel_inner
 from objectives.attitude.fused_errors import ErrorSums, _error_sums_inner
 from objectives.attitude.quaternion import euler_zyx
 from objectives.attitude.quaternion.algebra import _qmul_kernel_inner
@@ -49,8 +53,6 @@ from tuner.objective import Score
 
 __all__ = ["evaluate_batch", "batchable"]
 
-#: kernel family of each batched filter class (exact class: a subclass may change ``_run``)
-_FAMILY = {Madgwick: 0, Mahony: 1, EKF: 2, FAEKF: 3, KF1D: 4}
 #: per pair: the 11 error sums of fused_errors, then the N_SEGMENTS mean squares and counts of divergence
 _N_ERR = 11
 _N_SUMS = _N_ERR + 2 * N_SEGMENTS
@@ -211,12 +213,17 @@ def _kf1d_batch(data, pairs, lanes_, bufs, sums, mse):
             _lane_sums(q, trues[r], masks[r], acc, sums[p])
 
 
+def _kernel(obj: Any) -> _Kernel | None:
+    """The population kernel the objective's filter class declares (``batch_kernel`` of the class itself)."""
+    return _KERNELS.get(vars(obj._cls).get("batch_kernel"))
+
+
 def batchable(obj: Any) -> bool:
     """True when :func:`evaluate_batch` can evaluate this objective's configuration (module docstring)."""
-    fam = _FAMILY.get(obj._cls)
-    if fam is None or (obj.metric == "mse_1d" and fam != 4):
+    kernel = _kernel(obj)
+    if kernel is None or (obj.metric == "mse_1d" and not kernel.mse_1d):
         return False
-    if fam in (2, 3):
+    if not kernel.robust:
         try:
             if obj.make_filter({}).robust:
                 return False
@@ -240,7 +247,7 @@ class _Data:
         self.masks = List([c(obj._mask(r), dtype=np.bool_) for r in recs])
         self.n = np.array([r.n for r in recs], dtype=np.int64)
         self.q0: dict[tuple, np.ndarray] = {}
-        self.gravity = [gravity_in_units(r) if obj._cls in (EKF, FAEKF) else 1.0 for r in recs]
+        self.gravity = [gravity_in_units(r) for r in recs]  # g_ref of kernel_setup
         frame = obj._cls.working_frame
         self.rots = np.zeros((len(recs), 5))
         for i, r in enumerate(recs):
@@ -306,7 +313,7 @@ def _score(obj: Any, recs: list, sums: list[ErrorSums], mse_1d: list | None, seg
     return Score(float(fitness), per, failed)
 
 
-def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str, Any]], results: list):
+def _prepare(obj: Any, data: _Data, kernel: _Kernel, params_list: Sequence[Mapping[str, Any]], results: list):
     """Per pair: the filter's :meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup` (coefficients
     and initial state, as its serial run builds them), magnetometer use (and fuzzy tables); failures into
     ``results``."""
@@ -319,9 +326,7 @@ def _prepare(obj: Any, data: _Data, fam: int, params_list: Sequence[Mapping[str,
                 q0 = data.initial(obj, flt, ri)
                 use_mag = bool(flt.values.get("use_mag", False)) and rec.mag is not None
                 setup = flt.kernel_setup(rec.dt, use_mag, q0, rec.frame, data.gravity[ri])
-                fz = None
-                if fam == 3:
-                    fz = (flt.membership_table(), faekf_rules(flt.singletons())[1], flt.values)
+                fz = kernel.tables(flt) if kernel.tables is not None else None
                 pairs.append((ci, ri, setup.coef, setup.state, int(use_mag), fz))
             rows += pairs
         except Exception as exc:  # this candidate fails as it would serially; the others go on
@@ -350,46 +355,42 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     """
     if not batchable(obj):
         return None
-    fam = _FAMILY[obj._cls]
+    kernel = _kernel(obj)
     data = _data(obj)
     results: list[Any] = [None] * len(params_list)
-    rows = _prepare(obj, data, fam, params_list, results)
+    rows = _prepare(obj, data, kernel, params_list, results)
     n_lanes = use_threads(n_threads)
     P = len(rows)
     pair_rec = np.array([r[1] for r in rows], dtype=np.int64)
     pair_mag = np.array([r[4] for r in rows], dtype=np.int64)
-    width = {4: 4}.get(fam) or max([len(r[2]) for r in rows] or [5 if fam <= 1 else 12])
-    coefs = np.zeros((P, width))
-    states = np.zeros((P, 5 if fam == 4 else max([len(r[3]) for r in rows] or [7])))
+    coefs = np.zeros((P, max([len(r[2]) for r in rows] or [kernel.coef_len])))
+    states = np.zeros((P, max([len(r[3]) for r in rows] or [kernel.state_len])))
     for k, r in enumerate(rows):
         coefs[k, :len(r[2])] = r[2]
         states[k, :len(r[3])] = r[3]
     order = deal(data.n[pair_rec] if P else np.zeros(0))  # longest first, claimed by free lanes
     n_max = int(data.n.max()) if len(data.n) else 0
-    qbuf = np.empty((n_lanes, n_max, 4))
-    cbuf = np.empty((n_lanes, n_max, 4))
     sums = np.zeros((P, _N_SUMS))
-    lanes_ = (order, counter())
-    if fam == 4:
-        mse = np.full(P, np.nan)
-        up = np.array([_up_sign(r.frame) for r in data.recs])
-        c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
-        cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
-                     for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
-        _kf1d_batch((*cols, data.trues, data.masks, up, data.angles()), (pair_rec, coefs, states), lanes_,
-                    (np.empty((n_lanes, n_max)), qbuf, np.empty((n_lanes, n_max)), np.empty((n_lanes, n_max))),
-                    sums, mse)
-        return _results(obj, data, params_list, rows, sums, mse, results)
+    mse = kernel.run(obj, data, params_list, rows, (pair_rec, pair_mag, coefs, states), (order, counter()),
+                     (n_lanes, n_max), sums)
+    return _results(obj, data, params_list, rows, sums, mse, results)
+
+
+def _run_bias(family: int, obj: Any, data: _Data, params_list, rows, pairs, lanes_, shape, sums) -> None:
+    """Madgwick (``family`` 0) or Mahony (1) on every pair (:func:`_bias_batch`)."""
     recs = (data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots)
-    pairs = (pair_rec, pair_mag, coefs, states)
-    if fam <= 1:
-        _bias_batch(fam, recs, pairs, lanes_, (qbuf, cbuf), sums)
-        return _results(obj, data, params_list, rows, sums, None, results)
+    _bias_batch(family, recs, pairs, lanes_, (np.empty((*shape, 4)), np.empty((*shape, 4))), sums)
+
+
+def _run_ekf(fuzzy: bool, obj: Any, data: _Data, params_list, rows, pairs, lanes_, shape, sums) -> None:
+    """The EKF or (``fuzzy``) the FAEKF on every pair (:func:`_ekf_batch`), with each pair's fuzzy tables."""
+    n_lanes, n_max = shape
+    P = len(rows)
     mf_kind = np.zeros((3, 3), dtype=np.int64)  # objectives.fuzzy.GAUSS, as FAEKF.scale
     rules = faekf_rules(np.zeros(7))[0]
     mf_params = np.zeros((P, 3, 3, 4))
     cons = np.zeros((P, rules.shape[0]))
-    if fam == 3 and P:
+    if fuzzy and P:
         flt = obj.make_filter(params_list[rows[0][0]])  # disturbances depend on fixed options only
         vibs, exts, mps = _disturbances(obj, data, flt)
         for k, r in enumerate(rows):
@@ -397,10 +398,61 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
             cons[k] = r[5][1]
     else:
         vibs = exts = mps = List([np.zeros(0) for _ in data.recs])
-    bufs = (qbuf, np.empty((n_lanes, n_max, 3)), cbuf, np.empty((n_lanes, n_max if fam == 3 else 0)))
-    _ekf_batch(1 if fam == 3 else 0, recs, pairs, lanes_, (vibs, exts, mps, mf_kind, mf_params, rules, cons), bufs,
+    recs = (data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots)
+    bufs = (np.empty((n_lanes, n_max, 4)), np.empty((n_lanes, n_max, 3)), np.empty((n_lanes, n_max, 4)),
+            np.empty((n_lanes, n_max if fuzzy else 0)))
+    _ekf_batch(1 if fuzzy else 0, recs, pairs, lanes_, (vibs, exts, mps, mf_kind, mf_params, rules, cons), bufs,
                sums)
-    return _results(obj, data, params_list, rows, sums, None, results)
+
+
+def _run_kf1d(obj: Any, data: _Data, params_list, rows, pairs, lanes_, shape, sums) -> np.ndarray:
+    """The thesis 1-D tilt KF on every pair (:func:`_kf1d_batch`); returns each pair's ``mse_1d``."""
+    n_lanes, n_max = shape
+    pair_rec, _, coefs, states = pairs
+    mse = np.full(len(rows), np.nan)
+    up = np.array([_up_sign(r.frame) for r in data.recs])
+    c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
+    cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
+                 for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
+    _kf1d_batch((*cols, data.trues, data.masks, up, data.angles()), (pair_rec, coefs, states), lanes_,
+                (np.empty((n_lanes, n_max)), np.empty((n_lanes, n_max, 4)), np.empty((n_lanes, n_max)),
+                 np.empty((n_lanes, n_max))), sums, mse)
+    return mse
+
+
+def _fuzzy_tables(flt: Any) -> tuple:
+    """The FAEKF's per-candidate tables: set parameters (3, 3, 4), rule consequents (27,), values."""
+    return flt.membership_table(), faekf_rules(flt.singletons())[1], flt.values
+
+
+@dataclass(frozen=True)
+class _Kernel:
+    """A population kernel a filter class can declare (``batch_kernel``).
+
+    run : ``run(obj, data, params_list, rows, pairs, lanes_, (n_lanes, n_max), sums)`` runs every pair into
+        ``sums`` and returns the pairs' ``mse_1d`` (None when the kernel keeps no angle).
+    coef_len, state_len : widths of the coefficient and state arrays when there is no pair.
+    mse_1d : the kernel computes ``mse_1d`` (the 1-D filters' angle is kept per pair).
+    robust : the kernel runs the filter's robust blocks (else a configuration with one on is serial).
+    tables : per candidate, what the kernel needs besides coefficients and state (None: nothing).
+    """
+
+    run: Callable[..., np.ndarray | None]
+    coef_len: int
+    state_len: int
+    mse_1d: bool = False
+    robust: bool = True
+    tables: Callable[[Any], Any] | None = None
+
+
+#: the population kernels by the name a filter class declares in ``batch_kernel``
+_KERNELS: dict[str, _Kernel] = {
+    "madgwick": _Kernel(partial(_run_bias, 0), 5, 7),
+    "mahony": _Kernel(partial(_run_bias, 1), 5, 7),
+    "ekf": _Kernel(partial(_run_ekf, False), 12, 7, robust=False),
+    "faekf": _Kernel(partial(_run_ekf, True), 12, 7, robust=False, tables=_fuzzy_tables),
+    "kf1d": _Kernel(_run_kf1d, 4, 5, mse_1d=True),
+}
 
 
 def _results(obj: Any, data: _Data, params_list: Sequence[Mapping[str, Any]], rows: list, sums: np.ndarray,

@@ -104,6 +104,26 @@ def test_configurations_without_a_kernel_return_none(flt, section):
     assert obj.evaluate_batch([obj.default_params()], 2) is None
 
 
+def test_the_kernel_is_declared_by_the_class_itself():
+    """Every declared ``batch_kernel`` is a kernel of the batch; a subclass (which may change ``_run``) is batched
+    only under a declaration of its own."""
+    from types import SimpleNamespace
+
+    from objectives.attitude.batch import _KERNELS
+    from objectives.attitude.filters import FILTERS, get_filter
+    from objectives.attitude.filters.mahony import Mahony
+
+    declared = {n: vars(get_filter(n)).get("batch_kernel") for n in FILTERS}
+    assert {k for k in declared.values() if k} == set(_KERNELS)
+
+    class Tuned(Mahony):
+        def _run(self, rec, q0):  # pragma: no cover - never run
+            raise AssertionError
+
+    assert Tuned.batch_kernel == "mahony"
+    assert not batchable(SimpleNamespace(_cls=Tuned, metric="euler_rmse_mean"))
+
+
 def _history(rd):
     with open(rd / "history.csv") as fh:
         return [{k: v for k, v in row.items() if k != "seconds"} for row in csv.DictReader(fh)]

@@ -306,6 +306,7 @@ class EKF(AttitudeFilter):
     """
 
     name: ClassVar[str] = "ekf"
+    batch_kernel: ClassVar[str | None] = "ekf"
     decl: ClassVar[ParamSet] = ParamSet("ekf", _EKF_DECL + _ROBUST_DECL)
     working_frame: ClassVar[str] = "NED"
     needs_mag: ClassVar[bool] = True
@@ -451,6 +452,7 @@ class FAEKF(EKF):
     """
 
     name: ClassVar[str] = "faekf"
+    batch_kernel: ClassVar[str | None] = "faekf"
     decl: ClassVar[ParamSet] = ParamSet("faekf", (
         *_EKF_DECL,
         *(Param(f"K{i + 1}", K_DEFAULTS[i], K_BOUNDS if f"K{i + 1}" in SEARCHED_K else None, "log", "1",

@@ -180,6 +180,7 @@ class KF1D(AttitudeFilter):
     """
 
     name: ClassVar[str] = "kf1d"
+    batch_kernel: ClassVar[str | None] = "kf1d"
     decl: ClassVar[ParamSet] = ParamSet("kf1d", _kf_noise(
         (0.008, 0.45), (7e-9, 2e-6), (1e-13, 2e-8), (0.05, 5e-7, 5e-9),
         "accelerometer-angle noise variance R (eq. 3.17)") + _P0_OPTIONS)
@@ -258,6 +259,7 @@ class AKF1D(KF1D):
     """
 
     name: ClassVar[str] = "akf1d"
+    batch_kernel: ClassVar[str | None] = None  # the fuzzy scale of R: serial only
     decl: ClassVar[ParamSet] = ParamSet("akf1d", _kf_noise(
         (0.005, 0.43), (1e-8, 8e-7), (1e-12, 5e-11), (0.05, 7e-8, 5e-12),
         "accelerometer-angle noise variance before fuzzy scaling (eq. 3.24)") + _P0_OPTIONS + (

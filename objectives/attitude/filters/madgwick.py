@@ -246,4 +246,5 @@ class Madgwick(BiasKernelFilter, kernel=_madgwick_kernel, coef=_coef, bias_param
     """
 
     name = "madgwick"
+    batch_kernel = "madgwick"
     decl = DECL

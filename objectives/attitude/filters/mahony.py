@@ -209,4 +209,5 @@ class Mahony(BiasKernelFilter, kernel=_mahony_kernel, coef=_coef, bias_param="Ki
     """
 
     name = "mahony"
+    batch_kernel = "mahony"
     decl = DECL
