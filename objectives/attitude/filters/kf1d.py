@@ -326,6 +326,15 @@ class AKF1D(KF1D):
 
 
 # --- Mahony1D / Madgwick1D -----------------------------------------------------------------------
+def _tilt_start(q0: np.ndarray, frame: str, q_frame: str) -> np.ndarray:
+    """The Mahony/Madgwick 1-D kernels' start state (3,): the half-angle quaternion ``(cos, sin)`` of the tilt
+    of ``q0`` (in ``q_frame``) in ``frame``'s convention (:func:`tilt_from_quat`,
+    :func:`~objectives.attitude.filters._kf1d_kernels.tilt_state`) and a zero integral."""
+    state = np.empty(3)
+    tilt_state(tilt_from_quat(q0, frame, q_frame), state)
+    return state
+
+
 _EXACT = Param("exact_step", True, choices=(True, False),
                doc="exact rotation per sample (true) or the sample code's first-order step (false)")
 
@@ -370,13 +379,10 @@ class Mahony1D(AttitudeFilter):
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th, "gyr_bias": b})
 
     def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
-        """The kernel's gains ``(Ts, Kp, Ki)`` (it takes them as scalars) and start state: the half-angle
-        quaternion ``(cos, sin)`` of the tilt of ``q0`` in ``frame``'s convention (:func:`tilt_from_quat`,
-        :func:`~objectives.attitude.filters._kf1d_kernels.tilt_state`) and a zero integral; ``use_mag`` and
-        ``g_ref`` do not enter."""
-        state = np.empty(3)
-        tilt_state(tilt_from_quat(q0, frame, self.working_frame), state)
-        return KernelSetup(np.array([dt, self.values["Kp"], self.values["Ki"]], dtype=np.float64), state)
+        """The kernel's gains ``(Ts, Kp, Ki)`` (it takes them as scalars) and start state (:func:`_tilt_start`);
+        ``use_mag`` and ``g_ref`` do not enter."""
+        return KernelSetup(np.array([dt, self.values["Kp"], self.values["Ki"]], dtype=np.float64),
+                           _tilt_start(q0, frame, self.working_frame))
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
         """O(1) per-sample filter (the kernel carries the quaternion and integral in ``state``)."""
@@ -417,11 +423,10 @@ class Madgwick1D(AttitudeFilter):
         return FilterResult(quat_from_tilt(th), rec.frame, {"angle": th})
 
     def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
-        """The kernel's gains ``(Ts, beta)`` (it takes them as scalars) and start state, as
-        :meth:`Mahony1D.kernel_setup`'s."""
-        state = np.empty(3)
-        tilt_state(tilt_from_quat(q0, frame, self.working_frame), state)
-        return KernelSetup(np.array([dt, self.values["beta"]], dtype=np.float64), state)
+        """The kernel's gains ``(Ts, beta)`` (it takes them as scalars) and start state (:func:`_tilt_start`);
+        ``use_mag`` and ``g_ref`` do not enter."""
+        return KernelSetup(np.array([dt, self.values["beta"]], dtype=np.float64),
+                           _tilt_start(q0, frame, self.working_frame))
 
     stream = Mahony1D.stream
 
