@@ -293,14 +293,9 @@ class BiasKernelFilter(AttitudeFilter):
 class _BiasKernelStream(StateStream):
     """O(1) per-sample stream: the kernel on one sample with quaternion and bias carried in ``state``."""
 
-    def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        flt = self.filter
-        self._kernel = flt.kernel
-        setup = flt.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
-        self._coef = setup.coef
-        self._out = np.empty((1, 4))
+    def _buffers(self) -> None:
+        self._kernel = self.filter.kernel
         self._bias = np.empty((0, 3))
-        return setup.state
 
     def _step(self, state, gyr, acc, mag):
         self._kernel(gyr, acc, mag, self._coef, state, self._out, self._bias)

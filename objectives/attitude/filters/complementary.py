@@ -359,24 +359,18 @@ class _ComplementaryBase(AttitudeFilter):
 
 
 class _CFStream(StateStream):
-    def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
-        self._coef = setup.coef
-        self._out = np.empty((1, 4))
+    def _buffers(self) -> None:
         self._none = np.empty((0, 3))
         self._none1 = np.empty(0)
         self._robust = None
         if self.filter.robust:  # the blocks' coefficients and states, carried between samples
-
             self._robust = (*self.filter._blocks(G_SI, self.dt), *robust_states())
-        return setup.state
 
     def _step(self, state, gyr, acc, mag):
         coef = self._coef
         if self._robust is None:
             _cf_kernel(gyr, acc, mag, coef, state, self._out, self._none, self._none)
         else:
-
             flags, mcoef, rcoef, acoef, ms, rs, ast = self._robust
             cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms, rs, ast, self._out,
                              self._none, self._none, self._none1)

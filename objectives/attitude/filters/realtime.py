@@ -138,13 +138,9 @@ class Realtime(AttitudeFilter):
 
 
 class _RealtimeStream(StateStream):
-    def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
-        self._coef = setup.coef
-        self._out = np.empty((1, 4))
+    def _buffers(self) -> None:
         self._bias = np.empty((1, 3))
         self._flags = np.empty((1, 3))
-        return setup.state
 
     def _step(self, state, gyr, acc, mag):
         realtime_kernel(gyr, acc, mag, self._coef, state, self._out, self._bias, self._flags)

@@ -155,9 +155,10 @@ class StreamBase:
 class StateStream(StreamBase):
     """O(1) stream over a kernel with state in/out (see module docstring).
 
-    Subclasses implement ``_init_state(q0) -> state`` and ``_step(state, gyr, acc, mag) -> q (4,)``
-    with ``q`` in the working frame (or in ``output_frame`` when a subclass sets it); ``mag`` is (1, 3)
-    or an empty (0, 3) array.
+    Subclasses implement ``_step(state, gyr, acc, mag) -> q (4,)`` with ``q`` in the working frame (or in
+    ``output_frame`` when a subclass sets it); ``mag`` is (1, 3) or an empty (0, 3) array. The start state
+    comes from the filter's ``kernel_setup`` (:meth:`_init_state`, with :meth:`_buffers` for a subclass's
+    work arrays); a filter without one overrides ``_init_state(q0) -> state``.
     """
 
     output_frame: str | None = None
@@ -185,8 +186,17 @@ class StateStream(StreamBase):
         self.n += 1
         return to_frame(q[None, :], self.output_frame or self.filter.working_frame, self.frame)[0]
 
-    def _init_state(self, q0: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    def _init_state(self, q0: np.ndarray) -> np.ndarray:
+        """The filter's ``kernel_setup`` at the stream's rate and magnetometer use: ``self._coef`` and the
+        one-sample output ``self._out`` set, the start state returned."""
+        setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
+        self._coef = setup.coef
+        self._out = np.empty((1, 4))
+        self._buffers()
+        return setup.state
+
+    def _buffers(self) -> None:
+        """A subclass's work arrays and carried block states (none here)."""
 
     def _step(self, state: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray) -> np.ndarray:
         raise NotImplementedError  # pragma: no cover - abstract
