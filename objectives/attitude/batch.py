@@ -35,7 +35,6 @@ import numpy as np
 from numba import njit, prange
 from numba.typed import List
 
-from objectives.attitude.disturbance import CONTEXT_KEYS
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict, recording_failure
 from objectives.attitude.filters._ekf_kernel import ekf_kernel_inner
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel_inner
@@ -237,7 +236,7 @@ class _Data:
     """The recordings as the kernels read them (built once per objective, shared by every batch)."""
 
     def __init__(self, obj: Any):
-        recs = obj.recordings("train")
+        recs = obj.prepare("train").recordings
         self.recs = recs
         c = np.ascontiguousarray
         self.gyrs = List([c(r.gyr, dtype=np.float64) for r in recs])
@@ -283,9 +282,11 @@ class _Data:
 
 
 def _data(obj: Any) -> _Data:
-    if "batch_data" not in obj._cache:
-        obj._cache["batch_data"] = _Data(obj)
-    return obj._cache["batch_data"]
+    """The train recordings as the kernels read them, kept with the objective's prepared train split."""
+    prepared = obj.prepare("train")
+    if prepared.batch is None:
+        prepared.batch = _Data(obj)
+    return prepared.batch
 
 
 def _sums(out: np.ndarray) -> ErrorSums:
@@ -335,13 +336,11 @@ def _prepare(obj: Any, data: _Data, kernel: _Kernel, params_list: Sequence[Mappi
 
 
 def _disturbances(obj: Any, data: _Data, flt: Any) -> tuple[List, List, List]:
-    """The FAEKF's fuzzy inputs per recording, from the objective's cache as its serial path uses them."""
+    """The FAEKF's fuzzy inputs per recording, the prepared ones its serial path uses."""
     outs = ([], [], [])
+    prepared = obj.prepare("train")
     for i, rec in enumerate(data.recs):
-        key = ("dist", ("train", i), tuple((k, flt.values.get(k)) for k in CONTEXT_KEYS))
-        if key not in obj._cache:
-            obj._cache[key] = flt.disturbances(rec)
-        d = obj._cache[key]
+        d = prepared.disturbances(flt, i)
         d = flt._as_disturbances(rec, d.vib_freq_hz, d.ext_acc_g, d.mag_pert_nu)
         for lst, a in zip(outs, (d.vib_freq_hz, d.ext_acc_g, d.mag_pert_nu)):
             lst.append(a)

@@ -38,7 +38,7 @@ __all__ = ["vibration_frequency", "packet_spectrum", "external_acceleration", "m
 #: the gravity magnitude used by default, m/s^2 (the value the synthetic benches use)
 G_STANDARD = 9.81
 #: filter values on which precomputed fuzzy inputs (these disturbance measures) depend: the filter
-#: objective's cache of them, serial and batch, is keyed by these
+#: objective prepares them once per split and these values (objectives.attitude.prepared), serial and batch
 CONTEXT_KEYS = ("window", "fft_length", "f_thr", "omega_thr", "use_mag", "acc_window", "mag_window")
 
 

@@ -35,13 +35,16 @@ Metrics (lower is better):
 ``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
 
 A filter whose output is not finite, or whose error grows without bound (:mod:`objectives.attitude.divergence`)
-is a failed evaluation naming the recording. Recordings load once per worker (lazily), never pickled.
+is a failed evaluation naming the recording. Each split's recordings load once per worker, on first use,
+and :meth:`FilterObjective.prepare` computes what its evaluations reuse (:mod:`objectives.attitude.prepared`);
+neither is pickled.
 """
 
 from __future__ import annotations
 
+import copy
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -56,7 +59,6 @@ from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.data_specs import check_specs as _check_specs
 from objectives.attitude.data_specs import split_data as _split_data
-from objectives.attitude.disturbance import CONTEXT_KEYS as _CONTEXT_KEYS
 from objectives.attitude.divergence import recording_failure, unbounded_growth
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective_options import (
@@ -64,8 +66,8 @@ from objectives.attitude.objective_options import (
     aggregate_scores,
     check_metric_options,
     check_prior,
-    recording_groups,
 )
+from objectives.attitude.prepared import DataSplit, Prepared, Split, check_split, prepare
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
@@ -116,7 +118,8 @@ class FilterObjective:
                                  f"not all 0, got {self.q0!r}")
         if self.warmup_s < 0:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
-        self._cache: dict[str, Any] = {}
+        self._data = DataSplit()
+        self._prepared: dict[Split, Prepared] = {}
 
     # --- construction -------------------------------------------------------------------------
     @classmethod
@@ -186,9 +189,26 @@ class FilterObjective:
         return FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
                                self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
 
+    def with_recordings(self, *, train: Iterable[Recording] | None = None,
+                        test: Iterable[Recording] | None = None) -> FilterObjective:
+        """A copy scoring the given recordings as its ``train`` / ``test`` split instead of loading them
+        (a cross-validation fold, one recording of the per-trial report); a split not given is as here.
+
+        Like loaded recordings they stay in this process: a pickled copy loads its specs again, so specs
+        that name the same recordings make a worker score the same.
+        """
+        out = copy.copy(self)  # through __getstate__: nothing loaded or prepared is shared
+        data = self._data
+        for split, recs in (("train", train), ("test", test)):
+            if recs is not None:
+                data = data.with_split(split, recs)
+        out._data = data
+        return out
+
     def __getstate__(self) -> dict[str, Any]:
         d = dict(self.__dict__)
-        d["_cache"] = {}  # loaded recordings stay in the process that loaded them
+        d["_data"] = DataSplit()  # loaded recordings stay in the process that loaded them,
+        d["_prepared"] = {}  # and so does what was computed from them
         d.pop("_cls", None)
         return d
 
@@ -246,10 +266,11 @@ class FilterObjective:
     def preflight(self) -> list[str]:
         """Load every recording once (kept for the run), check ``warmup_s`` against each, warn on units."""
         warnings: list[str] = []
-        for which, specs in (("train", self.train_specs), ("test", self.test_specs)):
-            key = "objective.data" + (f".{which}" if self.test_specs else "")
-            recs: list[Recording] = list(self._cache.get(which, []))
-            for i, spec in enumerate(specs if which not in self._cache else []):
+        for split, specs in (("train", self.train_specs), ("test", self.test_specs)):
+            key = "objective.data" + (f".{split}" if self.test_specs else "")
+            loaded = self._data.get(split)
+            recs: list[Recording] = list(loaded or [])
+            for i, spec in enumerate(specs if loaded is None else []):
                 where = "objective.data.all" if isinstance(spec, tuple) else f"{key}[{i}]"
                 try:
                     recs += self._load([spec])
@@ -263,7 +284,8 @@ class FilterObjective:
                                      f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
                 warnings += unit_warnings(rec)
                 warnings += self._start_warning(rec)
-            self._cache[which] = recs
+            if loaded is None:
+                self._data = self._data.with_split(split, recs)
         return warnings
 
     def start_init(self) -> Any:
@@ -317,10 +339,22 @@ class FilterObjective:
                 out += load_recordings(spec, base)
         return out
 
-    def recordings(self, which: str = "train") -> list[Recording]:
-        if which not in self._cache:
-            self._cache[which] = self._load(self.train_specs if which == "train" else self.test_specs)
-        return self._cache[which]
+    def recordings(self, split: Split = "train") -> tuple[Recording, ...]:
+        """The recordings of ``split``, loaded on first use (see :class:`~objectives.attitude.prepared.DataSplit`)."""
+        recs = self._data.get(check_split(split))
+        if recs is None:
+            recs = tuple(self._load(self.train_specs if split == "train" else self.test_specs))
+            self._data = self._data.with_split(split, recs)
+        return recs
+
+    def prepare(self, split: Split = "train") -> Prepared:
+        """What every evaluation on ``split`` reuses, computed on the split's first evaluation and kept
+        (:func:`objectives.attitude.prepared.prepare`: recordings, groups, disturbance inputs). One split at a
+        time, not both at once: a worker that tunes never scores the held-out split, so never loads it."""
+        split = check_split(split)
+        if split not in self._prepared:
+            self._prepared[split] = prepare(self, split)
+        return self._prepared[split]
 
     # --- scoring ------------------------------------------------------------------------------
     def check_params(self, params: Mapping[str, Any]) -> None:
@@ -331,13 +365,10 @@ class FilterObjective:
         values = {**self.fixed, **{k: v for k, v in params.items() if k in self._cls.defaults}}
         return self._cls(**values)
 
-    def _run(self, flt, rec: Recording, idx: tuple[str, int]):
-        dist_fn = getattr(flt, "disturbances", None)
-        if callable(dist_fn):  # fuzzy inputs depend only on fixed window options: compute once
-            key = ("dist", idx, tuple((k, flt.values.get(k)) for k in _CONTEXT_KEYS))
-            if key not in self._cache:
-                self._cache[key] = dist_fn(rec)
-            return flt.run_detailed(rec, self.q0, disturbances=self._cache[key])
+    def _run(self, flt, rec: Recording, idx: tuple[Split, int]):
+        """``flt`` on ``rec``, recording ``idx[1]`` of split ``idx[0]``, with its prepared disturbance inputs."""
+        if callable(getattr(flt, "disturbances", None)):  # fuzzy inputs depend only on fixed window options
+            return flt.run_detailed(rec, self.q0, disturbances=self.prepare(idx[0]).disturbances(flt, idx[1]))
         return flt.run_detailed(rec, self.q0)
 
     def _mask(self, rec: Recording) -> np.ndarray:
@@ -346,7 +377,7 @@ class FilterObjective:
             mask[: int(round(self.warmup_s / rec.dt))] = False
         return mask
 
-    def score(self, params: Mapping[str, Any], which: str = "train", keep_outputs: bool = False,
+    def score(self, params: Mapping[str, Any], split: Split = "train", keep_outputs: bool = False,
               outputs_limit: int | None = None, filter_override: Any = None) -> Score:
         """Fitness and per-recording metrics of ``params`` on the train or test recordings.
 
@@ -354,7 +385,7 @@ class FilterObjective:
         ``{name: FilterResult}``, for the first ``outputs_limit`` recordings only when it is given (a report that
         draws one recording need not hold all sixteen BROAD trials); ``filter_override``: a filter scored instead.
         """
-        recs = self.recordings(which)
+        recs = self.prepare(split).recordings
         if not recs:
             return Score(math.nan)
         flt = self.make_filter(params) if filter_override is None else filter_override
@@ -363,7 +394,7 @@ class FilterObjective:
         sums: list[Any] = []
         failed = ""
         for i, rec in enumerate(recs):
-            res = self._run(flt, rec, (which, i))
+            res = self._run(flt, rec, (split, i))
             q = res.quat
             mask = self._mask(rec)
             m: dict[str, float] = {}
@@ -379,7 +410,7 @@ class FilterObjective:
             per[rec.name] = m
             if keep_outputs and (outputs_limit is None or len(outputs) < outputs_limit):
                 outputs[rec.name] = res
-        fitness = self._combine(sums, per, [r.name for r in recs], which)
+        fitness = self._combine(sums, per, [r.name for r in recs], split)
         return Score(float(fitness), per, failed, outputs)
 
     @staticmethod
@@ -398,19 +429,14 @@ class FilterObjective:
         return M.mse_1d(est, true, mask)
 
     def _combine(self, sums: list[Any], per: dict[str, dict[str, float]], names: list[str] | None = None,
-                 which: str = "train") -> float:
+                 split: Split = "train") -> float:
         """The configured metric from the per-recording sums (definitions in the module docstring)."""
         opts = self.metric_options
         if opts.get("aggregate", "mean") != "mean" or opts.get("group_balanced", False):
             key = {"broad_mean_rmse": "total_rmse_deg", "mse_1d": "mse_1d"}.get(self.metric)
             names = list(per) if names is None else names
             scores = ([per[n][key] for n in names] if key else [float(np.mean(s.rmse_deg)) for s in sums])
-            groups = None
-            if opts.get("group_balanced", False):
-                gkey = ("groups", which)
-                if gkey not in self._cache:
-                    self._cache[gkey] = recording_groups(self.recordings(which), opts.get("groups", "broad"))
-                groups = self._cache[gkey]
+            groups = self.prepare(split).group_map() if opts.get("group_balanced", False) else None
             return aggregate_scores(scores, names, opts, groups)
         if self.metric == "mse_1d":
             return float(np.mean([m["mse_1d"] for m in per.values()]))
@@ -515,8 +541,7 @@ class FilterObjective:
                 obj = FilterObjective(self.filter, [("subset", specs, tuple(keep))], [], dict(self.fixed),
                                       self.metric, opts, self.q0, self.warmup_s,
                                       dict(self.report), self.base_dir, dict(self.prior))
-                obj._cache["train"] = [by_name[n] for n in keep]
-                sides.append(obj)
+                sides.append(obj.with_recordings(train=[by_name[n] for n in keep]))
             out.append((fname, sides[0], sides[1]))
         return out
 

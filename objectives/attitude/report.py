@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude.objective_options import fitness_label
+from objectives.attitude.prepared import Split
 from tuner.figures import pyplot
 
 __all__ = ["filter_report", "summary_table"]
@@ -91,7 +92,7 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
     md = ["Train and test scores of the best parameters (RMSE in degrees; test recordings were not used "
           "for tuning).", "", "```", table, "```", "", md_table(df, ".4g")]
     if obj.report.get("per_trial_optimum"):
-        po = per_trial_optimum(obj, best, which="test" if test else "train",
+        po = per_trial_optimum(obj, best, split="test" if test else "train",
                                budget=int(obj.report.get("per_trial_budget", 120)))
         out["per_trial_optimum"] = po
         md += ["", "Trial-agnostic parameters (tuned on the training recordings) next to each recording's "
@@ -207,7 +208,7 @@ def _plot_fuzzy_surface(flt, path: Path) -> None:
     plt.close(fig)
 
 
-def per_trial_optimum(obj: Any, best: dict[str, Any], which: str = "test", budget: int = 120) -> dict[str, Any]:
+def per_trial_optimum(obj: Any, best: dict[str, Any], split: Split = "test", budget: int = 120) -> dict[str, Any]:
     """Each recording's own optimum (a small serial PSO per recording) next to the given parameters.
 
     Shows how much a trial-agnostic parameter set loses against per-trial tuning (BROAD's TAGP vs
@@ -218,11 +219,10 @@ def per_trial_optimum(obj: Any, best: dict[str, Any], which: str = "test", budge
 
     space = obj.default_space()
     out: dict[str, Any] = {}
-    recs = obj.recordings(which)
+    recs = obj.recordings(split)
     for i, rec in enumerate(recs):
         single = type(obj)(obj.filter, [], [], dict(obj.fixed), obj.metric, dict(obj.metric_options), obj.q0,
-                           obj.warmup_s, {}, obj.base_dir)
-        single._cache["train"] = [rec]
+                           obj.warmup_s, {}, obj.base_dir).with_recordings(train=[rec])
         agnostic = single.score(best).fitness
         pop = max(6, min(12, budget // 10))
         opt = PSO(space.dim, np.random.default_rng(i), population=pop, generations=max(1, budget // pop),

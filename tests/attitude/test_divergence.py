@@ -68,7 +68,7 @@ def _biased_recording(bias_rps: float, duration_s: float = 60.0, rate_hz: float 
 def test_filter_objective_records_a_runaway_filter_as_failed():
     obj = FilterObjective("madgwick", [{"synthetic": {"generator": "bench6dof", "duration_s": 1, "seed": 1}}],
                           metric="broad_mean_rmse", q0="truth")
-    obj._cache["train"] = [_biased_recording(0.03)]  # 0.03 rad/s for 60 s: 103 deg of heading at the end
+    obj = obj.with_recordings(train=[_biased_recording(0.03)])  # 0.03 rad/s for 60 s: 103 deg of heading
     pure = obj({"beta": 0.0})                         # gyro integration only: the heading drifts away
     assert pure.status != "ok" and "grows without bound" in pure.error and "biased" in pure.error
     corrected = obj({"beta": 0.1})                    # the magnetometer holds the heading: bounded

@@ -84,7 +84,7 @@ def test_recordings_are_not_pickled_and_load_once():
 
     obj = FilterObjective("madgwick", [BENCH])
     obj({"beta": 0.1})
-    assert "train" in obj._cache
+    assert obj._data.train is not None and obj.prepare("train").recordings == obj.recordings("train")
     blob = pickle.dumps(obj)
     assert len(blob) < 5000, "loaded recordings must not travel with the objective"
     twin = pickle.loads(blob)
@@ -182,3 +182,31 @@ def test_tuner_evaluate_json_on_other_data(tmp_path):
                           capture_output=True, text=True, timeout=300)
     assert json.loads(same.stdout)["fitness"] == pytest.approx(res.best_fitness, rel=1e-12)
     assert Path(res.run_dir / "report.html").exists()
+
+
+def test_split_is_checked_and_recordings_are_substituted_explicitly():
+    obj = FilterObjective("madgwick", [BENCH])
+    with pytest.raises(ValueError, match="train, test"):
+        obj.score({"beta": 0.1}, "validation")
+    with pytest.raises(ValueError, match="train, test"):
+        obj.recordings("tests")
+    rec = obj.recordings("train")[0]
+    other = FilterObjective("madgwick", []).with_recordings(train=[rec])
+    assert other.recordings("train") == (rec,) and other.recordings("test") == ()
+    assert other({"beta": 0.1}).fitness == obj({"beta": 0.1}).fitness
+    assert obj._data.test is None, "a split loads on first use only"
+
+
+def test_prepare_computes_the_fixed_disturbance_inputs_once_and_stays_out_of_pickles():
+    import pickle
+
+    obj = FilterObjective("faekf", [BENCH])
+    prepared = obj.prepare("train")
+    assert obj.prepare("train") is prepared and len(prepared.dist) == 1
+    (per,) = prepared.dist.values()
+    assert all(d is not None for d in per)
+    first = obj(obj.default_params())
+    assert len(prepared.dist) == 1 and next(iter(prepared.dist.values()))[0] is per[0], "reused, not recomputed"
+    twin = pickle.loads(pickle.dumps(obj))
+    assert twin._prepared == {} and twin._data.train is None
+    assert twin(obj.default_params()).fitness == first.fitness

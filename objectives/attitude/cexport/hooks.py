@@ -19,6 +19,7 @@ import numpy as np
 
 from objectives.attitude.cexport import C_FILTERS, render_c_filter
 from objectives.attitude.filters.base import FilterResult
+from objectives.attitude.prepared import Split
 
 __all__ = ["export_c_filter", "verify_c_filter", "usage_comment"]
 
@@ -129,8 +130,8 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def verify_c_filter(obj: Any, params: Mapping[str, Any], precision: str = "double",
-                    opt: tuple[str, ...] = ("-O2",), which: str = "train") -> dict[str, Any]:
-    """Build the deployed filter's C, run it on the objective's ``which`` recordings, score both.
+                    opt: tuple[str, ...] = ("-O2",), split: Split = "train") -> dict[str, Any]:
+    """Build the deployed filter's C, run it on the objective's ``split`` recordings, score both.
 
     Returns ``{"filter", "precision", "flags", "python": Score, "c": Score, "max_angle_rad": {recording:
     float}, "seconds": {"python", "c"}}``; ``FileNotFoundError`` when there is no C compiler.
@@ -147,9 +148,9 @@ def verify_c_filter(obj: Any, params: Mapping[str, Any], precision: str = "doubl
     with tempfile.TemporaryDirectory() as tmp:
         model = _CModel(CFilter(compile_shared(files, tmp, tuple(opt)), "TVC", precision), flt, frame)
         t = time.perf_counter()
-        py = obj.score(params, which, keep_outputs=True, filter_override=flt)
+        py = obj.score(params, split, keep_outputs=True, filter_override=flt)
         t_py = time.perf_counter() - t
-        c = obj.score(params, which, keep_outputs=True, filter_override=model)
+        c = obj.score(params, split, keep_outputs=True, filter_override=model)
     diff = {}
     for name, res in py.outputs.items():
         e = _angle(res.quat, c.outputs[name].quat)
