@@ -150,7 +150,7 @@ class TimedObjective:
     def __call__(self, params: dict[str, Any]) -> Any:
         return self.objective(params)
 
-    def prepare(self) -> None:
+    def load_once(self) -> None:
         """Load the data once in this process (``preflight`` hook), so every forked child inherits it."""
         if not self._prepared:
             self._prepared = True
@@ -163,7 +163,7 @@ class TimedObjective:
 
     def call_with_timeout(self, params: Any, call: Any = None) -> tuple[Evaluation, bool]:
         """Evaluate ``(call or self.objective)(params)`` in a forked child killed after ``timeout_s``."""
-        self.prepare()
+        self.load_once()
         child, recv = fork_child(_child, call or self.objective, params)
         try:
             if recv.poll(self.timeout_s):
@@ -389,7 +389,7 @@ class Evaluator:
             else:
                 if not self._prepared:  # data loaded and kernels compiled here, inherited by every child
                     self._prepared = True
-                    timed.prepare()
+                    timed.load_once()
                     batch([], self.n_jobs)
                 rounds = -(-len(params) // self.n_jobs)
                 ok, recs = _in_child(_batch_records, (batch, params, self.n_jobs, seeds), timed.timeout_s * rounds)

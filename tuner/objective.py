@@ -117,7 +117,7 @@ class TunableObjective(Objective, Protocol):
         message starts with the config key (``objective.data[0]: ...``) on bad data; return warnings
         (e.g. implausible units) as strings."""
 
-    def score(self, params: Mapping[str, Any], which: str = "train") -> Score:
+    def score(self, params: Mapping[str, Any], split: str = "train") -> Score:
         """Detailed :class:`Score` of ``params`` on the ``"train"`` or ``"test"`` data."""
 
     @property
