@@ -252,8 +252,8 @@ class _Data:
         for i, r in enumerate(recs):
             self.rots[i, :4] = frame_rotation(frame, r.frame)
             self.rots[i, 4] = 0.0 if frame.upper() == r.frame.upper() else 1.0
-        self.dist: list | None = None
         self._angles: List | None = None
+        self._tilt: tuple | None = None
 
     def angles(self) -> List:
         """The true angles ``mse_1d`` compares with, per recording (``FilterObjective._mse_1d``'s choice)."""
@@ -266,6 +266,16 @@ class _Data:
                 out.append(np.ascontiguousarray(np.asarray(true, dtype=float).ravel()))
             self._angles = List(out)
         return self._angles
+
+    def tilt_inputs(self) -> tuple:
+        """The 1-D filters' inputs per recording (gyro y, acc x, acc z, as ``kf1d._inputs``) and each frame's
+        up sign, made once like the other arrays (not per generation)."""
+        if self._tilt is None:
+            c = np.ascontiguousarray
+            cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in self.recs])
+                         for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
+            self._tilt = (*cols, np.array([_up_sign(r.frame) for r in self.recs]))
+        return self._tilt
 
     def initial(self, obj: Any, flt: Any, i: int) -> np.ndarray:
         """The start quaternion of ``flt`` on recording ``i`` (``AttitudeFilter._run_detailed``'s)."""
@@ -409,11 +419,8 @@ def _run_kf1d(obj: Any, data: _Data, params_list, rows, pairs, lanes_, shape, su
     n_lanes, n_max = shape
     pair_rec, _, coefs, states = pairs
     mse = np.full(len(rows), np.nan)
-    up = np.array([_up_sign(r.frame) for r in data.recs])
-    c = np.ascontiguousarray  # the 1-D filters' inputs (kf1d._inputs)
-    cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
-                 for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
-    _kf1d_batch((*cols, data.trues, data.masks, up, data.angles()), (pair_rec, coefs, states), lanes_,
+    gy, ax, az, up = data.tilt_inputs()
+    _kf1d_batch((gy, ax, az, data.trues, data.masks, up, data.angles()), (pair_rec, coefs, states), lanes_,
                 (np.empty((n_lanes, n_max)), np.empty((n_lanes, n_max, 4)), np.empty((n_lanes, n_max)),
                  np.empty((n_lanes, n_max))), sums, mse)
     return mse
