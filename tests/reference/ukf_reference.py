@@ -14,9 +14,14 @@ Q_ENU_FROM_NWU = np.array([np.sqrt(0.5), 0.0, 0.0, np.sqrt(0.5)])
 
 
 def qmul(p, q):
-    pw, pv = p[0], np.asarray(p[1:])
-    qw, qv = q[0], np.asarray(q[1:])
-    return np.concatenate([[pw * qw - pv @ qv], pw * qv + qw * pv + np.cross(pv, qv)])
+    """Hamilton product: [pw qw - pv.qv, pw qv + qw pv + pv x qv] (the cross product written out: np.cross
+    costs ~20 us per call, three quarters of this reference's run time)."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return np.array([pw * qw - (px * qx + py * qy + pz * qz),
+                     pw * qx + qw * px + (py * qz - pz * qy),
+                     pw * qy + qw * py + (pz * qx - px * qz),
+                     pw * qz + qw * pz + (px * qy - py * qx)])
 
 
 def conj(q):
