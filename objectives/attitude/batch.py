@@ -18,9 +18,10 @@ Batched: Madgwick and Mahony (any options), EKF / FAEKF without the robust block
 have truth. For any other configuration :func:`evaluate_batch` returns None and the engine evaluates
 serially.
 
-The kernels are not cached (``cache=False``): they call kernels of other modules, whose changes
-numba's cache would not see (the rule of :mod:`objectives.control.wmp`); they compile once per
-process, on the first batch.
+The population kernels call kernels of other modules and are cached on disk under rule 3 of
+:mod:`objectives.jit` (each entry keyed on the whole package's sources): they compile once per machine,
+not in every process on its first batch (15 s for Madgwick's); their callees are compiled into them
+(rule 2).
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from objectives.attitude.quaternion import euler_zyx
 from objectives.attitude.quaternion.algebra import _qmul_kernel_inner
 from objectives.attitude.quaternion.conversions import frame_rotation
 from objectives.batch_threads import _pairwise_sum, claim, counter, deal, use_threads
+from objectives.jit import CACHE
 from tuner.objective import Score
 
 __all__ = ["evaluate_batch", "batchable"]
@@ -93,7 +95,7 @@ def _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag):
     return p, r, n, qbuf[lane, :n], mag
 
 
-@njit(cache=False, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def _bias_batch(family, data, pairs, lanes_, bufs, sums):
     """Madgwick (family 0) or Mahony (1) on every pair, error sums into ``sums[pair]`` (P, 11).
 
@@ -124,7 +126,7 @@ def _bias_batch(family, data, pairs, lanes_, bufs, sums):
             p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
 
-@njit(cache=False, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
     """EKF (``fuzzy`` 0) or FAEKF (1: the fuzzy scale of eqs. 28-31 first) on every pair, as ``_bias_batch``
     (``coefs`` (P, 12)).
@@ -178,7 +180,7 @@ def _mse_1d_kernel(est, true, mask, e):
     return _pairwise_sum(e, 0, m) / m
 
 
-@njit(cache=False, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def _kf1d_batch(data, pairs, lanes_, bufs, sums, mse):
     """The thesis 1-D tilt KF on every pair: the error sums of its quaternion
     (:func:`objectives.attitude.filters.kf1d.quat_from_tilt`, already in the recording's frame) into

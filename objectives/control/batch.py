@@ -14,8 +14,8 @@ Candidates are claimed by the lanes one at a time (:mod:`objectives.batch_thread
 early costs little, and the other lane takes the next candidate instead of waiting. The simulation
 writes into buffers of its lane, so a batch allocates (lanes x samples), not (candidates x samples).
 
-Not cached (``cache=False``), like the driver it calls (see :mod:`objectives.control.wmp`): the kernel
-compiles once per process, on the first batch.
+Cached on disk under rule 3 of :mod:`objectives.jit` (the entry is keyed on the whole package's sources),
+and it calls the driver's uncached twin (rule 2), so a new process loads it instead of compiling it.
 """
 
 from __future__ import annotations
@@ -38,9 +38,13 @@ from objectives.control.metrics import (
     log10_product,
 )
 from objectives.control.wmp import STATUS_NAMES, STATUS_OK, _simulate
+from objectives.jit import CACHE, uncached
 from tuner.objective import Evaluation
 
 __all__ = ["evaluate_batch"]
+
+#: the closed-loop driver as the batch kernel calls it: its uncached twin (rule 2 of objectives.jit)
+_simulate_in_kernel = uncached(_simulate)
 
 #: a candidate's row of the kernel's statistics: 4 measures (SAE, SSE, STAE, STSE) of each error ...
 _ERRORS = ("nu", "xi", "omega3")
@@ -121,7 +125,7 @@ def _score_run(ref, y, ts, wins, expo, e, tmp, out):
     out[_COST] = _weighted_cost_kernel(terms, expo)
 
 
-@njit(cache=False, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def _closed_loop_batch(loop, kind, cps, state_size, sched, score, bufs, status, stats):
     """``_simulate`` and its score for every candidate ``p``: controller ``kind`` with parameters ``cps[p]``
     and a zeroed state of ``state_size``; ``status[p]`` is ``(status code, samples done)``, ``stats[p]``
@@ -149,7 +153,7 @@ def _closed_loop_batch(loop, kind, cps, state_size, sched, score, bufs, status, 
                 break
             p = order[j]
             cs[:] = 0.0
-            st, done = _simulate(x0, c, sc, ref, noise, kind, cps[p], cs, n_sub, fall_limit,
+            st, done = _simulate_in_kernel(x0, c, sc, ref, noise, kind, cps[p], cs, n_sub, fall_limit,
                                  x_buf[lane], y, m_buf[lane], u_buf[lane])
             status[p, 0] = st
             status[p, 1] = done

@@ -151,7 +151,7 @@ def mae_weighted_cost(e_nu, e_xi, e_omega3, i_avg, weights: Mapping[str, float] 
     return float(np.prod([t**a for t, a in zip(terms, expo)]) ** 0.25)
 
 
-@njit(cache=False)  # calls another module's kernel, whose changes numba's cache would not see
+@njit(cache=False)  # compiled into the batch kernel that calls it (rule 2 of objectives.jit)
 def _measures_kernel(e, ts, tmp, out):
     """SAE, SSE, STAE, STSE of ``e`` (eqs. 2.34-2.35) into ``out[0:4]``, equal to :func:`sae`, :func:`sse`,
     :func:`stae` and :func:`stse` bit for bit; ``tmp``: scratch of at least ``e``'s length."""

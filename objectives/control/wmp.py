@@ -30,11 +30,12 @@ part (it runs even with h = Ts, ~900 L/R), fourth order for the mechanics, and d
 lag ``(L/R) dI_ss/dt``, a relative error ~ (L/R) / tau_mech ~ 5e-4 independent of h. It is checked
 against scipy's Radau on the full eq. 2.12 (tests/control/test_wmp.py).
 
-Caching: the plant kernels use numba's on-disk cache, but the closed-loop driver
-:func:`_simulate` and ``controllers.kernels.controller_step`` do not: they call kernels in other
-modules (``controllers/kernels.py``, later ``controllers/fuzzy.py``) and numba's cache does not notice
-edits in such callees (a cached driver silently ran stale controller code). They compile once per
-worker process (~2-3 s).
+Caching: the plant kernels and the closed-loop driver :func:`_simulate` use numba's on-disk cache.
+The driver calls kernels of other modules (``controllers/kernels.py`` and the fuzzy steps), whose edits
+numba's own cache would not notice (a cached driver once ran stale controller code); rule 3 of
+:mod:`objectives.jit` keys its entry on the whole package's sources, so it is compiled once per machine
+instead of once per worker process (~2-3 s each). ``controller_step`` and the steps it calls are
+compiled into the driver (rule 2).
 
 Sensors (thesis Table 1.1, sampled at Ts = 0.01 s, section 2.2.3.1): see :class:`SensorParams`.
 """
@@ -71,6 +72,7 @@ from objectives.control.wmp_params import (
     SensorParams,
     WMPParams,
 )
+from objectives.jit import CACHE
 
 __all__ = [
     "WMPParams",
@@ -219,7 +221,7 @@ def _quant(v, lsb):
     return v
 
 
-@njit(cache=False)  # not cached: it calls kernels from other modules (module docstring)
+@njit(cache=CACHE)  # calls kernels of other modules: cached under rule 3 of objectives.jit
 def _simulate(x0, c, sc, ref, noise, kind, cp, cs, n_sub, fall_limit, x_out, y_out, m_out, u_out):
     """Closed loop over the whole profile in one call.
 

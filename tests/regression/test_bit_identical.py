@@ -79,6 +79,57 @@ def test_rules_find_their_breaches(tmp_path, monkeypatch):
     assert rule_violations([mod]) == ["cache_rule_probe.caller uses fastmath", "cache_rule_probe.leaf <- caller"]
 
 
+_STALE_PROBE = """
+import sys
+from pathlib import Path
+if sys.argv[2] == "package":
+    from objectives.jit import install_locators
+    assert install_locators(Path(sys.argv[1]) / "pkg")
+sys.path.insert(0, sys.argv[1])
+from pkg.caller import g
+print(g(1.0))
+"""
+
+
+@pytest.mark.parametrize("locators", ["numba", "package"])
+def test_an_edited_callee_reaches_its_cached_caller_under_the_package_locators(tmp_path, locators):
+    """Rule 3: numba keys a cache entry on the caller's own file, so a cached kernel kept running the old body
+    of a kernel it calls from another module (shown with numba's locators); under the package's locators
+    the entry is keyed on every source of the package and the edit is seen."""
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "callee.py").write_text("from numba import njit\n\n@njit\ndef f(x):\n    return x + 1.0\n")
+    (pkg / "caller.py").write_text("from numba import njit\nfrom pkg.callee import f\n\n"
+                                   "@njit(cache=True)\ndef g(x):\n    return f(x)\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+
+    def g_of_one() -> float:
+        out = subprocess.run([sys.executable, "-c", _STALE_PROBE, str(tmp_path), locators], capture_output=True,
+                             text=True, env=env, cwd=PINNED.parents[2], timeout=300)
+        assert out.returncode == 0, out.stderr
+        return float(out.stdout.split()[-1])
+
+    assert g_of_one() == 2.0
+    assert any((tmp_path / "cache").rglob("*.nbi"))  # the caller was cached
+    (pkg / "callee.py").write_text("from numba import njit\n\n@njit\ndef f(x):\n    return x + 2.0\n")
+    assert g_of_one() == (3.0 if locators == "package" else 2.0)
+
+
+def test_the_package_kernels_are_cached_under_the_package_locators():
+    """Every cached kernel of the package, the cross-module population and closed-loop kernels among them,
+    uses rule 3's locators (a kernel module imported before them would not; rule_violations reports it)."""
+    from objectives.attitude import batch
+    from objectives.control import batch as control_batch
+    from objectives.control import wmp
+    from objectives.jit import CACHE, package_digest
+
+    assert CACHE
+    for k in (batch._bias_batch, control_batch._closed_loop_batch, wmp._simulate):
+        stamp = k._cache._impl.locator.get_source_stamp()
+        assert type(k._cache._impl.locator).__name__.startswith("Package") and stamp[1] == package_digest()
+
+
 def _has_avx2() -> bool:
     try:
         return " avx2 " in Path("/proc/cpuinfo").read_text()

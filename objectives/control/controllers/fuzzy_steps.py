@@ -4,9 +4,8 @@ Kept apart from :mod:`.fuzzy` so that :mod:`.kernels` can import them without im
 (``fuzzy`` -> ``base`` -> ``wmp`` -> ``kernels`` would be circular). Parameter-array layout: offsets
 below; :class:`.fuzzy.FLC`, :class:`.fuzzy.ProtectiveFuzzy` and :class:`.fuzzy.LUTFuzzy` build it.
 
-The steps that call :mod:`objectives.fuzzy` are not cached on disk: numba's cache does not notice
-edits in callees of other modules (the reason given in :mod:`objectives.control.wmp`); they compile
-with the closed-loop kernel once per process.
+The steps are not cached on their own: they are compiled into the closed-loop driver, whose cache entry
+holds them (rules 2 and 3 of :mod:`objectives.jit`).
 """
 
 from __future__ import annotations
@@ -46,7 +45,7 @@ FLC_STATE_SIZE = 10
 # --------------------------------------------------------------------------------------------------
 # numba steps
 # --------------------------------------------------------------------------------------------------
-@njit(cache=False)  # calls kernels of objectives.fuzzy: see the module docstring
+@njit(cache=False)  # compiled into the closed-loop driver: see the module docstring
 def _fis(p, mf_off, n_in, rules, c_off, x0, x1, s):
     """One Sugeno evaluation (eqs. 2.27-2.29) with sets p[mf_off:] (n_in, 3, 4), singletons p[c_off:]."""
     xs = s[2:4]
@@ -61,7 +60,7 @@ def _fis(p, mf_off, n_in, rules, c_off, x0, x1, s):
     return sugeno_mu(mu, rules, p[c_off : c_off + rules.shape[0]], AND_MIN, 0.0)
 
 
-@njit(cache=False)  # calls kernels of objectives.fuzzy: see the module docstring
+@njit(cache=False)  # compiled into the closed-loop driver: see the module docstring
 def _flc2_flc3_step(p, s, ref, meas):
     """FLC2 (eq. 2.29) and FLC3 (eq. 2.30, time-integrated); returns (u_theta3, u_xi) in V."""
     d = 180.0 / math.pi
@@ -70,7 +69,7 @@ def _flc2_flc3_step(p, s, ref, meas):
     return u_th, s[1]
 
 
-@njit(cache=False)  # calls kernels of objectives.fuzzy: see the module docstring
+@njit(cache=False)  # compiled into the closed-loop driver: see the module docstring
 def _flc_step(p, s, ref, meas, u_out):
     """Cascade FLC1-3 of section 2.2.2: PI-type FLC1 (eq. 2.28, time-integrated), FLC2, FLC3, eq. 2.31."""
     s[0] += p[_TS] * _fis(p, _F1_MF, 1, RULES_PI, _F1_C, ref[0] - meas[0], 0.0, s)
@@ -79,7 +78,7 @@ def _flc_step(p, s, ref, meas, u_out):
     u_out[1] = s[0] + u_th + u_xi
 
 
-@njit(cache=False)  # calls kernels of objectives.fuzzy: see the module docstring
+@njit(cache=False)  # compiled into the closed-loop driver: see the module docstring
 def _protective_step(p, s, ref, meas, u_out):
     """Protective PI-type FLC1 (section 2.3.1, Table 2.6) + FLC2 + FLC3, combined by eq. 2.31.
 
@@ -115,7 +114,7 @@ def lut_nearest(table, x_range, y_range, x, y):
     return table[i, j]
 
 
-@njit(cache=False)  # calls kernels of objectives.fuzzy: see the module docstring
+@njit(cache=False)  # compiled into the closed-loop driver: see the module docstring
 def _lut_lookup(p, o, x, y, mode):
     """Table number at offset ``o`` of p: header (nx, ny, x_lo, x_hi, y_lo, y_hi), then nx*ny values."""
     nx = int(p[o])
@@ -126,7 +125,7 @@ def _lut_lookup(p, o, x, y, mode):
     return lut_interp(t, p[o + 2 : o + 4], p[o + 4 : o + 6], x, y)
 
 
-@njit(cache=False)  # calls kernels of objectives.fuzzy: see the module docstring
+@njit(cache=False)  # compiled into the closed-loop driver: see the module docstring
 def _lut_step(p, s, ref, meas, u_out):
     """LUT1-3 version of the protective scheme (eqs. 2.32-2.33): p = (Ts, mode, o1P, o1I, o2, o3, tables).
 

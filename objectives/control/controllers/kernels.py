@@ -12,8 +12,9 @@ numbers the kernel understands:
 
 Adding a controller (for example the fuzzy controllers in ``controllers/fuzzy.py``) means:
 
-1. write an ``@njit(cache=True)`` step function ``_my_step(p, s, ref, meas, x, u_out)`` (in its own
-   module, e.g. ``fuzzy.py``);
+1. write an ``@njit`` step function ``_my_step(p, s, ref, meas, x, u_out)`` (in its own module, e.g.
+   ``fuzzy_steps.py``; not cached on its own: the closed-loop driver's cache entry holds it, rules 2 and 3
+   of :mod:`objectives.jit`);
 2. give it a new ``KIND_*`` constant here and one ``elif kind == KIND_...`` branch in
    :func:`controller_step` that calls it;
 3. write the Python class (subclass of :class:`objectives.control.controllers.base.Controller`)
@@ -123,7 +124,7 @@ def _pid_step(p, s, ref, meas, u_out):
     u_out[1] = u_nu + u_th + s[6]
 
 
-@njit(cache=False)  # calls step functions of other modules: see objectives/control/wmp.py
+@njit(cache=False)  # compiled into the closed-loop driver (rule 2 of objectives.jit)
 def controller_step(kind, p, s, ref, meas, x, r_wheel, d_wheels, u_out):
     """Dispatch one controller step by ``kind`` (see the module docstring for the signals).
 
