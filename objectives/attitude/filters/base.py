@@ -59,10 +59,14 @@ class KernelSetup:
     state : (m,) the kernel's state before the first sample: the start orientation in the kernel's own
         form (quaternion, ZYX Euler angles or tilt angle), then what the kernel carries from sample to
         sample (bias, covariance, the robust blocks' states).
+    extra : the further arrays of a kernel that starts from more than one state array, in the order its
+        docstring gives (the UKFs: the integer state, then with a robust block on the blocks' coefficients
+        and states; :meth:`objectives.attitude.filters.ukf.QUKF.kernel_setup`); empty for the others.
     """
 
     coef: np.ndarray
     state: np.ndarray
+    extra: tuple[np.ndarray, ...] = ()
 
 
 @dataclass(frozen=True)
