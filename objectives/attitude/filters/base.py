@@ -15,9 +15,11 @@ and implement ``_run(rec, q0) -> FilterResult`` with ``q0`` already in the filte
 Output quaternions are sensor-to-earth ``(w, x, y, z)`` in the recording's frame (``rec.frame``).
 
 A filter whose numba kernel takes a coefficient array and a start state builds both in one method,
-:meth:`AttitudeFilter.kernel_setup` (a :class:`KernelSetup`), which its serial ``_run``, its ``stream()``
-and the population batch (:mod:`objectives.attitude.batch`) all call; ``batch_kernel``, set on the class
-itself, names the population kernel that runs the class (None: evaluated serially only).
+:meth:`AttitudeFilter.kernel_setup` (a :class:`KernelSetup`, with a kernel's further start arrays in its
+``extra``), which its serial ``_run``, its ``stream()`` and the population batch (:mod:`objectives.attitude.batch`)
+all call (every filter with a numba kernel; VQF, which wraps an external package, is outside);
+``batch_kernel``, set on the class itself, names the population kernel that runs the class (None: evaluated
+serially only).
 
 Every filter runs on a :class:`Recording` or on plain arrays (``run(gyr, acc, mag, rate_hz=...)``) and
 offers a per-sample :meth:`AttitudeFilter.stream`; see :mod:`objectives.attitude.filters.stream`.

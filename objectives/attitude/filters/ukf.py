@@ -251,7 +251,14 @@ class QUKF(AttitudeFilter):
     working_frame = "ENU"
     needs_mag = True
     decl = ParamSet("qukf", _COMMON)
-    robust = False
+    #: the QRAUKF's covariance matching and Hampel gain (eqs. 34-38), the kernel's ``robust`` argument
+    adaptive = False
+    batch_kernel = "ukf"
+
+    @property
+    def robust(self) -> bool:
+        """True when a robust block is on (QRAUKF options; the blocks' driver runs, as for the EKF's ``robust``)."""
+        return self._block_values(G_SI) is not None
 
     def _kwargs(self) -> dict[str, Any]:
         v = self.values
@@ -265,17 +272,17 @@ class QUKF(AttitudeFilter):
         states. ``frame`` does not enter (ENU); ValueError without the magnetometer (``use_mag`` False)."""
         if not use_mag:
             raise ValueError(f"{self.name}: needs a magnetometer (the pseudo-measurement of eq. 22)")
-        return ukf_setup(float(dt), q0, robust=self.robust, **self._kwargs(), blocks=self._block_values(g_ref))
+        return ukf_setup(float(dt), q0, robust=self.adaptive, **self._kwargs(), blocks=self._block_values(g_ref))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
         from objectives.attitude.filters.ekf import gravity_in_units
 
-        g = gravity_in_units(rec) if self._block_values(G_SI) is not None else G_SI
+        g = gravity_in_units(rec) if self.robust else G_SI
         c = np.ascontiguousarray
         out = run_setup(self.kernel_setup(rec.dt, True, q0, rec.frame, g), c(rec.gyr, dtype=np.float64),
                         c(rec.acc, dtype=np.float64), c(rec.mag, dtype=np.float64))
         diag = {"bias": out["bias"], "skipped": out["skipped"]}
-        if self.robust:
+        if self.adaptive:
             diag["lam"] = out["lam"]
             diag["fallback"] = out["fallback"]
         for key in ("mag_gain", "rest"):
@@ -300,7 +307,7 @@ class QUKF(AttitudeFilter):
 
 class _UKFStream(StateStream):
     def _buffers(self) -> None:
-        self._robust = bool(self._coef[7] != 0.0)
+        self._adaptive = bool(self._coef[7] != 0.0)
         self._work = new_work()
         self._bias = np.empty((1, 3))
         self._lam = np.empty((1, 3))
@@ -311,10 +318,10 @@ class _UKFStream(StateStream):
     def _step(self, state, gyr, acc, mag):
         x = self._extra
         if len(x) == 1:
-            _ukf_run(gyr, acc, mag, self._coef, self._robust, state, x[0], self._work, self._out, self._bias,
+            _ukf_run(gyr, acc, mag, self._coef, self._adaptive, state, x[0], self._work, self._out, self._bias,
                      self._lam, self._skip, self._fallback)
         else:
-            _ukf_robust_loop(gyr, acc, mag, self._coef, self._robust, state, *x[:1], self._work, *x[1:], self._out,
+            _ukf_robust_loop(gyr, acc, mag, self._coef, self._adaptive, state, x[0], self._work, *x[1:], self._out,
                              self._bias, self._lam, self._skip, self._fallback, self._d)
         return self._out[0]
 
@@ -345,7 +352,8 @@ class QRAUKF(QUKF):
         Param("n_sigma", 3.0, (1.0, 10.0), unit="1", doc="Hampel confidence region (paper 3)", eq="eq. 36",
               allowed=POSITIVE),
     ) + _ROBUST_DECL)
-    robust = True
+    adaptive = True
+    batch_kernel = "ukf"
 
     def _kwargs(self) -> dict[str, Any]:
         kw = super()._kwargs()
