@@ -13,8 +13,8 @@ returns for the same parameters, bit for bit (tests/attitude/test_filter_batch.p
 A filter class names the population kernel that runs it in its own ``batch_kernel`` (a key of
 :data:`_KERNELS`; a subclass, which may change ``_run``, declares its own), and every pair starts from the
 filter's :meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup`, as its serial run does.
-Batched: Madgwick and Mahony (any options), EKF / FAEKF without the robust blocks and the thesis
-1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
+Batched: Madgwick and Mahony (any options), EKF / FAEKF and QUKF / QRAUKF without the robust blocks and the
+thesis 1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
 have truth. For any other configuration :func:`evaluate_batch` returns None and the engine evaluates
 serially.
 
@@ -39,6 +39,7 @@ from numba.typed import List
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict, recording_failure
 from objectives.attitude.filters._ekf_kernel import ekf_kernel_inner
 from objectives.attitude.filters._kf1d_kernels import kf1d_kernel_inner
+from objectives.attitude.filters._ukf_kernels import WORK_SIZE, _ukf_run_inner
 from objectives.attitude.filters.base import initial_quaternion
 from objectives.attitude.filters.ekf import faekf_rules, fuzzy_scale_inner, gravity_in_units
 from objectives.attitude.filters.kf1d import _quat_from_tilt_inner, _up_sign
@@ -153,6 +154,27 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
                 ekf_kernel_inner(gyrs[r], accs[r], mag, coefs[p], k, states[p], q, bbuf[lane, :n])
             else:
                 ekf_kernel_inner(gyrs[r], accs[r], mag, coefs[p], one, states[p], q, bbuf[lane, :n])
+            _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
+            p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
+
+
+@njit(cache=False, parallel=True)
+def _ukf_batch(data, pairs, istates, lanes_, bufs, sums):
+    """QUKF / QRAUKF (``coefs[p, 7]``) on every pair, as ``_bias_batch`` (``coefs`` (P, 8), ``states`` padded to
+    the longest innovation window); ``istates`` (P, 4) the integer start states; ``bufs``: per-lane quaternion,
+    converted quaternion, bias, Hampel gain, skipped and fallback buffers."""
+    gyrs, accs, _, trues, masks, rots = data
+    coefs, states = pairs[2], pairs[3]
+    qbuf, cbuf, bbuf, lbuf, sbuf, fbuf = bufs
+    for lane in prange(qbuf.shape[0]):
+        no_mag = np.empty((0, 3))
+        work = np.empty(WORK_SIZE)
+        acc = np.empty(_N_SUMS)
+        p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
+        while p >= 0:
+            work[:] = 0.0  # the serial run's fresh scratch
+            _ukf_run_inner(gyrs[r], accs[r], mag, coefs[p], coefs[p, 7] != 0.0, states[p], istates[p], work, q,
+                           bbuf[lane, :n], lbuf[lane, :n], sbuf[lane, :n], fbuf[lane, :n])
             _pair_sums(q, cbuf[lane, :n], rots, r, trues[r], masks[r], acc, sums[p])
             p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
@@ -330,17 +352,17 @@ def _prepare(obj: Any, data: _Data, kernel: _Kernel, params_list: Sequence[Mappi
     """Per pair: the filter's :meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup` (coefficients
     and initial state, as its serial run builds them), magnetometer use (and fuzzy tables); failures into
     ``results``."""
-    rows: list[tuple[int, int, np.ndarray, np.ndarray, int, Any]] = []
+    rows: list[tuple[int, int, np.ndarray, np.ndarray, int, Any, tuple]] = []
     for ci, params in enumerate(params_list):
         try:
             flt = obj.make_filter(params)
             pairs = []
             for ri, rec in enumerate(data.recs):
                 q0 = data.initial(obj, flt, ri)
-                use_mag = bool(flt.values.get("use_mag", False)) and rec.mag is not None
+                use_mag = bool(flt.values.get("use_mag", True)) and rec.mag is not None
                 setup = flt.kernel_setup(rec.dt, use_mag, q0, rec.frame, data.gravity[ri])
                 fz = kernel.tables(flt) if kernel.tables is not None else None
-                pairs.append((ci, ri, setup.coef, setup.state, int(use_mag), fz))
+                pairs.append((ci, ri, setup.coef, setup.state, int(use_mag), fz, setup.extra))
             rows += pairs
         except Exception as exc:  # this candidate fails as it would serially; the others go on
             results[ci] = exc
@@ -428,6 +450,17 @@ def _run_kf1d(obj: Any, data: _Data, params_list, rows, pairs, lanes_, shape, su
     return mse
 
 
+def _run_ukf(obj: Any, data: _Data, params_list, rows, pairs, lanes_, shape, sums) -> None:
+    """The QUKF / QRAUKF on every pair (:func:`_ukf_batch`), each from its setup's integer state."""
+    n_lanes, n_max = shape
+    istates = np.array([r[6][0] for r in rows], dtype=np.int64).reshape(len(rows), 4)
+    recs = (data.gyrs, data.accs, data.mags, data.trues, data.masks, data.rots)
+    flags = np.zeros((n_lanes, n_max), dtype=np.bool_)
+    _ukf_batch(recs, pairs, istates, lanes_, (np.empty((n_lanes, n_max, 4)), np.empty((n_lanes, n_max, 4)),
+                                              np.empty((n_lanes, n_max, 3)), np.empty((n_lanes, n_max, 3)), flags,
+                                              flags.copy()), sums)
+
+
 def _fuzzy_tables(flt: Any) -> tuple:
     """The FAEKF's per-candidate tables: set parameters (3, 3, 4), rule consequents (27,), values."""
     return flt.membership_table(), faekf_rules(flt.singletons())[1], flt.values
@@ -460,6 +493,7 @@ _KERNELS: dict[str, _Kernel] = {
     "ekf": _Kernel(partial(_run_ekf, False), 12, 7, robust=False),
     "faekf": _Kernel(partial(_run_ekf, True), 12, 7, robust=False, tables=_fuzzy_tables),
     "kf1d": _Kernel(_run_kf1d, 4, 5, mse_1d=True),
+    "ukf": _Kernel(_run_ukf, 8, 52, robust=False),
 }
 
 

@@ -201,7 +201,8 @@ def test_run_on_arrays_errors(rec):
 
 # --- streaming -----------------------------------------------------------------------------------
 #: filters whose kernel carries its state: O(1) per sample
-NATIVE = {"madgwick", "mahony", "lcf", "ncf", "ccf", "ekf", "kf1d", "mahony1d", "madgwick1d", "realtime"}
+NATIVE = {"madgwick", "mahony", "lcf", "ncf", "ccf", "ekf", "kf1d", "mahony1d", "madgwick1d", "realtime", "qukf",
+          "qraukf"}
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -216,7 +217,7 @@ def test_stream_equals_batch_sample_by_sample(name, rec):
     np.testing.assert_array_equal(got, want)
 
 
-@pytest.mark.parametrize("name", sorted(NATIVE - {"kf1d", "mahony1d", "madgwick1d"}))
+@pytest.mark.parametrize("name", sorted(NATIVE - {"kf1d", "mahony1d", "madgwick1d", "qukf", "qraukf"}))  # UKFs: 9-D
 def test_native_stream_imu_only_and_explicit_start(name, rec):
     flt = get_filter(name)(use_mag=False, **({"gyro_sample": "current", "acc_gate": 0.5} if name == "ekf" else {}))
     q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])

@@ -55,6 +55,8 @@ def _call(obj, p):
     ("faekf", FAEKF_FIXED, {"metric": "euler_rmse_mean", "metric_options": {"aggregate": "median"}}),
     ("kf1d", {}, {"metric": "mse_1d", "data": [TILT, TILT2]}),
     ("kf1d", {}, {"metric": "euler_rmse_mean", "data": [TILT]}),
+    ("qukf", {}, {}),
+    ("qraukf", {"n_sigma": 2.0}, {"metric": "broad_total_rmse", "q0": "truth"}),
 ])
 @pytest.mark.slow
 def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
@@ -97,6 +99,7 @@ def test_an_empty_batch_prepares_and_returns_nothing():
 @pytest.mark.parametrize("flt, section", [("akf1d", {"data": [TILT], "metric": "mse_1d"}),
                                           ("madgwick", {"data": [TILT], "metric": "mse_1d"}),
                                           ("ekf", {"data": [BENCH], "fixed": {"mag_rejection": True}}),
+                                          ("qraukf", {"data": [BENCH], "fixed": {"rest_bias": True}}),
                                           ("vqf", {"data": [BENCH]})])
 def test_configurations_without_a_kernel_return_none(flt, section):
     obj = FilterObjective.from_config({"kind": "filter", "filter": flt, **section})

@@ -24,8 +24,8 @@ holds the per-sample arithmetic, written for the fixed sizes of the problem (6 e
 - QRAUKF's sorted innovation window finds the removal and insertion places by branch-free counts and
   the MAD merge uses selects (eq. 36; the same values bit for bit): innovations are noise, so the
   former bisection and insertion scans mispredicted most of their jumps.
-- Compiled with the NumPy error model (no division checks) and rounding-only fast-math flags
-  (FMA contraction, reassociation, reciprocals; no NaN/inf assumptions, the degeneracy checks stay).
+- Compiled with the NumPy error model (no division checks) and, as every kernel, without fast-math flags
+  (:mod:`objectives.jit`, rule 1; the profile below was measured with them).
 - The pseudo-measurement UT (eq. 25) shares the accelerometer quaternion between the 6 magnetometer
   sigma points, and uses that the magnetometer quaternion of eq. 24 does not depend on the length
   of the field vector.

@@ -132,19 +132,21 @@ def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mc
 
 def ukf_robust_run(gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray, coef: np.ndarray, robust: bool,
                    state: np.ndarray, istate: np.ndarray, work: np.ndarray, flags: np.ndarray, mcoef: np.ndarray,
-                   rcoef: np.ndarray, acoef: np.ndarray) -> dict[str, np.ndarray]:
+                   rcoef: np.ndarray, acoef: np.ndarray, states: tuple | None = None) -> dict[str, np.ndarray]:
     """The kernel with the robust blocks over a whole recording (contiguous float64 (N, 3) arrays).
 
     ``flags`` (4,): mag_rejection, rest_bias, acc_lp (1/0), rest variance (rad/s)^2; ``mcoef``, ``rcoef``,
-    ``acoef`` from :mod:`objectives.attitude.filters.robust`. Returns the kernel's outputs plus
-    ``mag_gain`` (N,) and ``rest`` (N,) bool.
+    ``acoef`` from :mod:`objectives.attitude.filters.robust`; ``states``: the blocks' states ``(ms, rs, ast)``,
+    updated in place (None: their start states). Returns the kernel's outputs plus ``mag_gain`` (N,) and
+    ``rest`` (N,) bool.
     """
+    ms, rs, ast = states if states is not None else (mag_dist_state(), rest_state(), acc_lp_state())
     n = gyr.shape[0]
     out = {"quat": np.empty((n, 4)), "bias": np.empty((n, 3)), "lam": np.empty((n, 3)),
            "skipped": np.zeros(n, dtype=np.bool_), "fallback": np.zeros(n, dtype=np.bool_)}
     d = np.empty((n, 2))
     _ukf_robust_loop(gyr, acc, mag, coef, bool(robust), state, istate, work, flags, mcoef, rcoef, acoef,
-                     mag_dist_state(), rest_state(), acc_lp_state(), out["quat"], out["bias"],
+                     ms, rs, ast, out["quat"], out["bias"],
                      out["lam"], out["skipped"], out["fallback"], d)
     out["mag_gain"] = d[:, 0]
     out["rest"] = d[:, 1] != 0.0

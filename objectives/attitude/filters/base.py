@@ -15,9 +15,11 @@ and implement ``_run(rec, q0) -> FilterResult`` with ``q0`` already in the filte
 Output quaternions are sensor-to-earth ``(w, x, y, z)`` in the recording's frame (``rec.frame``).
 
 A filter whose numba kernel takes a coefficient array and a start state builds both in one method,
-:meth:`AttitudeFilter.kernel_setup` (a :class:`KernelSetup`), which its serial ``_run``, its ``stream()``
-and the population batch (:mod:`objectives.attitude.batch`) all call; ``batch_kernel``, set on the class
-itself, names the population kernel that runs the class (None: evaluated serially only).
+:meth:`AttitudeFilter.kernel_setup` (a :class:`KernelSetup`, with a kernel's further start arrays in its
+``extra``), which its serial ``_run``, its ``stream()`` and the population batch (:mod:`objectives.attitude.batch`)
+all call (every filter with a numba kernel; VQF, which wraps an external package, is outside);
+``batch_kernel``, set on the class itself, names the population kernel that runs the class (None: evaluated
+serially only).
 
 Every filter runs on a :class:`Recording` or on plain arrays (``run(gyr, acc, mag, rate_hz=...)``) and
 offers a per-sample :meth:`AttitudeFilter.stream`; see :mod:`objectives.attitude.filters.stream`.
@@ -59,10 +61,14 @@ class KernelSetup:
     state : (m,) the kernel's state before the first sample: the start orientation in the kernel's own
         form (quaternion, ZYX Euler angles or tilt angle), then what the kernel carries from sample to
         sample (bias, covariance, the robust blocks' states).
+    extra : the further arrays of a kernel that starts from more than one state array, in the order its
+        docstring gives (the UKFs: the integer state, then with a robust block on the blocks' coefficients
+        and states; :meth:`objectives.attitude.filters.ukf.QUKF.kernel_setup`); empty for the others.
     """
 
     coef: np.ndarray
     state: np.ndarray
+    extra: tuple[np.ndarray, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -187,10 +187,12 @@ class StateStream(StreamBase):
         return to_frame(q[None, :], self.output_frame or self.filter.working_frame, self.frame)[0]
 
     def _init_state(self, q0: np.ndarray) -> np.ndarray:
-        """The filter's ``kernel_setup`` at the stream's rate and magnetometer use: ``self._coef`` and the
-        one-sample output ``self._out`` set, the start state returned."""
+        """The filter's ``kernel_setup`` at the stream's rate and magnetometer use: ``self._coef``, the setup's
+        further start arrays ``self._extra`` (carried like the state) and the one-sample output ``self._out``
+        set, the start state returned."""
         setup = self.filter.kernel_setup(self.dt, bool(self.use_mag), q0, self.frame)
         self._coef = setup.coef
+        self._extra = setup.extra
         self._out = np.empty((1, 4))
         self._buffers()
         return setup.state

@@ -84,14 +84,22 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters._ukf_kernels import new_state, new_work, ukf_chunk
-from objectives.attitude.filters._ukf_robust import ukf_robust_run
-from objectives.attitude.filters.base import AttitudeFilter, FilterResult
-from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
+from objectives.attitude.filters._ukf_kernels import _ukf_run, new_state, new_work, ukf_chunk
+from objectives.attitude.filters._ukf_robust import _ukf_robust_loop, ukf_robust_run
+from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
+from objectives.attitude.filters.robust import (
+    acc_lp_coefficients,
+    acc_lp_state,
+    mag_dist_coefficients,
+    mag_dist_state,
+    rest_coefficients,
+    rest_state,
+)
 from objectives.attitude.filters.robust_params import ROBUST_SWITCHES, robust_decl
+from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
-__all__ = ["QUKF", "QRAUKF", "run_ukf"]
+__all__ = ["QUKF", "QRAUKF", "run_ukf", "ukf_setup", "run_setup"]
 
 
 def run_ukf(gyr, acc, mag, dt, q0, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sigma_mag,
@@ -142,22 +150,55 @@ def run_ukf(gyr, acc, mag, dt, q0, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sig
     window = int(window)
     if robust and window < 2:
         raise ValueError(f"window must be an integer >= 2, got {window!r}")
+    setup = ukf_setup(dt, q0, sigma_gyr=sigma_gyr, att_rw=att_rw, bias_rw=bias_rw, sigma_acc=sigma_acc,
+                      sigma_mag=sigma_mag, p0_att=p0_att, p0_bias=p0_bias, robust=robust, window=window,
+                      n_sigma=n_sigma, blocks=blocks)
+    return run_setup(setup, gyr, acc, mag)
+
+
+def _blocks_on(b: dict[str, Any]) -> bool:
+    return bool(b.get("mag_rejection")) or bool(b.get("rest_bias")) or float(b.get("acc_lp_tau_s", 0.0)) > 0
+
+
+def ukf_setup(dt: float, q0: np.ndarray, *, sigma_gyr, att_rw, bias_rw, sigma_acc, sigma_mag, p0_att=0.1,
+              p0_bias=0.01, robust=False, window=20, n_sigma=3.0, blocks: dict[str, Any] | None = None) -> KernelSetup:
+    """The kernel start of a run from checked values (arguments as :func:`run_ukf`): what
+    :meth:`QUKF.kernel_setup` returns and :func:`run_setup` runs.
+
+    ``coef`` (8,): the kernel's 7 coefficients (:func:`~objectives.attitude.filters._ukf_kernels._ukf_run`)
+    and 1.0 for the QRAUKF (``robust``), 0.0 for the QUKF; ``state``: :func:`new_state` (the innovation window
+    of ``window`` samples for the QRAUKF, of 1 for the QUKF); ``extra``: ``(istate,)``, with a robust block on
+    ``(istate, flags, mcoef, rcoef, acoef, ms, rs, ast)`` (:func:`~objectives.attitude.filters._ukf_robust.
+    ukf_robust_run`'s block coefficients and the blocks' start states).
+    """
     state, istate = new_state(q0, p0_att, p0_bias, window if robust else 1)
-    kcoef = np.array([dt, sigma_gyr, att_rw, bias_rw, sigma_acc, sigma_mag, n_sigma], dtype=np.float64)
+    kcoef = np.array([dt, sigma_gyr, att_rw, bias_rw, sigma_acc, sigma_mag, n_sigma, 1.0 if robust else 0.0],
+                     dtype=np.float64)
     b = blocks or {}
+    if not _blocks_on(b):
+        return KernelSetup(kcoef, state, (istate,))
     tau = float(b.get("acc_lp_tau_s", 0.0))
-    if bool(b.get("mag_rejection")) or bool(b.get("rest_bias")) or tau > 0:
-        g = float(b.get("gravity", 9.81))
-        flags = np.array([float(bool(b.get("mag_rejection"))), float(bool(b.get("rest_bias"))), float(tau > 0),
-                          float(b.get("rest_bias_var", 3e-6))])
-        mcoef = mag_dist_coefficients(dt, norm_th=float(b.get("mag_norm_th", 0.1)),
-                                      dip_th_deg=float(b.get("mag_dip_th_deg", 10.0)),
-                                      max_rejection_s=float(b.get("mag_max_rejection_s", 60.0)))
-        rcoef = rest_coefficients(dt, th_acc=0.5 * g / 9.81)
-        acoef = acc_lp_coefficients(dt, tau_acc_s=tau, gravity=g)
-        return ukf_robust_run(gyr, acc, mag, kcoef, bool(robust), state, istate, new_work(), flags, mcoef, rcoef,
-                              acoef)
-    return ukf_chunk(gyr, acc, mag, kcoef, bool(robust), state, istate)
+    g = float(b.get("gravity", 9.81))
+    flags = np.array([float(bool(b.get("mag_rejection"))), float(bool(b.get("rest_bias"))), float(tau > 0),
+                      float(b.get("rest_bias_var", 3e-6))])
+    mcoef = mag_dist_coefficients(dt, norm_th=float(b.get("mag_norm_th", 0.1)),
+                                  dip_th_deg=float(b.get("mag_dip_th_deg", 10.0)),
+                                  max_rejection_s=float(b.get("mag_max_rejection_s", 60.0)))
+    rcoef = rest_coefficients(dt, th_acc=0.5 * g / 9.81)
+    acoef = acc_lp_coefficients(dt, tau_acc_s=tau, gravity=g)
+    return KernelSetup(kcoef, state, (istate, flags, mcoef, rcoef, acoef, mag_dist_state(), rest_state(),
+                                      acc_lp_state()))
+
+
+def run_setup(setup: KernelSetup, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray) -> dict[str, np.ndarray]:
+    """The kernel (with a robust block on, the blocks' driver) from ``setup`` (:func:`ukf_setup`) over
+    contiguous float64 (N, 3) arrays; the outputs of :func:`run_ukf`. The setup's arrays are updated in place."""
+    robust = bool(setup.coef[7] != 0.0)
+    if len(setup.extra) > 1:
+        istate, flags, mcoef, rcoef, acoef, *states = setup.extra
+        return ukf_robust_run(gyr, acc, mag, setup.coef, robust, setup.state, istate, new_work(), flags, mcoef,
+                              rcoef, acoef, tuple(states))
+    return ukf_chunk(gyr, acc, mag, setup.coef, robust, setup.state, setup.extra[0])
 
 
 # ----------------------------------------------------------------------------------------------
@@ -202,26 +243,46 @@ class QUKF(AttitudeFilter):
     att_rw : float, rad/sqrt(s), additive attitude random walk density (Q2).
     p0_att, p0_bias : fixed options, initial std of attitude (rad) and bias (rad/s).
 
-    :meth:`stream` uses the buffered fallback of :mod:`objectives.attitude.filters.stream` (equal to
-    the batch, O(n) per sample): the kernel does not yet take and return its state (quaternion, bias,
-    covariance and, for the QRAUKF, the innovation window).
+    :meth:`kernel_setup` builds the kernel's start (:func:`ukf_setup`), which :meth:`_run`, :func:`run_ukf`
+    and :meth:`stream` (O(1) per sample: the kernel on one sample with its state carried) all run.
     """
 
     name = "qukf"
     working_frame = "ENU"
     needs_mag = True
     decl = ParamSet("qukf", _COMMON)
-    robust = False
+    #: the QRAUKF's covariance matching and Hampel gain (eqs. 34-38), the kernel's ``robust`` argument
+    adaptive = False
+    batch_kernel = "ukf"
+
+    @property
+    def robust(self) -> bool:
+        """True when a robust block is on (QRAUKF options; the blocks' driver runs, as for the EKF's ``robust``)."""
+        return self._block_values(G_SI) is not None
 
     def _kwargs(self) -> dict[str, Any]:
         v = self.values
         return {k: v[k] for k in _KERNEL_KEYS}
 
+    def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray, frame: str, g_ref: float = G_SI) -> KernelSetup:
+        """The kernel's start on a recording (:func:`ukf_setup`): coefficients (the 7 of the kernel, then 1.0
+        for the QRAUKF), the float state (quaternion ``q0``, zero bias, the initial covariance, the innovation
+        window) and in ``extra`` the integer state, then with a robust block on the blocks' ``flags, mcoef,
+        rcoef, acoef`` (``g_ref``: g in acc units, for the rest detection and the acc low-pass) and their start
+        states. ``frame`` does not enter (ENU); ValueError without the magnetometer (``use_mag`` False)."""
+        if not use_mag:
+            raise ValueError(f"{self.name}: needs a magnetometer (the pseudo-measurement of eq. 22)")
+        return ukf_setup(float(dt), q0, robust=self.adaptive, **self._kwargs(), blocks=self._block_values(g_ref))
+
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
-        out = run_ukf(rec.gyr, rec.acc, rec.mag, rec.dt, q0, robust=self.robust, **self._kwargs(),
-                      **self._blocks(rec))
+        from objectives.attitude.filters.ekf import gravity_in_units
+
+        g = gravity_in_units(rec) if self.robust else G_SI
+        c = np.ascontiguousarray
+        out = run_setup(self.kernel_setup(rec.dt, True, q0, rec.frame, g), c(rec.gyr, dtype=np.float64),
+                        c(rec.acc, dtype=np.float64), c(rec.mag, dtype=np.float64))
         diag = {"bias": out["bias"], "skipped": out["skipped"]}
-        if self.robust:
+        if self.adaptive:
             diag["lam"] = out["lam"]
             diag["fallback"] = out["fallback"]
         for key in ("mag_gain", "rest"):
@@ -229,14 +290,40 @@ class QUKF(AttitudeFilter):
                 diag[key] = out[key]
         return FilterResult(out["quat"], "ENU", diag)
 
-    def _blocks(self, rec: Recording) -> dict[str, Any]:
-        """``{"blocks": ...}`` for :func:`run_ukf` when a robust block is on (QRAUKF), else ``{}``."""
+    def _block_values(self, g_ref: float) -> dict[str, Any] | None:
+        """The robust blocks' values for :func:`ukf_setup` (``gravity`` = ``g_ref``) when one is on (QRAUKF),
+        else None."""
         v = self.values
         if not any(bool(v.get(k)) for k in _BLOCK_SWITCHES):
-            return {}
-        from objectives.attitude.filters.ekf import gravity_in_units
+            return None
+        return {**{k: v[k] for k in _BLOCK_KEYS}, "gravity": float(g_ref)}
 
-        return {"blocks": {**{k: v[k] for k in _BLOCK_KEYS}, "gravity": gravity_in_units(rec)}}
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample filter: the kernel (with a robust block on, the blocks' driver) on one sample at a
+        time with the float, integer and block states carried (equal to :meth:`run` on the samples seen so
+        far); the accelerometer is in m/s^2 (``g_ref`` = 9.80665) as for :meth:`run` on arrays."""
+        return _UKFStream(self, rate_hz, dt, q0, frame)
+
+
+class _UKFStream(StateStream):
+    def _buffers(self) -> None:
+        self._adaptive = bool(self._coef[7] != 0.0)
+        self._work = new_work()
+        self._bias = np.empty((1, 3))
+        self._lam = np.empty((1, 3))
+        self._skip = np.zeros(1, dtype=np.bool_)
+        self._fallback = np.zeros(1, dtype=np.bool_)
+        self._d = np.empty((1, 2))
+
+    def _step(self, state, gyr, acc, mag):
+        x = self._extra
+        if len(x) == 1:
+            _ukf_run(gyr, acc, mag, self._coef, self._adaptive, state, x[0], self._work, self._out, self._bias,
+                     self._lam, self._skip, self._fallback)
+        else:
+            _ukf_robust_loop(gyr, acc, mag, self._coef, self._adaptive, state, x[0], self._work, *x[1:], self._out,
+                             self._bias, self._lam, self._skip, self._fallback, self._d)
+        return self._out[0]
 
 
 class QRAUKF(QUKF):
@@ -265,7 +352,8 @@ class QRAUKF(QUKF):
         Param("n_sigma", 3.0, (1.0, 10.0), unit="1", doc="Hampel confidence region (paper 3)", eq="eq. 36",
               allowed=POSITIVE),
     ) + _ROBUST_DECL)
-    robust = True
+    adaptive = True
+    batch_kernel = "ukf"
 
     def _kwargs(self) -> dict[str, Any]:
         kw = super()._kwargs()

@@ -4,6 +4,9 @@ VQF is today's state of the art on the BROAD benchmark (about 2 deg mean total R
 trials with its default parameters) and the reference users compare tuned filters with. This module
 does not re-implement it: it calls the package's compiled core (``vqf.VQF.updateBatch``, causal, the
 default; or ``vqf.offlineVQF``, acausal, with ``offline: true``) and exposes its documented parameters.
+Having no kernel of its own, it stays outside the filter contract of
+:meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup` (serial only, never batched; its stream
+calls the package's own per-sample update).
 
 Install with ``pip install vqf`` (or ``pip install -e '.[vqf]'`` in a clone of this repository).
 
