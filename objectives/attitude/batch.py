@@ -158,7 +158,7 @@ def _ekf_batch(fuzzy, data, pairs, lanes_, fz, bufs, sums):
             p, r, n, q, mag = _claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
 
-@njit(cache=False, parallel=True)
+@njit(cache=CACHE, parallel=True)
 def _ukf_batch(data, pairs, istates, lanes_, bufs, sums):
     """QUKF / QRAUKF (``coefs[p, 7]``) on every pair, as ``_bias_batch`` (``coefs`` (P, 8), ``states`` padded to
     the longest innovation window); ``istates`` (P, 4) the integer start states; ``bufs``: per-lane quaternion,
