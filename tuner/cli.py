@@ -196,7 +196,7 @@ def _cmd_resume(a) -> int:
 
 
 def _cmd_show(a) -> int:
-    from tuner.report import run_summary
+    from tuner.runinfo import run_summary
 
     path = Path(a.path)
     if (path / "sweep.yaml").exists():
@@ -264,8 +264,7 @@ def _show_scores(path: Path, fit: float | None, evaluation: dict, params: dict) 
 def _cmd_compare(a) -> int:
     import pandas as pd
 
-    from tuner.report import run_summary
-    from tuner.runinfo import scores, tuned_system
+    from tuner.runinfo import run_summary, scores, tuned_system
 
     cols = {}
     for d in a.run_dirs:
@@ -525,7 +524,7 @@ COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare"
 def main(argv: list[str] | None = None) -> int:
     from tuner.config import ConfigError
     from tuner.registry import RegistryError
-    from tuner.run import RunError
+    from tuner.rundir import RunError  # tuner.run re-exports it; importing that costs every command ~0.1 s
     from tuner.space import SpaceError
 
     ap = build_parser()

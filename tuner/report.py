@@ -38,6 +38,7 @@ from tuner.render import fmt_num, md_escape, md_path, write_text_atomic
 from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
+from tuner.runinfo import run_summary
 
 __all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary", "md_table", "pivot_metrics",
            "sweep_figures", "write_html", "convergence_table", "write_live_report", "throttled", "sweep_warnings_md",
@@ -57,24 +58,6 @@ def write_html(path: Path, markdown: str, base_dir: Path, title: str | None = No
                refresh_s: float | None = None, scripts: tuple[str, ...] = (), data: Any = None) -> Path:
     """Self-contained HTML page of a Markdown report (see :func:`tuner.render.write_html`)."""
     return _write_html(path, markdown, base_dir, title=title, refresh_s=refresh_s, scripts=scripts, data=data)
-
-
-def run_summary(run_dir: Path, meta: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Status, best fitness, parameters and counts of a run directory (``meta`` replaces ``meta.json``)."""
-    run_dir = Path(run_dir)
-    rd = RunDir(run_dir)
-    if meta is None:
-        meta = rd.meta().to_dict()  # RunError naming the file if meta.json is corrupt
-    elif not isinstance(meta, dict):
-        meta = meta.to_dict()
-    best = rd.best().to_doc() if rd.has_best() else {}
-    return {"run": rd.path.name, "status": meta.get("status"), "optimizer": meta.get("optimizer"),
-            "seed": meta.get("seed"), "n_evals": meta.get("n_evals"), "n_failed": meta.get("n_failed"),
-            "best_fitness": best.get("fitness"), "params": best.get("params", {}),
-            "metrics": best.get("metrics", {}), "evaluation": best.get("evaluation", {}) or {},
-            "wall_s": (meta.get("timing") or {}).get("wall_s"), "stop_reason": meta.get("stop_reason", ""),
-            "created": meta.get("created"), "found": best.get("found", {}), "name": meta.get("name", ""),
-            "notes": list(meta.get("notes") or [])}
 
 
 def md_table(df: pd.DataFrame, floatfmt: str = ".6g") -> str:

@@ -1,4 +1,8 @@
-"""What a run tuned and how it validated, for ``tuner show`` and ``tuner compare``.
+"""What a run tuned and how it validated, for ``tuner show``, ``tuner compare`` and the run report.
+
+:func:`run_summary` gathers status, best fitness, parameters and counts from ``meta.json`` and
+``best.yaml`` (here rather than in :mod:`tuner.report`, so ``tuner show`` imports neither pandas nor
+the report's figures).
 
 :func:`tuned_system` names the filter or controller and the settings the run held fixed: from the
 complete deployment record in ``best.yaml`` (``deployment:``, values whose source is ``fixed``) when the
@@ -16,13 +20,31 @@ from typing import Any
 
 from tuner.rundir import RunDir
 
-__all__ = ["tuned_system", "scores", "SCORE_KEYS"]
+__all__ = ["run_summary", "tuned_system", "scores", "SCORE_KEYS"]
 
 #: the numbers of ``best.yaml``'s ``evaluation`` that show and compare print, in order
 SCORE_KEYS = ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "defaults_fitness",
               "defaults_train_fitness", "defaults_test_fitness", "defaults_cv_fitness")
 #: objective keys that name what is tuned, by objective kind (first present wins)
 _NAME_KEYS = ("filter", "controller", "function", "callable")
+
+
+def run_summary(run_dir: Path, meta: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Status, best fitness, parameters and counts of a run directory (``meta`` replaces ``meta.json``)."""
+    run_dir = Path(run_dir)
+    rd = RunDir(run_dir)
+    if meta is None:
+        meta = rd.meta().to_dict()  # RunError naming the file if meta.json is corrupt
+    elif not isinstance(meta, dict):
+        meta = meta.to_dict()
+    best = rd.best().to_doc() if rd.has_best() else {}
+    return {"run": rd.path.name, "status": meta.get("status"), "optimizer": meta.get("optimizer"),
+            "seed": meta.get("seed"), "n_evals": meta.get("n_evals"), "n_failed": meta.get("n_failed"),
+            "best_fitness": best.get("fitness"), "params": best.get("params", {}),
+            "metrics": best.get("metrics", {}), "evaluation": best.get("evaluation", {}) or {},
+            "wall_s": (meta.get("timing") or {}).get("wall_s"), "stop_reason": meta.get("stop_reason", ""),
+            "created": meta.get("created"), "found": best.get("found", {}), "name": meta.get("name", ""),
+            "notes": list(meta.get("notes") or [])}
 
 
 def tuned_system(run_dir: str | Path) -> dict[str, Any]:
