@@ -14,7 +14,7 @@ import subprocess
 import pytest
 import yaml
 
-from tests.tuner.browser import chromium, measure, screenshot
+from tests.tuner.browser import Browser, chromium, measure, screenshot
 from tests.tuner.test_render import _assert_inert, _assert_inert_attrs, _parse
 from tuner.config import config_from_dict
 from tuner.run import run
@@ -261,6 +261,13 @@ def test_sweep_live_report_reloads_until_every_job_finished(sweep_dir, tmp_path)
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="Chromium not installed (.ci/run installs it)")
 
 
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    """One Chromium for every page of this module (each page in a browser context of its own)."""
+    with Browser(tmp_path_factory.mktemp("chromium")) as b:
+        yield b
+
+
 def _output_dir():
     import os
     from pathlib import Path
@@ -392,7 +399,7 @@ def _check_sorted(sorts):
 @needs_chromium
 @pytest.mark.parametrize("width", [1200, 390])
 @pytest.mark.parametrize("which", ["run", "filter_run", "sweep", "dashboard"])
-def test_pages_in_a_browser(which, width, request, tmp_path):
+def test_pages_in_a_browser(which, width, request, browser):
     import numpy as np
     from PIL import Image
 
@@ -401,7 +408,7 @@ def test_pages_in_a_browser(which, width, request, tmp_path):
     folder = request.getfixturevalue({"run": "evil_run", "filter_run": "filter_run", "sweep": "sweep_dir",
                                       "dashboard": "dashboard_dir"}[which])
     page = folder / ("index.html" if which == "dashboard" else "report.html")
-    res = measure(page, tmp_path, width)
+    res = measure(page, browser, width)
     assert res["innerWidth"] == width
     assert res["scrollWidth"] <= res["innerWidth"], res  # no horizontal overflow of the page
     assert res["wide"] == [], res  # nothing sticks out except inside scroll containers
@@ -421,14 +428,14 @@ def test_pages_in_a_browser(which, width, request, tmp_path):
             assert res["plots"][1]["name"] == "compare-convergence" and res["plots"][1]["traces"] == 2
     else:
         assert res["images"] >= 3
-    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", tmp_path, width, 7000 if width < 500 else 5000,
+    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", browser, width, 7000 if width < 500 else 5000,
                       "#compare=evil,madgwick" if which == "dashboard" else "")
     arr = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert arr.std() > 5 and (arr < 128).mean() > 0.005, "blank screenshot"
 
 
 @needs_chromium
-def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evil_run, tmp_path):
+def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evil_run, browser, tmp_path):
     """Negative control: the same measurement on pages that overflow, hold a broken image, a plot whose data
     is damaged and a plot whose script did not load."""
     from tuner import interactive
@@ -439,33 +446,33 @@ def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evi
     page = page.replace("<main>", '<main><div style="width:2500px">wide</div>'
                                   '<img src="data:image/png;base64,AAAA" alt="broken">', 1)
     (bad / "report.html").write_text(page)
-    res = measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", browser)
     assert res["scrollWidth"] > 2000 and res["wide"] and res["broken"] == ["broken"] and res["errors"]
     if not interactive.available():
         return
     good = (evil_run / "report.html").read_text()
     (bad / "report.html").write_text(good.replace('"best":[', '"best":[],"best_damaged":[', 1)
                                      .replace('"gen_median":[', '"gen_median":[],"gen_median_damaged":[', 1))
-    conv = next(p for p in measure(bad / "report.html", tmp_path)["plots"] if p["name"] == "convergence")
+    conv = next(p for p in measure(bad / "report.html", browser)["plots"] if p["name"] == "convergence")
     assert conv["rendered"] and conv["drawn"] == 0, conv  # the axes are there, the data is not: caught
     (bad / "report.html").write_text(good.replace('"convergence":{', '"convergence_damaged":{', 1))
-    res = measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", browser)
     conv = next(p for p in res["plots"] if p["name"] == "convergence")
     assert not conv["rendered"] and conv["drawn"] == 0 and any("convergence" in e for e in res["errors"]), res
     (bad / "report.html").write_text((evil_run / "report.html").read_text())
     (bad / "plotly.min.js").unlink()
-    res = measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", browser)
     assert res["errors"] and not any(p["rendered"] for p in res["plots"]), res
 
 
 @needs_chromium
-def test_report_with_cross_validation_in_a_browser(tmp_path):
+def test_report_with_cross_validation_in_a_browser(browser, tmp_path):
     # the Generalisation section (validation: cv) adds a table and a warning: it must fit the page too
     from tests.tuner.test_validation import _raw as _val_raw
 
     cfg = config_from_dict(_val_raw(tmp_path, {"cv": "kfold", "folds": 2, "budget_fraction": 0.5, "gap_warn_rel": 0.0}))
     page = run(cfg, quiet=True).run_dir / "report.html"
     assert "Generalisation" in page.read_text()
-    res = measure(page, tmp_path, 390)
+    res = measure(page, browser, 390)
     assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
     assert res["broken"] == [] and res["errors"] == [], res
