@@ -10,6 +10,7 @@ import math
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 import yaml
@@ -79,10 +80,33 @@ def _raw(name, options=None, generations=4):
             "parallel": {"backend": "serial"}}
 
 
+def _built_once(tmp_path_factory, name: str, build) -> Path:
+    """A folder filled by ``build(folder)`` once per test session, also when pytest-xdist workers share the
+    session: the first worker to ask builds it, the other waits for it. The tests only read it (a test that
+    changes a run or a page works on a copy)."""
+    import fcntl
+    import os
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the session's folder, above each worker's own
+    folder, done = root / f"built-{name}", root / f"built-{name}.done"
+    with open(root / f"built-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.exists():
+            shutil.rmtree(folder, ignore_errors=True)  # a build that failed half-way
+            folder.mkdir()
+            build(folder)
+            done.touch()
+    return folder
+
+
 @pytest.fixture(scope="module")
 def evil_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("evil")
-    return run(config_from_dict(_raw("evil"), base_dir=tmp), run_dir=tmp / "run", quiet=True).run_dir
+    def build(tmp):
+        run(config_from_dict(_raw("evil"), base_dir=tmp), run_dir=tmp / "run", quiet=True)
+
+    return _built_once(tmp_path_factory, "evil", build) / "run"
 
 
 def test_run_report_content(evil_run):
@@ -106,11 +130,12 @@ def test_run_report_content(evil_run):
         assert (evil_run / "figures" / f"{png}.png").exists()
 
 
-def test_hostile_names_are_neutralised(evil_run, monkeypatch):
+def test_hostile_names_are_neutralised(evil_run, tmp_path, monkeypatch):
     from tuner import interactive
     from tuner.report import write_run_report
 
     page = (evil_run / "report.html").read_text()
+    evil_run = Path(shutil.copytree(evil_run, tmp_path / "evil"))  # the pages are rewritten below
     _assert_safe(page)
     assert "&lt;img src=x onerror=alert('d')&gt;" in page  # description and string parameter shown as text
     assert "[x](javascript:alert('r'))" in page  # recording name shown literally, not as a link
@@ -121,7 +146,7 @@ def test_hostile_names_are_neutralised(evil_run, monkeypatch):
     _assert_inert(static)
     assert "<img src=\"data:image/png;base64," in static and "data-plot=" not in static
     monkeypatch.undo()
-    write_run_report(evil_run)  # back to the interactive page for the other tests
+    write_run_report(evil_run)  # back to the interactive page
     assert ("data-plot=" in (evil_run / "report.html").read_text()) == interactive.available()
 
 
@@ -217,19 +242,19 @@ def test_show_prints_warnings(evil_run):
 def sweep_dir(tmp_path_factory, evil_run):
     import sys
 
-    tmp = tmp_path_factory.mktemp("sweep")
-    base = _raw("s")
-    doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
-                     "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
-    (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
-    import os  # the objective lives in this test module: its package on the path, as a user's would be
-    from pathlib import Path
+    def build(tmp):
+        base = _raw("s")
+        doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
+                         "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
+        (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
+        import os  # the objective lives in this test module: its package on the path, as a user's would be
 
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
-    out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir", str(tmp / "sw"),
-                          "-q"], capture_output=True, text=True, timeout=600, env=env)
-    assert out.returncode == 0, out.stderr
-    return tmp / "sw"
+        env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+        out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir",
+                              str(tmp / "sw"), "-q"], capture_output=True, text=True, timeout=600, env=env)
+        assert out.returncode == 0, out.stderr
+
+    return _built_once(tmp_path_factory, "sweep", build) / "sw"
 
 
 def test_sweep_report_links_html_and_is_inert(sweep_dir):
@@ -270,7 +295,6 @@ def browser(tmp_path_factory):
 
 def _output_dir():
     import os
-    from pathlib import Path
 
     root = Path(os.environ.get("TUNER_TEST_OUTPUT", Path(__file__).resolve().parents[2] / "test-output"))
     out = root / "browser"
@@ -281,7 +305,6 @@ def _output_dir():
 @pytest.fixture(scope="module")
 def filter_run(tmp_path_factory, broad_dir):
     """Madgwick on two BROAD trials, scored on a third: the time series with a recording selector."""
-    tmp = tmp_path_factory.mktemp("filter")
     spec = {"dir": str(broad_dir), "stop_s": 60}
     raw = {"name": "madgwick", "seed": 1,
            "objective": {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
@@ -291,7 +314,11 @@ def filter_run(tmp_path_factory, broad_dir):
                                   "test": [{"broad": {**spec, "trial": "28_disturbed_stationary_magnet_A"}}]}},
            "parameters": {"beta": {"low": 0.005, "high": 0.5, "scale": "log"}, "zeta": {"low": 0.0, "high": 0.05}},
            "optimizer": {"method": "pso", "population": 6, "generations": 2}, "parallel": {"backend": "serial"}}
-    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True).run_dir
+
+    def build(tmp):
+        run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True)
+
+    return _built_once(tmp_path_factory, "filter", build) / "run"
 
 
 def test_filter_report_shows_the_worst_recording_first(filter_run):
@@ -313,15 +340,17 @@ def test_filter_report_shows_the_worst_recording_first(filter_run):
 def dashboard_dir(tmp_path_factory, evil_run, sweep_dir, filter_run):
     import sys
 
-    root = tmp_path_factory.mktemp("dash") / "runs"
-    root.mkdir()
-    shutil.copytree(evil_run, root / "evil")
-    shutil.copytree(filter_run, root / "madgwick")
-    shutil.copytree(sweep_dir, root / "sweeps" / "hostile")
-    out = subprocess.run([sys.executable, "-m", "tuner", "report", str(root)], capture_output=True, text=True,
-                         timeout=300)
-    assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
-    return root
+    def build(tmp):
+        root = tmp / "runs"
+        root.mkdir()
+        shutil.copytree(evil_run, root / "evil")
+        shutil.copytree(filter_run, root / "madgwick")
+        shutil.copytree(sweep_dir, root / "sweeps" / "hostile")
+        out = subprocess.run([sys.executable, "-m", "tuner", "report", str(root)], capture_output=True, text=True,
+                             timeout=300)
+        assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
+
+    return _built_once(tmp_path_factory, "dashboard", build) / "runs"
 
 
 def test_dashboard_lists_every_run_and_sweep(dashboard_dir):
