@@ -1,8 +1,14 @@
 """Headless Chromium checks of report pages: errors, overflow, images, plots, sortable tables, screenshots.
 
-``measure(page)`` opens a copy of ``page`` (beside it, so relative paths hold) with a measuring script
-admitted by a nonce, lets the page's own scripts run (virtual time), clicks the header of a table to sort
-it, and returns what it found as a dict:
+One :class:`Browser` (a Chromium driven over the DevTools protocol on a pipe) serves every page of a test
+module: each page opens in a browser context of its own (no cache, storage or renderer process shared
+with the pages before it) at a viewport of the asked size, and its timers run on virtual time, as with
+Chromium's ``--virtual-time-budget``: the page's scripts run to the end of the budget without waiting in
+real time.
+
+``measure(page, browser, width)`` opens ``page`` with a measuring script that runs before the page's own
+(so the page's Content-Security-Policy is left as it is), lets the page's scripts run, clicks the header
+of a table to sort it, and returns what it found as a dict:
 
 - ``errors``: console errors and warnings, uncaught exceptions, failed loads, CSP violations;
 - ``scrollWidth``/``innerWidth`` and ``wide``: elements sticking out of the page outside a scroll container;
@@ -12,18 +18,22 @@ it, and returns what it found as a dict:
 - ``sorts``: per sortable table, a column's cells before and after a click on its header;
 - ``dashboard``: rows shown after typing into the filter, and plots after ticking the last two rows;
 - ``selector``: a time-series selector switched to its last entry, and whether the plot changed.
+
+``screenshot(page, out, browser, width, height)`` writes a PNG of the top of the page.
 """
 
 from __future__ import annotations
 
-import html as _h
+import base64
 import json
-import re
+import os
+import select
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
-__all__ = ["chromium", "measure", "screenshot"]
+__all__ = ["Browser", "chromium", "measure", "screenshot"]
 
 
 def chromium() -> str | None:
@@ -33,7 +43,7 @@ def chromium() -> str | None:
     return None
 
 
-MEASURE = r"""<script nonce="measure">
+MEASURE = r"""
 window.__errors = [];
 window.addEventListener('error', function (e) {
   var t = e.target && e.target !== window ? ' ' + e.target.tagName + ' ' + (e.target.src || '') : '';
@@ -129,79 +139,173 @@ window.addEventListener('load', function () {
     }, 1500);
   }, 2500);
 });
-</script>
 """
 
 _FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-          "--disable-component-update", "--disable-sync", "--hide-scrollbars", "--force-device-scale-factor=1",
-          "--allow-file-access-from-files"]  # the 390 px frame reads its page's measurement
+          "--disable-component-update", "--disable-sync", "--hide-scrollbars", "--force-device-scale-factor=1"]
 
 
-def measure(page_path: Path, tmp_path: Path, width: int = 1200) -> dict:
-    """Open a copy of ``page_path`` with the measuring script in headless Chromium (module docstring)."""
-    page_path = Path(page_path)
-    text = page_path.read_text()
-    if "script-src 'self';" in text:
-        text = text.replace("script-src 'self';", "script-src 'self' 'nonce-measure';", 1)
-    else:
-        assert "default-src 'none';" in text
-        text = text.replace("default-src 'none';", "default-src 'none'; script-src 'nonce-measure';", 1)
-    text = text.replace("<head>\n", "<head>\n" + MEASURE, 1)
-    probe = page_path.parent / "_measure.html"  # beside the page: same relative paths
-    probe.write_text(text)
-    frame = _frame(probe, width, 900, copy_result=True)
-    try:
-        out = subprocess.run([chromium(), *_FLAGS, f"--user-data-dir={tmp_path / 'profile'}",
-                              f"--window-size={max(width, 600)},900", "--virtual-time-budget=20000", "--dump-dom",
-                              f"file://{frame or probe}"], capture_output=True, text=True, timeout=240)
-    finally:
-        probe.unlink()
-        if frame:
-            frame.unlink()
-    m = re.search(r'<pre id="measure">(.*?)</pre>', out.stdout, re.S)
-    assert m, f"no measurement in the DOM; stderr: {out.stderr[-2000:]}"
-    return json.loads(_h.unescape(m.group(1)))
+#: run argv[3:] with the descriptors argv[1] and argv[2] as its 3 and 4 (a shell's ``3<&N`` takes one digit)
+_AS_FD_3_AND_4 = """
+import fcntl, os, sys
+r, w = (fcntl.fcntl(int(fd), fcntl.F_DUPFD, 10) for fd in sys.argv[1:3])
+os.dup2(r, 3)
+os.dup2(w, 4)
+os.close(r)
+os.close(w)
+os.execv(sys.argv[3], sys.argv[3:])
+"""
 
 
-#: headless Chromium does not make a window narrower than this; a narrower page is shown in an iframe
-MIN_WINDOW = 500
+class Browser:
+    """A headless Chromium for many pages, driven over the DevTools protocol (``--remote-debugging-pipe``:
+    commands on its descriptor 3, answers and events on 4, each message JSON ending in a NUL byte).
 
-
-def _frame(page: Path, width: int, height: int, copy_result: bool = False, fragment: str = "") -> Path | None:
-    """For ``width`` < :data:`MIN_WINDOW`: a page beside ``page`` showing it in a ``width`` px iframe."""
-    if width >= MIN_WINDOW:
-        return None
-    copy = """<script>
-setInterval(function () {
-  var d = document.querySelector('iframe').contentDocument, m = d && d.getElementById('measure');
-  if (m && !document.getElementById('measure')) {
-    var pre = document.createElement('pre'); pre.id = 'measure'; pre.textContent = m.textContent;
-    document.body.appendChild(pre);
-  }
-}, 200);
-</script>""" if copy_result else ""
-    frame = page.parent / f"_frame_{page.stem}.html"
-    frame.write_text(f'<!DOCTYPE html><html><head><meta charset="utf-8"></head><body style="margin:0">'
-                     f'<iframe src="{page.name}{fragment}" '
-                     f'style="width:{width}px;height:{height}px;border:0;display:block">'
-                     f"</iframe>{copy}</body></html>")
-    return frame
-
-
-def screenshot(page_path: Path, out: Path, tmp_path: Path, width: int = 1200, height: int = 3000,
-               fragment: str = "") -> Path:
-    """A PNG of the top ``height`` px of the page (URL + ``fragment``) at ``width`` px, after its scripts ran.
-
-    Below :data:`MIN_WINDOW` px the window is 500 px wide and the page fills the left ``width`` px.
+    ``profile`` is the user-data directory; the browser's own log goes to ``profile/chromium.log``.
+    ``timeout_s`` bounds the wait for any one answer or event. Use as a context manager or call
+    :meth:`close`.
     """
+
+    def __init__(self, profile: Path, timeout_s: float = 240.0):
+        profile = Path(profile)
+        profile.mkdir(parents=True, exist_ok=True)
+        self.log = profile / "chromium.log"
+        self.timeout_s = timeout_s
+        cmd_r, self._cmd = os.pipe()  # we write, Chromium reads (its descriptor 3)
+        self._ans, ans_w = os.pipe()  # Chromium writes (its descriptor 4), we read
+        with open(self.log, "wb") as log:
+            self._proc = subprocess.Popen(
+                [sys.executable, "-c", _AS_FD_3_AND_4, str(cmd_r), str(ans_w), chromium(), *_FLAGS,
+                 f"--user-data-dir={profile}", "--remote-debugging-pipe", "about:blank"],
+                pass_fds=(cmd_r, ans_w), stdin=subprocess.DEVNULL, stdout=log, stderr=log)
+        os.close(cmd_r)
+        os.close(ans_w)
+        self._buf, self._id, self._events = b"", 0, []
+        self.send("Browser.getVersion")  # up and answering
+
+    def __enter__(self) -> Browser:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        if self._proc.poll() is None:
+            try:
+                self.send("Browser.close")
+                self._proc.wait(timeout=30)
+            except (OSError, RuntimeError, TimeoutError, subprocess.TimeoutExpired):
+                self._proc.kill()
+                self._proc.wait()
+        for fd in (self._cmd, self._ans):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+    def _fail(self, what: str) -> str:
+        return f"Chromium: {what}; its log ends: {self.log.read_text(errors='replace')[-2000:]}"
+
+    def _receive(self) -> dict:
+        while b"\0" not in self._buf:
+            ready, _, _ = select.select([self._ans], [], [], self.timeout_s)
+            if not ready:
+                raise TimeoutError(self._fail(f"no message in {self.timeout_s} s"))
+            chunk = os.read(self._ans, 1 << 20)
+            if not chunk:
+                raise RuntimeError(self._fail("the browser closed its pipe"))
+            self._buf += chunk
+        msg, self._buf = self._buf.split(b"\0", 1)
+        return json.loads(msg)
+
+    def send(self, method: str, params: dict | None = None, session: str | None = None) -> dict:
+        """Send one command (to a page when ``session`` is given) and return its result; events that
+        arrive meanwhile are kept for :meth:`wait_for`."""
+        self._id += 1
+        msg = {"id": self._id, "method": method, "params": params or {}}
+        if session:
+            msg["sessionId"] = session
+        os.write(self._cmd, json.dumps(msg).encode() + b"\0")
+        while True:
+            msg = self._receive()
+            if msg.get("id") == self._id:
+                if "error" in msg:
+                    raise RuntimeError(self._fail(f"{method}: {msg['error']}"))
+                return msg["result"]
+            self._events.append(msg)
+
+    def wait_for(self, method: str, session: str) -> dict:
+        """The next event ``method`` of page ``session``."""
+        while True:
+            for i, e in enumerate(self._events):
+                if e.get("method") == method and e.get("sessionId") == session:
+                    return self._events.pop(i)
+            self._events.append(self._receive())
+
+    def open(self, url: str, width: int, height: int, budget_ms: int, script: str = "") -> _Page:
+        """Load ``url`` in a new browser context at a ``width`` x ``height`` px viewport, ``script`` run in
+        the page before its own scripts, and return once ``budget_ms`` of virtual time have passed (timers
+        fire without waiting; virtual time stands still while a file or request is loading)."""
+        context = self.send("Target.createBrowserContext")["browserContextId"]
+        page = _Page(self, context)
+        try:
+            target = self.send("Target.createTarget", {"url": "about:blank", "browserContextId": context})
+            page.session = self.send("Target.attachToTarget", {"targetId": target["targetId"],
+                                                               "flatten": True})["sessionId"]
+            page.send("Page.enable")
+            page.send("Emulation.setDeviceMetricsOverride", {"width": width, "height": height,
+                                                             "deviceScaleFactor": 1, "mobile": False})
+            if script:
+                page.send("Page.addScriptToEvaluateOnNewDocument", {"source": script})
+            page.send("Emulation.setVirtualTimePolicy", {"policy": "pause"})  # no timer before the budget
+            nav = page.send("Page.navigate", {"url": url})
+            assert "errorText" not in nav, (url, nav)
+            page.send("Emulation.setVirtualTimePolicy", {"policy": "pauseIfNetworkFetchesPending",
+                                                         "budget": budget_ms})
+            self.wait_for("Emulation.virtualTimeBudgetExpired", page.session)
+        except BaseException:
+            page.close()
+            raise
+        return page
+
+
+class _Page:
+    """A page open in its own browser context (:meth:`Browser.open`); closing it drops the context."""
+
+    def __init__(self, browser: Browser, context: str):
+        self.browser, self.context, self.session = browser, context, None
+
+    def __enter__(self) -> _Page:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def send(self, method: str, params: dict | None = None) -> dict:
+        return self.browser.send(method, params, self.session)
+
+    def evaluate(self, expression: str):
+        out = self.send("Runtime.evaluate", {"expression": expression, "returnByValue": True})
+        assert "exceptionDetails" not in out, out
+        return out["result"].get("value")
+
+    def close(self) -> None:
+        self.browser.send("Target.disposeBrowserContext", {"browserContextId": self.context})
+        self.browser._events = [e for e in self.browser._events if e.get("sessionId") != self.session]
+
+
+def measure(page_path: Path, browser: Browser, width: int = 1200) -> dict:
+    """Open ``page_path`` with the measuring script in ``browser`` at ``width`` x 900 px (module docstring)."""
+    with browser.open(Path(page_path).resolve().as_uri(), width, 900, 20000, MEASURE) as page:
+        found = page.evaluate("(document.getElementById('measure') || {}).textContent")
+    assert found, browser._fail("no measurement in the page")
+    return json.loads(found)
+
+
+def screenshot(page_path: Path, out: Path, browser: Browser, width: int = 1200, height: int = 3000,
+               fragment: str = "") -> Path:
+    """A PNG of the top ``height`` px of the page (URL + ``fragment``) at ``width`` px, after its scripts ran."""
     out.parent.mkdir(parents=True, exist_ok=True)
-    frame = _frame(Path(page_path), width, height, fragment=fragment)
-    try:
-        subprocess.run([chromium(), *_FLAGS, f"--user-data-dir={tmp_path / 'profile2'}", f"--screenshot={out}",
-                        f"--window-size={max(width, MIN_WINDOW)},{height}", "--virtual-time-budget=8000",
-                        f"file://{frame}" if frame else f"file://{Path(page_path)}{fragment}"],
-                       capture_output=True, timeout=240)
-    finally:
-        if frame:
-            frame.unlink()
+    with browser.open(Path(page_path).resolve().as_uri() + fragment, width, height, 8000) as page:
+        out.write_bytes(base64.b64decode(page.send("Page.captureScreenshot", {"format": "png"})["data"]))
     return out

@@ -115,16 +115,89 @@ def test_installed_package_records_no_git_commit_of_a_surrounding_repository(tmp
     assert run_mod._git_commit() == ""
 
 
+#: python -m build without its second isolated environment: one environment builds the sdist from the clone,
+#: then the wheel from the unpacked sdist (a file missing from the sdist is missing from the wheel)
+_BUILD = """
+import sys, tarfile, tempfile
+from pathlib import Path
+from build import ProjectBuilder
+from build.env import DefaultIsolatedEnv
+
+src, out = sys.argv[1:]
+with DefaultIsolatedEnv() as env:
+    builder = ProjectBuilder.from_isolated_env(env, src)
+    env.install(builder.build_system_requires)
+    env.install(builder.get_requires_for_build("sdist"))
+    sdist = Path(builder.build("sdist", out))
+    with tempfile.TemporaryDirectory() as tmp:
+        with tarfile.open(sdist) as tar:  # the extraction filter is in 3.11.4 and later
+            tar.extractall(tmp, **({"filter": "data"} if hasattr(tarfile, "data_filter") else {}))
+        builder = ProjectBuilder.from_isolated_env(env, Path(tmp) / sdist.name.removesuffix(".tar.gz"))
+        env.install(builder.get_requires_for_build("wheel"))
+        builder.build("wheel", out)
+"""
+
+
+def _dependency_view(wheel: Path, dest: Path) -> Path:
+    """A folder of links to what installing ``wheel`` would download: its declared dependencies (and
+    theirs, extras followed) and pip, taken from the running interpreter's site-packages.
+
+    Nothing else is linked -- not this clone's own install (metadata, editable hook), not the dev tools --
+    so the virtualenv sees what a fresh one would after ``pip install wheel``, and an import the wheel does
+    not declare still fails there.
+    """
+    import sysconfig
+    import zipfile
+    from email.parser import Parser
+    from importlib.metadata import distributions
+
+    from packaging.requirements import Requirement
+    from packaging.utils import canonicalize_name
+
+    site = list(dict.fromkeys(sysconfig.get_paths()[k] for k in ("purelib", "platlib")))
+    installed: dict = {}
+    for dist in distributions(path=site):
+        if dist.metadata["Name"]:
+            installed.setdefault(canonicalize_name(dist.metadata["Name"]), dist)
+    with zipfile.ZipFile(wheel) as zf:
+        meta = next(n for n in zf.namelist() if n.endswith(".dist-info/METADATA"))
+        todo = [Requirement(r) for r in Parser().parsestr(zf.read(meta).decode()).get_all("Requires-Dist") or []]
+    todo = [r for r in todo if r.marker is None or r.marker.evaluate({"extra": ""})] + [Requirement("pip")]
+    dest.mkdir()
+    seen: set = set()
+    while todo:
+        req = todo.pop()
+        name = canonicalize_name(req.name)
+        if (name, *sorted(req.extras)) in seen or name not in installed:  # not here: pip downloads it
+            continue
+        seen.add((name, *sorted(req.extras)))
+        dist = installed[name]
+        for r in map(Requirement, dist.requires or []):
+            if r.marker is None or any(r.marker.evaluate({"extra": e}) for e in ("", *req.extras)):
+                todo.append(r)
+        assert dist.files is not None, f"{name}: no RECORD, cannot tell its files"
+        for top in {f.parts[0] for f in dist.files} - {"..", "__pycache__"}:
+            if not top.endswith(".pth") and not (dest / top).exists():
+                (dest / top).symlink_to(dist.locate_file(top))
+    return dest
+
+
 @pytest.mark.slow
 def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
-    """python -m build -> sdist and wheel; the wheel into a virtualenv without this clone on its path; then
-    `tuner --version`, `tuner describe madgwick`, `tuner init` and a short synthetic run, all from a
-    directory outside the clone (about 1-2 min with pip's cache warm)."""
+    """sdist, then the wheel from it (as python -m build does); the wheel into a virtualenv without this
+    clone on its path; then `tuner --version`, `tuner describe madgwick`, `tuner init` and a short synthetic
+    run, all from a directory outside the clone.
+
+    The virtualenv reads the wheel's dependencies from links to the test environment's copies
+    (:func:`_dependency_view`, through a plain path line in a ``.pth`` file: the linked folder's own ``.pth``
+    files are not processed) instead of downloading and installing them again; pip still resolves the
+    wheel's declared dependencies against them, and ``pip check`` finds none missing or conflicting.
+    """
     pytest.importorskip("build", reason="`build` is in the dev extra")
     dist = tmp_path / "dist"
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
-    subprocess.run([sys.executable, "-m", "build", "--outdir", str(dist), str(ROOT)], check=True, env=env,
-                   capture_output=True, timeout=600)
+    subprocess.run([sys.executable, "-c", _BUILD, str(ROOT), str(dist)], check=True, env=env, capture_output=True,
+                   timeout=600)
     wheels, sdists = list(dist.glob("attitude_tuner-*.whl")), list(dist.glob("attitude_tuner-*.tar.gz"))
     assert len(wheels) == 1 and len(sdists) == 1
     import zipfile
@@ -133,11 +206,15 @@ def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
     assert "tuner/data/configs/demo.yaml" in names and "objectives/starters.py" in names
     assert "tuner/static/tuner_report.js" in names  # the interactive report pages
     assert not any(n.startswith(("tests/", "configs/", "benchmarks/")) for n in names)
+    env["PYTHONDONTWRITEBYTECODE"] = "1"  # the linked dependencies are read, never written
     venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True, timeout=300)
     bin_dir = venv / "bin"
-    subprocess.run([str(bin_dir / "python"), "-m", "pip", "install", "--quiet", str(wheels[0])], check=True,
-                   env=env, timeout=900)
+    site = subprocess.run([str(bin_dir / "python"), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                          env=env, capture_output=True, text=True, check=True).stdout.strip()
+    Path(site, "dependencies.pth").write_text(f"{_dependency_view(wheels[0], tmp_path / 'deps')}\n")
+    for pip in (["install", "--quiet", str(wheels[0])], ["check"]):  # pip is among the links
+        subprocess.run([str(bin_dir / "python"), "-m", "pip", *pip], check=True, env=env, timeout=900)
     work = tmp_path / "outside"
     work.mkdir()
     env = {**env, "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PATH": f"{bin_dir}:{env.get('PATH', '')}"}

@@ -10,11 +10,12 @@ import math
 import re
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 import yaml
 
-from tests.tuner.browser import chromium, measure, screenshot
+from tests.tuner.browser import Browser, chromium, measure, screenshot
 from tests.tuner.test_render import _assert_inert, _assert_inert_attrs, _parse
 from tuner.config import config_from_dict
 from tuner.run import run
@@ -79,10 +80,33 @@ def _raw(name, options=None, generations=4):
             "parallel": {"backend": "serial"}}
 
 
+def _built_once(tmp_path_factory, name: str, build) -> Path:
+    """A folder filled by ``build(folder)`` once per test session, also when pytest-xdist workers share the
+    session: the first worker to ask builds it, the other waits for it. The tests only read it (a test that
+    changes a run or a page works on a copy)."""
+    import fcntl
+    import os
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the session's folder, above each worker's own
+    folder, done = root / f"built-{name}", root / f"built-{name}.done"
+    with open(root / f"built-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.exists():
+            shutil.rmtree(folder, ignore_errors=True)  # a build that failed half-way
+            folder.mkdir()
+            build(folder)
+            done.touch()
+    return folder
+
+
 @pytest.fixture(scope="module")
 def evil_run(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("evil")
-    return run(config_from_dict(_raw("evil"), base_dir=tmp), run_dir=tmp / "run", quiet=True).run_dir
+    def build(tmp):
+        run(config_from_dict(_raw("evil"), base_dir=tmp), run_dir=tmp / "run", quiet=True)
+
+    return _built_once(tmp_path_factory, "evil", build) / "run"
 
 
 def test_run_report_content(evil_run):
@@ -106,11 +130,12 @@ def test_run_report_content(evil_run):
         assert (evil_run / "figures" / f"{png}.png").exists()
 
 
-def test_hostile_names_are_neutralised(evil_run, monkeypatch):
+def test_hostile_names_are_neutralised(evil_run, tmp_path, monkeypatch):
     from tuner import interactive
     from tuner.report import write_run_report
 
     page = (evil_run / "report.html").read_text()
+    evil_run = Path(shutil.copytree(evil_run, tmp_path / "evil"))  # the pages are rewritten below
     _assert_safe(page)
     assert "&lt;img src=x onerror=alert('d')&gt;" in page  # description and string parameter shown as text
     assert "[x](javascript:alert('r'))" in page  # recording name shown literally, not as a link
@@ -121,7 +146,7 @@ def test_hostile_names_are_neutralised(evil_run, monkeypatch):
     _assert_inert(static)
     assert "<img src=\"data:image/png;base64," in static and "data-plot=" not in static
     monkeypatch.undo()
-    write_run_report(evil_run)  # back to the interactive page for the other tests
+    write_run_report(evil_run)  # back to the interactive page
     assert ("data-plot=" in (evil_run / "report.html").read_text()) == interactive.available()
 
 
@@ -217,19 +242,19 @@ def test_show_prints_warnings(evil_run):
 def sweep_dir(tmp_path_factory, evil_run):
     import sys
 
-    tmp = tmp_path_factory.mktemp("sweep")
-    base = _raw("s")
-    doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
-                     "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
-    (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
-    import os  # the objective lives in this test module: its package on the path, as a user's would be
-    from pathlib import Path
+    def build(tmp):
+        base = _raw("s")
+        doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
+                         "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
+        (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
+        import os  # the objective lives in this test module: its package on the path, as a user's would be
 
-    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
-    out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir", str(tmp / "sw"),
-                          "-q"], capture_output=True, text=True, timeout=600, env=env)
-    assert out.returncode == 0, out.stderr
-    return tmp / "sw"
+        env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+        out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir",
+                              str(tmp / "sw"), "-q"], capture_output=True, text=True, timeout=600, env=env)
+        assert out.returncode == 0, out.stderr
+
+    return _built_once(tmp_path_factory, "sweep", build) / "sw"
 
 
 def test_sweep_report_links_html_and_is_inert(sweep_dir):
@@ -261,9 +286,15 @@ def test_sweep_live_report_reloads_until_every_job_finished(sweep_dir, tmp_path)
 needs_chromium = pytest.mark.skipif(chromium() is None, reason="Chromium not installed (.ci/run installs it)")
 
 
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    """One Chromium for every page of this module (each page in a browser context of its own)."""
+    with Browser(tmp_path_factory.mktemp("chromium")) as b:
+        yield b
+
+
 def _output_dir():
     import os
-    from pathlib import Path
 
     root = Path(os.environ.get("TUNER_TEST_OUTPUT", Path(__file__).resolve().parents[2] / "test-output"))
     out = root / "browser"
@@ -274,7 +305,6 @@ def _output_dir():
 @pytest.fixture(scope="module")
 def filter_run(tmp_path_factory, broad_dir):
     """Madgwick on two BROAD trials, scored on a third: the time series with a recording selector."""
-    tmp = tmp_path_factory.mktemp("filter")
     spec = {"dir": str(broad_dir), "stop_s": 60}
     raw = {"name": "madgwick", "seed": 1,
            "objective": {"kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
@@ -284,7 +314,11 @@ def filter_run(tmp_path_factory, broad_dir):
                                   "test": [{"broad": {**spec, "trial": "28_disturbed_stationary_magnet_A"}}]}},
            "parameters": {"beta": {"low": 0.005, "high": 0.5, "scale": "log"}, "zeta": {"low": 0.0, "high": 0.05}},
            "optimizer": {"method": "pso", "population": 6, "generations": 2}, "parallel": {"backend": "serial"}}
-    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True).run_dir
+
+    def build(tmp):
+        run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True)
+
+    return _built_once(tmp_path_factory, "filter", build) / "run"
 
 
 def test_filter_report_shows_the_worst_recording_first(filter_run):
@@ -306,15 +340,17 @@ def test_filter_report_shows_the_worst_recording_first(filter_run):
 def dashboard_dir(tmp_path_factory, evil_run, sweep_dir, filter_run):
     import sys
 
-    root = tmp_path_factory.mktemp("dash") / "runs"
-    root.mkdir()
-    shutil.copytree(evil_run, root / "evil")
-    shutil.copytree(filter_run, root / "madgwick")
-    shutil.copytree(sweep_dir, root / "sweeps" / "hostile")
-    out = subprocess.run([sys.executable, "-m", "tuner", "report", str(root)], capture_output=True, text=True,
-                         timeout=300)
-    assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
-    return root
+    def build(tmp):
+        root = tmp / "runs"
+        root.mkdir()
+        shutil.copytree(evil_run, root / "evil")
+        shutil.copytree(filter_run, root / "madgwick")
+        shutil.copytree(sweep_dir, root / "sweeps" / "hostile")
+        out = subprocess.run([sys.executable, "-m", "tuner", "report", str(root)], capture_output=True, text=True,
+                             timeout=300)
+        assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
+
+    return _built_once(tmp_path_factory, "dashboard", build) / "runs"
 
 
 def test_dashboard_lists_every_run_and_sweep(dashboard_dir):
@@ -392,7 +428,7 @@ def _check_sorted(sorts):
 @needs_chromium
 @pytest.mark.parametrize("width", [1200, 390])
 @pytest.mark.parametrize("which", ["run", "filter_run", "sweep", "dashboard"])
-def test_pages_in_a_browser(which, width, request, tmp_path):
+def test_pages_in_a_browser(which, width, request, browser):
     import numpy as np
     from PIL import Image
 
@@ -401,7 +437,7 @@ def test_pages_in_a_browser(which, width, request, tmp_path):
     folder = request.getfixturevalue({"run": "evil_run", "filter_run": "filter_run", "sweep": "sweep_dir",
                                       "dashboard": "dashboard_dir"}[which])
     page = folder / ("index.html" if which == "dashboard" else "report.html")
-    res = measure(page, tmp_path, width)
+    res = measure(page, browser, width)
     assert res["innerWidth"] == width
     assert res["scrollWidth"] <= res["innerWidth"], res  # no horizontal overflow of the page
     assert res["wide"] == [], res  # nothing sticks out except inside scroll containers
@@ -421,14 +457,14 @@ def test_pages_in_a_browser(which, width, request, tmp_path):
             assert res["plots"][1]["name"] == "compare-convergence" and res["plots"][1]["traces"] == 2
     else:
         assert res["images"] >= 3
-    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", tmp_path, width, 7000 if width < 500 else 5000,
+    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", browser, width, 7000 if width < 500 else 5000,
                       "#compare=evil,madgwick" if which == "dashboard" else "")
     arr = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert arr.std() > 5 and (arr < 128).mean() > 0.005, "blank screenshot"
 
 
 @needs_chromium
-def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evil_run, tmp_path):
+def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evil_run, browser, tmp_path):
     """Negative control: the same measurement on pages that overflow, hold a broken image, a plot whose data
     is damaged and a plot whose script did not load."""
     from tuner import interactive
@@ -439,33 +475,33 @@ def test_browser_measurement_catches_overflow_broken_images_and_broken_plots(evi
     page = page.replace("<main>", '<main><div style="width:2500px">wide</div>'
                                   '<img src="data:image/png;base64,AAAA" alt="broken">', 1)
     (bad / "report.html").write_text(page)
-    res = measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", browser)
     assert res["scrollWidth"] > 2000 and res["wide"] and res["broken"] == ["broken"] and res["errors"]
     if not interactive.available():
         return
     good = (evil_run / "report.html").read_text()
     (bad / "report.html").write_text(good.replace('"best":[', '"best":[],"best_damaged":[', 1)
                                      .replace('"gen_median":[', '"gen_median":[],"gen_median_damaged":[', 1))
-    conv = next(p for p in measure(bad / "report.html", tmp_path)["plots"] if p["name"] == "convergence")
+    conv = next(p for p in measure(bad / "report.html", browser)["plots"] if p["name"] == "convergence")
     assert conv["rendered"] and conv["drawn"] == 0, conv  # the axes are there, the data is not: caught
     (bad / "report.html").write_text(good.replace('"convergence":{', '"convergence_damaged":{', 1))
-    res = measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", browser)
     conv = next(p for p in res["plots"] if p["name"] == "convergence")
     assert not conv["rendered"] and conv["drawn"] == 0 and any("convergence" in e for e in res["errors"]), res
     (bad / "report.html").write_text((evil_run / "report.html").read_text())
     (bad / "plotly.min.js").unlink()
-    res = measure(bad / "report.html", tmp_path)
+    res = measure(bad / "report.html", browser)
     assert res["errors"] and not any(p["rendered"] for p in res["plots"]), res
 
 
 @needs_chromium
-def test_report_with_cross_validation_in_a_browser(tmp_path):
+def test_report_with_cross_validation_in_a_browser(browser, tmp_path):
     # the Generalisation section (validation: cv) adds a table and a warning: it must fit the page too
     from tests.tuner.test_validation import _raw as _val_raw
 
     cfg = config_from_dict(_val_raw(tmp_path, {"cv": "kfold", "folds": 2, "budget_fraction": 0.5, "gap_warn_rel": 0.0}))
     page = run(cfg, quiet=True).run_dir / "report.html"
     assert "Generalisation" in page.read_text()
-    res = measure(page, tmp_path, 390)
+    res = measure(page, browser, 390)
     assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
     assert res["broken"] == [] and res["errors"] == [], res
