@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.tuner.jobs import unrendered_figures
 from tuner.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -145,10 +146,11 @@ def test_kind_python_imports_from_the_config_folder(tmp_path, capsys):
     assert main(["run", str(p)]) == 0, capsys.readouterr().err
 
 
-def test_same_seed_same_history_serial_and_threads(tmp_path):
+def test_same_seed_same_history_serial_and_threads(tmp_path, monkeypatch):
     from tuner.config import config_from_dict
     from tuner.run import run
 
+    unrendered_figures(monkeypatch)  # the histories are compared, no figure
     src = yaml.safe_load((EXAMPLES / "dc_motor_pid.yaml").read_text())
     src["optimizer"].update(population=6, generations=2)
     hist = []
