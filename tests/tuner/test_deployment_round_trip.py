@@ -52,7 +52,6 @@ NONDEFAULT = {
 }
 
 
-
 @pytest.fixture(autouse=True, scope="module")
 def _no_report():
     """No test here reads a figure or the run report: the objective's figures are not rendered, the report

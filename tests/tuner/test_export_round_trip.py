@@ -36,7 +36,6 @@ LOOP_OBJECTIVE = {"kind": "closed_loop", "period_s": 0.05,
                   "scenario": {"duration_s": 3.0, "reference": [{"t": 0.5, "value": 1.0}]}}
 
 
-
 @pytest.fixture(autouse=True, scope="module")
 def _no_report():
     """No test here reads a figure or the run report: the objective's figures are not rendered, the report
