@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.tuner.jobs import unrendered_figures, without_run_report
 from tuner.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -97,10 +98,12 @@ def test_bad_plant_spec_is_one_error_line(tmp_path, capsys, case):
 
 
 @pytest.mark.parametrize("name", ["dc_motor_pid", "ss_lqr", "cartpole_lqr"])
-def test_example_runs_tunes_reports_and_exports(tmp_path, capsys, name):
-    """Each example from its own folder (the cart-pendulum imports cartpole.py next to its config)."""
+def test_example_runs_tunes_reports_and_exports(tmp_path, capsys, monkeypatch, name):
+    """Each example from its own folder (the cart-pendulum imports cartpole.py next to its config); the
+    objective's report (figures, requirements.md) is read, the run's own report.md is not written."""
+    without_run_report(monkeypatch)
     src = yaml.safe_load((EXAMPLES / f"{name}.yaml").read_text())
-    src["optimizer"].update(population=6, generations=2)
+    src["optimizer"].update(population=6, generations=1)
     src["output"] = str(tmp_path / "runs")
     for f in EXAMPLES.glob("*.py"):
         shutil.copy(f, tmp_path / f.name)
@@ -145,10 +148,12 @@ def test_kind_python_imports_from_the_config_folder(tmp_path, capsys):
     assert main(["run", str(p)]) == 0, capsys.readouterr().err
 
 
-def test_same_seed_same_history_serial_and_threads(tmp_path):
+def test_same_seed_same_history_serial_and_threads(tmp_path, monkeypatch):
     from tuner.config import config_from_dict
     from tuner.run import run
 
+    unrendered_figures(monkeypatch)  # the histories are compared, no figure nor report
+    without_run_report(monkeypatch)
     src = yaml.safe_load((EXAMPLES / "dc_motor_pid.yaml").read_text())
     src["optimizer"].update(population=6, generations=2)
     hist = []

@@ -1,4 +1,5 @@
-"""Small jobs for the run and run-directory tests, and the pieces of a run killed and resumed from the CLI."""
+"""Small jobs for the run and run-directory tests, the pieces of a run killed and resumed from the CLI, and
+unrendered figures (or no run report) for the tests that read none."""
 
 import json
 import os
@@ -11,6 +12,31 @@ from pathlib import Path
 import yaml
 
 from tuner.config import config_from_dict
+
+
+def unrendered_figures(mp) -> None:
+    """Through the monkeypatch ``mp``, every figure a run draws (its report's, its objective's) is saved as an
+    empty file and not laid out: rendering the PNGs (and ``tight_layout``, which renders the text to measure
+    it) is most of a brief run's time, and a test that reads no figure needs the file only to exist. The
+    figures are still built, from the same data."""
+    from matplotlib.figure import Figure
+
+    def savefig(self, fname, *args, **kwargs):
+        if hasattr(fname, "write"):  # an open file: tuner.figures writes through a temporary one
+            return
+        Path(fname).write_bytes(b"")
+
+    mp.setattr(Figure, "savefig", savefig)
+    mp.setattr(Figure, "tight_layout", lambda self, *args, **kwargs: None)
+
+
+def without_run_report(mp) -> None:
+    """Through the monkeypatch ``mp``, a finished run writes no ``report.md`` / ``report.html`` (nor their
+    figures): for tests that read neither. The report comes after ``best.yaml`` and ``meta.json`` and never
+    fails a run (tuner.run.Run._report), so nothing else of the run changes."""
+    from tuner.run import Run
+
+    mp.setattr(Run, "_report", lambda self: None)
 
 
 def rastrigin_job(tmp_path, dim: int, population: int, generations: int, **over):

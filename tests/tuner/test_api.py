@@ -14,12 +14,27 @@ import pytest
 import yaml
 
 import tuner
+from tests.tuner.jobs import unrendered_figures
 from tuner.cli import main as cli_main
 
 ROOT = Path(__file__).resolve().parents[2]
 
 JOB = {"name": "api-rosen", "seed": 5, "objective": {"kind": "function", "function": "rosenbrock", "dim": 3},
        "optimizer": {"method": "pso", "population": 6, "generations": 4}, "parallel": {"backend": "serial"}}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _unrendered_figures():
+    """No test here reads a figure (report.html is still written, with the figures' files)."""
+    with pytest.MonkeyPatch.context() as mp:
+        unrendered_figures(mp)
+        yield
+
+
+@pytest.fixture(scope="module")
+def job_run(tmp_path_factory) -> tuner.Result:
+    """``tuner.tune(JOB)``, the plain run several tests compare against; they only read it."""
+    return tuner.tune(dict(JOB), run_dir=tmp_path_factory.mktemp("api") / "job", progress=False)
 
 
 def _write_job(tmp_path: Path, job: dict = JOB) -> Path:
@@ -59,12 +74,12 @@ def test_tune_equals_cli_run(tmp_path, capsys):
     assert res.validation is None
 
 
-def test_dict_and_typed_config_give_the_same_history(tmp_path):
+def test_dict_and_typed_config_give_the_same_history(tmp_path, job_run):
     from tuner.config import load_config
 
     path = _write_job(tmp_path)
     r_path = tuner.tune(path, run_dir=tmp_path / "p", progress=False)
-    r_dict = tuner.tune(dict(JOB), run_dir=tmp_path / "d", progress=False)
+    r_dict = job_run
     r_cfg = tuner.tune(load_config(path), run_dir=tmp_path / "c", progress=False)
     assert _history(r_path.run_dir) == _history(r_dict.run_dir) == _history(r_cfg.run_dir)
     # seed and n_jobs override a dict and a typed config as they override a file
@@ -106,7 +121,7 @@ def test_callback_gets_a_typed_summary_per_generation(tmp_path):
         seen[0].generation = 7
 
 
-def test_callback_exception_stops_the_run_resumably(tmp_path):
+def test_callback_exception_stops_the_run_resumably(tmp_path, job_run):
     def stop(s):
         if s.generation == 1:
             raise RuntimeError("enough")
@@ -115,8 +130,7 @@ def test_callback_exception_stops_the_run_resumably(tmp_path):
         tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, callback=stop)
     assert len(_history(tmp_path / "r")) == 12  # the generation the callback saw is on disk
     assert cli_main(["resume", str(tmp_path / "r"), "-q"]) == 0
-    whole = tuner.tune(dict(JOB), run_dir=tmp_path / "whole", progress=False)
-    assert _history(tmp_path / "r") == _history(whole.run_dir)
+    assert _history(tmp_path / "r") == _history(job_run.run_dir)  # as the run never stopped
 
 
 def test_progress_lines(tmp_path, capsys):
@@ -183,10 +197,10 @@ def test_filter_warmup_of_the_wrong_type_names_its_key():
         tuner.tune(job, progress=False)
 
 
-def test_function_objective_builds_its_point(tmp_path):
+def test_function_objective_builds_its_point(job_run):
     from objectives.functions import FUNCTIONS
 
-    res = tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False)
+    res = job_run
     x = res.build()
     assert x.tolist() == [res.params[f"x{i}"] for i in range(3)]
     assert FUNCTIONS["rosenbrock"][0](x) == pytest.approx(res.fitness, rel=1e-12)
@@ -227,7 +241,7 @@ def test_build_gives_the_tuned_controller(tmp_path):
     from tuner.starter import starter_text
 
     job = yaml.safe_load(starter_text("pid"))
-    job.update(optimizer={"method": "pso", "population": 4, "generations": 2}, parallel={"backend": "serial"})
+    job.update(optimizer={"method": "pso", "population": 4, "generations": 1}, parallel={"backend": "serial"})
     res = tuner.tune(job, run_dir=tmp_path / "pid", progress=False)
     ctl = res.build()
     assert type(ctl).__name__ == "PID" and dict(ctl.values) == res.best

@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.tuner.jobs import unrendered_figures, without_run_report
+
 # the pendulum's controllers and those of any plant, with the plant the latter run on
 from tests.tuner.test_export_round_trip import LOOP_CONTROLLERS, LOOP_OBJECTIVE, WMP_CONTROLLERS
 from tuner.deployment import Deployment, load_deployment
@@ -48,6 +50,16 @@ NONDEFAULT = {
     "vqf": {"offline": True, "magDistRejectionEnabled": False, "tauMag": 5.0},
     "realtime": {"mag_first_at_rest": True, "mag_recover_tau_s": 4.0, "motion_bias": False, "start": "q0"},
 }
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _no_report():
+    """No test here reads a figure or the run report: the objective's figures are not rendered, the report
+    is not written."""
+    with pytest.MonkeyPatch.context() as mp:
+        unrendered_figures(mp)
+        without_run_report(mp)
+        yield
 
 
 def _tiny_run(tmp, objective, parameters=None, name="deploy"):

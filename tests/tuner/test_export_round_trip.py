@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.tuner.jobs import unrendered_figures, without_run_report
 from tuner.export import export
 from tuner.export_formats import json_load
 from tuner.registry import REGISTRY
@@ -33,6 +34,16 @@ LOOP_OBJECTIVE = {"kind": "closed_loop", "period_s": 0.05,
                   "plant": {"ss": {"A": [[0.0, 1.0], [-1.0, -2.0]], "B": [[0.0], [1.0]], "C": [[1.0, 0.0], [0.0, 1.0]]},
                             "output": 0, "inner_output": 1},
                   "scenario": {"duration_s": 3.0, "reference": [{"t": 0.5, "value": 1.0}]}}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _no_report():
+    """No test here reads a figure or the run report: the objective's figures are not rendered, the report
+    is not written."""
+    with pytest.MonkeyPatch.context() as mp:
+        unrendered_figures(mp)
+        without_run_report(mp)
+        yield
 
 
 def _tiny_run(tmp, objective):
