@@ -13,25 +13,11 @@ ROOT = Path(__file__).resolve().parents[1] / "configs"
 CONFIGS = sorted(p for p in [*ROOT.glob("*.yaml"), *(ROOT / "papers").glob("*.yaml")] if not p.is_symlink())
 
 
-@pytest.fixture(scope="module")
-def closed_loop_compiled() -> None:
-    """The pendulum's closed-loop kernel compiled in this process. It is compiled per process, not cached
-    on disk (objectives/control/wmp.py), and the wmp configs (loky backend) score their default point in a
-    forked child: each child inherits it compiled here instead of compiling it again."""
-    from objectives.control.objective import ClosedLoopObjective
-
-    obj = ClosedLoopObjective.from_config({"kind": "closed_loop", "controller": "pid", "profile": "thesis_2s",
-                                           "duration_s": 2.0, "requirements": None})
-    obj(obj.defaults)
-
-
 @pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.broad) if "broad" in p.name else p
                                   for p in CONFIGS], ids=[p.name for p in CONFIGS])
-def test_config_builds(path, request):
+def test_config_builds(path):
     if path.name == "broad_vqf.yaml":
         pytest.importorskip("vqf")
-    if path.name.startswith("wmp_"):
-        request.getfixturevalue("closed_loop_compiled")
     text = path.read_text()
     assert text.startswith("#"), "each config documents itself at its top"
     if is_sweep_file(path):
