@@ -42,7 +42,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     from tuner.run import run as tuner_run
 
     duration = 10.0
-    reps = 3 if smoke else 30
+    reps = 1 if smoke else 30
     sims = {}
     for name in CONTROLLERS:
         try:
