@@ -128,7 +128,9 @@ def speedup(objective, params: list[dict], repeats: int, n_jobs: int = 2,
     return out
 
 
-def _engine_overhead(n_jobs: int, gens: int, pop: int, warm_up: bool = True) -> dict[str, Any]:
+def _engine_overhead(n_jobs: int, gens: int, pop: int, smoke: bool = False) -> dict[str, Any]:
+    """Evaluations per second of whole sphere runs, serial and on ``n_jobs`` loky workers (smoke: without the
+    warm-up run and the final report)."""
     from tuner.config import config_from_dict
     from tuner.run import run as tuner_run
 
@@ -140,11 +142,11 @@ def _engine_overhead(n_jobs: int, gens: int, pop: int, warm_up: bool = True) -> 
                "parallel": {"backend": backend, "n_jobs": jobs}}
         cfg = config_from_dict(raw, source="benchmarks/parallel.py", base_dir=REPO)
         with tempfile.TemporaryDirectory() as d:
-            if warm_up:
+            if not smoke:
                 tuner_run(config_from_dict({**raw, "optimizer": {**raw["optimizer"], "generations": 1}},
                                            source="warm-up", base_dir=REPO), run_dir=Path(d) / "w", quiet=True)
             t = time.perf_counter()
-            tuner_run(cfg, run_dir=Path(d) / "r", quiet=True)
+            tuner_run(cfg, run_dir=Path(d) / "r", quiet=True, report=not smoke)
             wall = time.perf_counter() - t
             import csv
 
@@ -255,7 +257,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     busy = FunctionObjective("sphere", 5, busy_s=0.01)
     busy_r = speedup(busy, [{f"x{i}": 0.1 * i for i in range(5)} for _ in range(8 if smoke else 60)], repeats, n_jobs,
                      backends=("serial", "loky"))
-    overhead = _engine_overhead(n_jobs, 2 if smoke else 20, 10 if smoke else 50, warm_up=not smoke)
+    overhead = _engine_overhead(n_jobs, 2 if smoke else 20, 10 if smoke else 50, smoke)
     # the threads child compiles the batch kernels again (not cached on disk): the full run only; a smoke
     # run's child evaluates serially (loky workers would double its start-up for a number that means nothing)
     mems = {b: _peak_memory(smoke, b) for b in (("serial",) if smoke else ("loky", "threads"))}
