@@ -42,7 +42,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     from tuner.run import run as tuner_run
 
     duration = 10.0
-    reps = 3 if smoke else 30
+    reps = 1 if smoke else 30
     sims = {}
     for name in CONTROLLERS:
         try:
@@ -71,7 +71,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     cfg = config_from_dict(raw, source="benchmarks/closed_loop.py", base_dir=REPO / "configs")
     with tempfile.TemporaryDirectory() as d:
         t = time.perf_counter()
-        res = tuner_run(cfg, run_dir=Path(d) / "run", quiet=True)
+        res = tuner_run(cfg, run_dir=Path(d) / "run", quiet=True, report=not smoke)  # smoke: no report figures
         wall = time.perf_counter() - t
     n = pop * gens
     thesis = {"population": pop, "generations": gens, "backend": backend, "n_jobs": n_jobs, "wall_s": wall,

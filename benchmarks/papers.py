@@ -49,6 +49,10 @@ class Budget:
         PSO of the FAEKF and EKF configs.
     control : (int, int)
         PSO of the pendulum's fuzzy and PID configs (the thesis: 150 x 150).
+    light : bool
+        Tuning runs in this process (same results) and without their final reports (figures no row
+        reads): the smoke budget's, whose few evaluations per run cost less than starting workers (which
+        compile the pendulum's kernel again: it is not cached on disk) and drawing the report.
     """
 
     name: str
@@ -57,10 +61,11 @@ class Budget:
     tilt: tuple[int, int] | None
     faekf: tuple[int, int]
     control: tuple[int, int]
+    light: bool = False
 
 
 BUDGETS = {
-    "smoke": Budget("smoke", (1, 2), 8, (3, 2), (3, 2), (4, 2)),
+    "smoke": Budget("smoke", (1, 2), 8, (3, 2), (3, 2), (4, 2), light=True),
     "reduced": Budget("reduced", (1, 2, 3, 4, 5), 300, (10, 10), (10, 8), (30, 30)),
     "full": Budget("full", (1, 2, 3, 4, 5), 300, None, (30, 30), (150, 150)),
 }
@@ -69,8 +74,9 @@ BUDGETS = {
 def measure(budget: Budget, runs: Path) -> list[Row]:
     """Every row, in page order."""
     s = budget.seeds
-    return (ccf_rows(budget.ccf_evals, s, runs) + qraukf_rows() + tilt_rows(budget.tilt, s, runs)
-            + faekf_rows(budget.faekf, s, runs) + control_rows(budget.control, s, runs))
+    j = budget.light
+    return (ccf_rows(budget.ccf_evals, s, runs) + qraukf_rows() + tilt_rows(budget.tilt, s, runs, j)
+            + faekf_rows(budget.faekf, s, runs, j) + control_rows(budget.control, s, runs, j))
 
 
 def _git(*args: str) -> str:

@@ -187,14 +187,14 @@ TABLE_36 = {"KF": ("1.5525", "1.7138", "2.2762", "2.6376"), "Madgwick": ("2.1219
 DEG2 = (180.0 / math.pi) ** 2
 
 
-def tilt_rows(budget: tuple[int, int] | None, seeds: Sequence[int], out: Path) -> list[Row]:
+def tilt_rows(budget: tuple[int, int] | None, seeds: Sequence[int], out: Path, light: bool = False) -> list[Row]:
     """Thesis 3.1: tuning gains and tuned values of Tables 3.1/3.3/3.4/3.5, and Table 3.6's "adaptive KF
     best on every measurement", over tuning seeds. ``budget`` None runs the thesis's own PSO sizes."""
     rows: list[Row] = []
     best = {}
     for name, (cfg, table, f0, f1, thesis_budget) in TILT.items():
         pop, gen = budget or thesis_budget
-        best[name] = [tuned(cfg, pop, gen, out, seed=s) for s in seeds]
+        best[name] = [tuned(cfg, pop, gen, out, seed=s, light=light) for s in seeds]
         obj = objective_from(config_raw(cfg), cfg)
         f_init = obj.score(obj.default_params(), "train").fitness
         gain = np.array([100.0 * (1.0 - b["evaluation"]["train_fitness"] / f_init) for b in best[name]])
@@ -251,13 +251,13 @@ def _euler_geomean(m: dict) -> float:
     return math.prod(math.radians(m[k]) ** 2 for k in ("roll_rmse_deg", "pitch_rmse_deg", "yaw_rmse_deg")) ** (1 / 3)
 
 
-def faekf_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path) -> list[Row]:
+def faekf_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path, light: bool = False) -> list[Row]:
     """FAEKF paper, sections 5.2-5.3: the FAEKF against the EKF with the same tuned Q and R but no adaptive
     strategy (the paper's comparison) and against a separately tuned EKF, per held-out recording; the tuned
     values of section 5.2."""
     pop, gen = budget
-    fa = [tuned("faekf_bench6dof.yaml", pop, gen, out, seed=s) for s in seeds]
-    ekf = [tuned("ekf_bench6dof.yaml", pop, gen, out, seed=s) for s in seeds]
+    fa = [tuned("faekf_bench6dof.yaml", pop, gen, out, seed=s, light=light) for s in seeds]
+    ekf = [tuned("ekf_bench6dof.yaml", pop, gen, out, seed=s, light=light) for s in seeds]
     ekf_obj = objective_from(config_raw("ekf_bench6dof.yaml"), "ekf_bench6dof.yaml")
     paper = iv_hull(*(iv_gain(_geomean_iv(e), _geomean_iv(f)) for f, e in FAEKF_TABLE_2.values()))
     fa_per = np.array([[_euler_geomean(m) for m in b["evaluation"]["test"].values()] for b in fa])

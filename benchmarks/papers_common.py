@@ -226,11 +226,12 @@ def default_score(config: str, which: str = "test", sets: Sequence[str] = ()) ->
 
 
 def tuned(config: str, population: int | None, generations: int | None, out: Path, sets: Sequence[str] = (),
-          tag: str = "", max_evals: int | None = None, seed: int | None = None) -> dict:
+          tag: str = "", max_evals: int | None = None, seed: int | None = None, light: bool = False) -> dict:
     """Run ``config`` (in this process) into ``out/<stem><tag>[-s<seed>]`` at a PSO budget (``population`` x
     ``generations``) or, with ``max_evals``, at that many evaluations of the config's own method (plus
     ``--set`` overrides ``sets``, and ``seed`` for the run seed); return its best.yaml (empty ``params``,
-    ``metrics`` and ``evaluation`` when no evaluation succeeded)."""
+    ``metrics`` and ``evaluation`` when no evaluation succeeded). ``light``: in this process instead of the
+    config's workers (the same results) and without the run's final report, which no row reads."""
     import shutil
 
     from tuner.config import load_config
@@ -241,8 +242,8 @@ def tuned(config: str, population: int | None, generations: int | None, out: Pat
         shutil.rmtree(run_dir)
     over = [f"optimizer.max_evals={max_evals}"] if max_evals is not None else [
         f"optimizer.population={population}", f"optimizer.generations={generations}"]
-    cfg = load_config(PAPERS / config, over + list(sets), seed=seed)
-    run(cfg, run_dir, quiet=True)
+    cfg = load_config(PAPERS / config, over + list(sets), seed=seed, n_jobs=1 if light else None)
+    run(cfg, run_dir, quiet=True, report=not light)
     best = run_dir / "best.yaml"
     if not best.exists():  # no evaluation succeeded (e.g. none met a closed loop's requirements)
         return {"params": {}, "metrics": {}, "evaluation": {}}

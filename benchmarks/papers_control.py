@@ -151,16 +151,16 @@ def _get(best: dict, section: str, key: str) -> float:
     return float(best.get(section, {}).get(key, np.nan))
 
 
-def pso_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path) -> list[Row]:
+def pso_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path, light: bool = False) -> list[Row]:
     """Section 2.3.4: the PSO improves F of the protective fuzzy scheme (with its per-term gains), the u3 box
     read off Table 2.7 (sensitivity study), and the tuned fuzzy scheme against the tuned PID (peaks)."""
     pop, gen = budget
     cfg = "wmp_fuzzy_protective.yaml"
     b_str = f"--set optimizer.population={pop} --set optimizer.generations={gen}"
-    runs = [tuned(cfg, pop, gen, out, seed=s) for s in seeds]
-    boxed = [tuned(cfg, pop, gen, out, (f"parameters.u3={{low: 0.1, high: {U3_BOX}}}",), "-u3box", seed=s)
-             for s in seeds]
-    pid = [tuned("wmp_pid.yaml", pop, gen, out, seed=s) for s in seeds]
+    runs = [tuned(cfg, pop, gen, out, seed=s, light=light) for s in seeds]
+    boxed = [tuned(cfg, pop, gen, out, (f"parameters.u3={{low: 0.1, high: {U3_BOX}}}",), "-u3box", seed=s,
+                   light=light) for s in seeds]
+    pid = [tuned("wmp_pid.yaml", pop, gen, out, seed=s, light=light) for s in seeds]
     obj = _objective()
     m0 = obj(obj.defaults).metrics
     f0 = obj(obj.defaults).fitness
@@ -191,9 +191,9 @@ def pso_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path) -> list[R
     return rows
 
 
-def control_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path) -> list[Row]:
-    """Every chapter-2 row."""
-    return tables_24_25_rows(seeds) + f_band_rows() + pso_rows(budget, seeds, out)
+def control_rows(budget: tuple[int, int], seeds: Sequence[int], out: Path, light: bool = False) -> list[Row]:
+    """Every chapter-2 row (``light``: see :func:`benchmarks.papers_common.tuned`)."""
+    return tables_24_25_rows(seeds) + f_band_rows() + pso_rows(budget, seeds, out, light)
 
 
 __all__ = ["control_rows", "tables_24_25_rows", "f_band_rows", "pso_rows"]

@@ -50,6 +50,11 @@ REPO = Path(__file__).resolve().parent.parent
 #: serial seconds a benchmark batch aims at (the batch size is this over one evaluation's time)
 BATCH_S = 1.5
 
+#: the problem a smoke run times: the threads backend compiles each problem's batch kernels (not cached on
+#: disk), 5 s of CPU for the 1-D KF's and up to 20 s for the others', and the WMP problems' loky workers
+#: compile the closed-loop kernel again; one problem runs the same code path for every backend
+SMOKE_PROBLEMS = ["kf1d_tilt1d"]
+
 
 def _cpu_s(pool_pids: set[int]) -> float:
     """CPU seconds used so far by this process and its child processes (loky workers)."""
@@ -123,7 +128,9 @@ def speedup(objective, params: list[dict], repeats: int, n_jobs: int = 2,
     return out
 
 
-def _engine_overhead(n_jobs: int, gens: int, pop: int) -> dict[str, Any]:
+def _engine_overhead(n_jobs: int, gens: int, pop: int, smoke: bool = False) -> dict[str, Any]:
+    """Evaluations per second of whole sphere runs, serial and on ``n_jobs`` loky workers (smoke: without the
+    warm-up run and the final report)."""
     from tuner.config import config_from_dict
     from tuner.run import run as tuner_run
 
@@ -135,10 +142,11 @@ def _engine_overhead(n_jobs: int, gens: int, pop: int) -> dict[str, Any]:
                "parallel": {"backend": backend, "n_jobs": jobs}}
         cfg = config_from_dict(raw, source="benchmarks/parallel.py", base_dir=REPO)
         with tempfile.TemporaryDirectory() as d:
-            tuner_run(config_from_dict({**raw, "optimizer": {**raw["optimizer"], "generations": 1}},
-                                       source="warm-up", base_dir=REPO), run_dir=Path(d) / "w", quiet=True)
+            if not smoke:
+                tuner_run(config_from_dict({**raw, "optimizer": {**raw["optimizer"], "generations": 1}},
+                                           source="warm-up", base_dir=REPO), run_dir=Path(d) / "w", quiet=True)
             t = time.perf_counter()
-            tuner_run(cfg, run_dir=Path(d) / "r", quiet=True)
+            tuner_run(cfg, run_dir=Path(d) / "r", quiet=True, report=not smoke)
             wall = time.perf_counter() - t
             import csv
 
@@ -153,7 +161,8 @@ def _engine_overhead(n_jobs: int, gens: int, pop: int) -> dict[str, Any]:
 
 
 def _memory_child(smoke: bool, backend: str = "loky") -> None:
-    """Run in a fresh process: Madgwick on all BROAD trials, 2 workers (the parent samples RSS)."""
+    """Run in a fresh process: Madgwick on all BROAD trials, 2 workers (the parent samples RSS); ``serial``:
+    in the child process alone."""
     from objectives.attitude.data.broad import default_broad_dir
     from tuner.config import config_from_dict
     from tuner.run import run as tuner_run
@@ -164,7 +173,7 @@ def _memory_child(smoke: bool, backend: str = "loky") -> None:
                          "data": [{"broad": {"dir": str(default_broad_dir()), "trials": trials}}],
                          "metric": "broad_mean_rmse"},
            "optimizer": {"method": "pso", "population": 8, "generations": 1 if smoke else 3},
-           "parallel": {"backend": backend, "n_jobs": 2}}
+           "parallel": {"backend": backend, "n_jobs": 1 if backend == "serial" else 2}}
     with tempfile.TemporaryDirectory() as d:
         tuner_run(config_from_dict(raw, source="benchmarks/parallel.py", base_dir=REPO), run_dir=Path(d) / "r",
                   quiet=True)
@@ -202,7 +211,8 @@ def _peak_memory(smoke: bool, backend: str = "loky") -> dict[str, Any]:
         time.sleep(0.02)
     n_trials = 1 if smoke else len(broad_trials(default_broad_dir()))
     return {"peak_rss_total_mb": peak / 2**20, "peak_rss_main_mb": peak_main / 2**20, "processes_at_peak": n_proc,
-            "trials": n_trials, "n_jobs": 2, "backend": backend, "wall_s": time.perf_counter() - t,
+            "trials": n_trials, "n_jobs": 1 if backend == "serial" else 2, "backend": backend,
+            "wall_s": time.perf_counter() - t,
             "returncode": p.returncode}
 
 
@@ -229,7 +239,7 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     repeats = 1 if smoke else 7
     load_before = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     problems = {}
-    for name in problem_names(smoke):
+    for name in SMOKE_PROBLEMS if smoke else problem_names():
         try:
             p = build_problem(name, smoke)
         except FileNotFoundError as exc:
@@ -247,9 +257,10 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
     busy = FunctionObjective("sphere", 5, busy_s=0.01)
     busy_r = speedup(busy, [{f"x{i}": 0.1 * i for i in range(5)} for _ in range(8 if smoke else 60)], repeats, n_jobs,
                      backends=("serial", "loky"))
-    overhead = _engine_overhead(n_jobs, 2 if smoke else 20, 10 if smoke else 50)
-    # the threads child compiles the batch kernels again (not cached on disk): the full run only
-    mems = {b: _peak_memory(smoke, b) for b in (("loky",) if smoke else ("loky", "threads"))}
+    overhead = _engine_overhead(n_jobs, 2 if smoke else 20, 10 if smoke else 50, smoke)
+    # the threads child compiles the batch kernels again (not cached on disk): the full run only; a smoke
+    # run's child evaluates serially (loky workers would double its start-up for a number that means nothing)
+    mems = {b: _peak_memory(smoke, b) for b in (("serial",) if smoke else ("loky", "threads"))}
     load_after = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
     rows = [[k, v.get("t_eval_s"), v.get("batch"), v.get("serial"), v.get("loky"), v.get("threads"),
              v.get("speedup_loky"), v.get("speedup_threads"), v.get("cpu_bound_loky"), v.get("cpu_bound_threads"),
@@ -280,7 +291,8 @@ def run(smoke: bool = False, n_jobs: int = 2, **_: Any) -> dict[str, Any]:
         if "error" in mem:
             md.append(f"\nPeak memory ({backend}): {mem['error']}")
         else:
-            md.append(f"\nPeak memory of Madgwick on {mem['trials']} BROAD trials with 2 {backend} workers: "
+            md.append(f"\nPeak memory of Madgwick on {mem['trials']} BROAD trials with {mem['n_jobs']} {backend} "
+                      f"worker{'s' if mem['n_jobs'] > 1 else ''}: "
                       f"**{mem['peak_rss_total_mb']:.0f} MB** RSS summed over {mem['processes_at_peak']} processes "
                       f"(main process {mem['peak_rss_main_mb']:.0f} MB; shared pages counted once per process).")
     return {"results": {"problems": problems, "busy_10ms": busy_r, "engine_overhead": overhead, "peak_memory": mems,

@@ -119,9 +119,9 @@ def _score(name: str, K: float, Ti: float, Td: float) -> dict[str, float]:
             "overshoot_pct": sp.metrics.get("overshoot_pct", math.nan)}
 
 
-def tune(name: str, pop: int, gens: int, seed: int = 1) -> tuple[dict[str, float], float, float]:
+def tune(name: str, pop: int, gens: int, seed: int = 1, report: bool = True) -> tuple[dict[str, float], float, float]:
     """PID of plant ``name`` tuned by ``tuner.run``; returns its parameters, the wall and the CPU time (s)
-    of the whole run (serial: one core)."""
+    of the whole run (serial: one core; ``report=False``: without the run's final report)."""
     from tuner.config import config_from_dict
     from tuner.run import run as tuner_run
 
@@ -137,7 +137,7 @@ def tune(name: str, pop: int, gens: int, seed: int = 1) -> tuple[dict[str, float
         raw["output"] = d
         cfg = config_from_dict(raw, source="benchmarks/pid_benchmark.py", base_dir=Path(d))
         t, c = time.perf_counter(), time.process_time()
-        res = tuner_run(cfg, quiet=True)
+        res = tuner_run(cfg, quiet=True, report=report)
         wall, cpu = time.perf_counter() - t, time.process_time() - c
     return dict(res.best_params), wall, cpu
 
@@ -148,10 +148,11 @@ def run(smoke: bool = False, n_jobs: int = 1, **_: Any) -> dict[str, Any]:
     import os
 
     rows, results, ok_all, cpus = [], {}, True, []
-    tune(names[0], 2, 1)  # warm-up: imports and the numba cache load are not part of one tuning
+    if not smoke:  # warm-up: imports and the numba cache load are not part of one tuning
+        tune(names[0], 2, 1)
     for name in names:
         scored = {rule: _score(name, *v) for rule, v in rules(name).items()}
-        best, wall, cpu = tune(name, pop, gens)
+        best, wall, cpu = tune(name, pop, gens, report=not smoke)
         cpus.append(cpu)
         scored["tuner"] = _score(name, best["K"], best["Ti_s"], best["Td_s"])
         feasible = [s["iae"] for r, s in scored.items() if r != "tuner" and s["ms"] <= MS_MAX]

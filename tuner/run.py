@@ -183,8 +183,9 @@ class Run:
 
     def __init__(self, cfg: RunConfig, rd: RunDir, objective: Any, space: Space,
                  progress: Callable[[str], None] | None, meta: Meta, n_jobs: int,
-                 on_generation: Callable[[Generation], None] | None = None):
+                 on_generation: Callable[[Generation], None] | None = None, report: bool = True):
         self.cfg, self.rd, self.dir = cfg, rd, rd.path
+        self.report = report
         self.objective, self.base_space, self.progress = objective, space, progress
         self.meta, self.n_jobs, self.on_generation = meta, n_jobs, on_generation or (lambda g: None)
         self.best: Best | None = None
@@ -302,7 +303,7 @@ class Run:
         extra = self._finish() if self.best is not None else {}
         self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
-        if self.best is not None:
+        if self.best is not None and self.report:
             self._report()  # after meta.json: the report shows the final status
         return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
 
@@ -416,10 +417,12 @@ _UNSTARTED = {"config.yaml", ".config.json", ".lock"}
 
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         progress: Callable[[str], None] | None = None,
-        on_generation: Callable[[Generation], None] | None = None) -> RunResult:
+        on_generation: Callable[[Generation], None] | None = None, report: bool = True) -> RunResult:
     """Create a run directory for ``cfg`` and run it to the end (or until interrupted); ``on_generation(g)``
     is called after each generation is written. Everything that can be refused (objective, parameters,
     optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
+    ``report=False`` leaves out the final report (report.md, report.html and their figures; ``tuner report
+    RUN_DIR`` writes it later); the records and best.yaml are written as always.
     """
     objective, space = _build(cfg)
     n_jobs, notes = worker_count(cfg, space)
@@ -440,7 +443,7 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
             printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
         meta = _new_meta(cfg, rd.write_config(_resolved(cfg, space)), n_jobs, notes)
         rd.write_meta(meta)
-        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation, report)
         if printer:
             printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
                     f"{cfg.parallel.backend} x {n_jobs})")

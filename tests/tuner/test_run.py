@@ -86,6 +86,17 @@ def test_run_directory_contents(tmp_path):
         run(job(tmp_path), run_dir=d, quiet=True)
 
 
+def test_run_without_report_writes_the_same_records(tmp_path):
+    """``report=False`` leaves out report.md and its figures, nothing else: same history and best."""
+    a = run(job(tmp_path), run_dir=tmp_path / "a", quiet=True)
+    b = run(job(tmp_path), run_dir=tmp_path / "b", quiet=True, report=False)
+    assert (a.run_dir / "report.md").exists() and not (b.run_dir / "report.md").exists()
+    assert not (b.run_dir / "figures" / "convergence.png").exists()
+    pd.testing.assert_frame_equal(history(a.run_dir).drop(columns="seconds"),
+                                  history(b.run_dir).drop(columns="seconds"))
+    assert (b.run_dir / "best.yaml").exists() and a.best_params == b.best_params and b.status == "finished"
+
+
 def test_run_leaves_global_rng_alone(tmp_path):
     state = np.random.get_state()[1].copy()
     run(job(tmp_path, optimizer={"method": "cmaes"}), run_dir=tmp_path / "g", quiet=True)
