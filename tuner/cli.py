@@ -48,6 +48,8 @@ def _add_run(sub) -> None:
     p.add_argument("--n-jobs", type=int, help="override parallel.n_jobs")
     p.add_argument("--run-dir", help="use this run directory instead of runs/<time>-<name>-<hex>")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--no-report", action="store_true",
+                   help="leave out the final report (report.md/.html and figures; `tuner report RUN` writes it later)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -145,11 +147,12 @@ def _cmd_run(a) -> int:
     from tuner.sweep import is_sweep_file
 
     if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
-        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir:
-            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir apply to job files")
+        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir or a.no_report:
+            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir/--no-report apply to job "
+                             "files")
         return _cmd_sweep(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet))
     cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
-    res = run(cfg, run_dir=a.run_dir, quiet=a.quiet)
+    res = run(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report)
     return _print_result(res)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.tuner.jobs import unrendered_figures, without_run_report
+from tests.tuner.jobs import unrendered_figures
 from tuner.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -98,10 +98,9 @@ def test_bad_plant_spec_is_one_error_line(tmp_path, capsys, case):
 
 
 @pytest.mark.parametrize("name", ["dc_motor_pid", "ss_lqr", "cartpole_lqr"])
-def test_example_runs_tunes_reports_and_exports(tmp_path, capsys, monkeypatch, name):
+def test_example_runs_tunes_reports_and_exports(tmp_path, capsys, name):
     """Each example from its own folder (the cart-pendulum imports cartpole.py next to its config); the
-    objective's report (figures, requirements.md) is read, the run's own report.md is not written."""
-    without_run_report(monkeypatch)
+    objective's report (figures, requirements.md) is read; the run's own report.md is left out (``--no-report``)."""
     src = yaml.safe_load((EXAMPLES / f"{name}.yaml").read_text())
     src["optimizer"].update(population=6, generations=1)
     src["output"] = str(tmp_path / "runs")
@@ -109,14 +108,14 @@ def test_example_runs_tunes_reports_and_exports(tmp_path, capsys, monkeypatch, n
         shutil.copy(f, tmp_path / f.name)
     path = tmp_path / f"{name}.yaml"
     path.write_text(yaml.safe_dump(src))
-    assert main(["run", str(path)]) == 0
+    assert main(["run", str(path), "--no-report"]) == 0
     run = next((tmp_path / "runs").iterdir())
     best = yaml.safe_load((run / "best.yaml").read_text())
     assert best["fitness"] < 1e12
     assert (run / "figures" / "response.png").stat().st_size > 1000
     assert (run / "requirements.md").read_text().count("|") > 6
     assert (run / "figures" / "bode.png").exists() == (name != "cartpole_lqr")
-    capsys.readouterr()
+    assert not (run / "report.md").exists() and "report:" not in capsys.readouterr().out  # --no-report
     for fmt in ("yaml", "json", "python", "c"):
         assert main(["export", str(run), "--format", fmt]) == 0
         out = capsys.readouterr().out
@@ -153,14 +152,13 @@ def test_same_seed_same_history_serial_and_threads(tmp_path, monkeypatch):
     from tuner.run import run
 
     unrendered_figures(monkeypatch)  # the histories are compared, no figure nor report
-    without_run_report(monkeypatch)
     src = yaml.safe_load((EXAMPLES / "dc_motor_pid.yaml").read_text())
     src["optimizer"].update(population=6, generations=2)
     hist = []
     for i, par in enumerate(({"backend": "serial"}, {"backend": "loky", "n_jobs": 2})):
         src["output"] = str(tmp_path / f"runs{i}")
         src["parallel"] = par
-        res = run(config_from_dict(src, base_dir=EXAMPLES), quiet=True)
+        res = run(config_from_dict(src, base_dir=EXAMPLES), quiet=True, report=False)
         hist.append(np.loadtxt(Path(res.run_dir) / "history.csv", delimiter=",", skiprows=1, usecols=range(4),
                                dtype=str))
     assert (hist[0] == hist[1]).all()

@@ -1,5 +1,5 @@
 """Small jobs for the run and run-directory tests, the pieces of a run killed and resumed from the CLI, and
-unrendered figures (or no run report) for the tests that read none."""
+unrendered figures for the tests that read none."""
 
 import json
 import os
@@ -28,15 +28,6 @@ def unrendered_figures(mp) -> None:
 
     mp.setattr(Figure, "savefig", savefig)
     mp.setattr(Figure, "tight_layout", lambda self, *args, **kwargs: None)
-
-
-def without_run_report(mp) -> None:
-    """Through the monkeypatch ``mp``, a finished run writes no ``report.md`` / ``report.html`` (nor their
-    figures): for tests that read neither. The report comes after ``best.yaml`` and ``meta.json`` and never
-    fails a run (tuner.run.Run._report), so nothing else of the run changes."""
-    from tuner.run import Run
-
-    mp.setattr(Run, "_report", lambda self: None)
 
 
 def rastrigin_job(tmp_path, dim: int, population: int, generations: int, **over):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.tuner.jobs import unrendered_figures, without_run_report
+from tests.tuner.jobs import unrendered_figures
 
 # the pendulum's controllers and those of any plant, with the plant the latter run on
 from tests.tuner.test_export_round_trip import LOOP_CONTROLLERS, LOOP_OBJECTIVE, WMP_CONTROLLERS
@@ -53,12 +53,11 @@ NONDEFAULT = {
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _no_report():
-    """No test here reads a figure or the run report: the objective's figures are not rendered, the report
-    is not written."""
+def _unrendered():
+    """No test here reads a figure or the run report: the objective's figures are not rendered, and the runs
+    leave out the report (``report=False``)."""
     with pytest.MonkeyPatch.context() as mp:
         unrendered_figures(mp)
-        without_run_report(mp)
         yield
 
 
@@ -70,7 +69,7 @@ def _tiny_run(tmp, objective, parameters=None, name="deploy"):
            "optimizer": {"method": "pso", "population": 3, "generations": 1}, "parallel": {"backend": "serial"}}
     if parameters is not None:
         raw["parameters"] = parameters
-    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / name, quiet=True).run_dir
+    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / name, quiet=True, report=False).run_dir
 
 
 def _data(name):

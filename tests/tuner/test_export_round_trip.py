@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.tuner.jobs import unrendered_figures, without_run_report
+from tests.tuner.jobs import unrendered_figures
 from tuner.export import export
 from tuner.export_formats import json_load
 from tuner.registry import REGISTRY
@@ -37,12 +37,11 @@ LOOP_OBJECTIVE = {"kind": "closed_loop", "period_s": 0.05,
 
 
 @pytest.fixture(autouse=True, scope="module")
-def _no_report():
-    """No test here reads a figure or the run report: the objective's figures are not rendered, the report
-    is not written."""
+def _unrendered():
+    """No test here reads a figure or the run report: the objective's figures are not rendered, and the runs
+    leave out the report (``report=False``)."""
     with pytest.MonkeyPatch.context() as mp:
         unrendered_figures(mp)
-        without_run_report(mp)
         yield
 
 
@@ -52,7 +51,7 @@ def _tiny_run(tmp, objective):
 
     raw = {"name": "roundtrip", "seed": 5, "objective": objective,
            "optimizer": {"method": "pso", "population": 3, "generations": 1}, "parallel": {"backend": "serial"}}
-    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True).run_dir
+    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True, report=False).run_dir
 
 
 def _filter_objective(name):
