@@ -515,7 +515,7 @@ def _cmd_demo(a) -> int:
     except StarterError as exc:
         raise UsageError(str(exc)) from None
     return _cmd_run(argparse.Namespace(config=str(path), overrides=[], seed=None, n_jobs=None, run_dir=None,
-                                       quiet=a.quiet))
+                                       no_report=False, quiet=a.quiet))
 
 
 COMMANDS = {"run": _cmd_run, "resume": _cmd_resume, "show": _cmd_show, "compare": _cmd_compare,
