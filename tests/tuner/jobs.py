@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 import yaml
 
 from tuner.config import config_from_dict
@@ -28,6 +29,15 @@ def unrendered_figures(mp) -> None:
 
     mp.setattr(Figure, "savefig", savefig)
     mp.setattr(Figure, "tight_layout", lambda self, *args, **kwargs: None)
+
+
+@pytest.fixture(scope="module")
+def unrendered():
+    """For a module whose tests read no figure (``pytestmark = pytest.mark.usefixtures("unrendered")``, the
+    fixture imported): :func:`unrendered_figures` for the whole module."""
+    with pytest.MonkeyPatch.context() as mp:
+        unrendered_figures(mp)
+        yield
 
 
 def rastrigin_job(tmp_path, dim: int, population: int, generations: int, **over):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.tuner.jobs import unrendered_figures
+from tests.tuner.jobs import unrendered  # noqa: F401 (the module fixture)
 
 # the pendulum's controllers and those of any plant, with the plant the latter run on
 from tests.tuner.test_export_round_trip import LOOP_CONTROLLERS, LOOP_OBJECTIVE, WMP_CONTROLLERS
@@ -52,13 +52,9 @@ NONDEFAULT = {
 }
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _unrendered():
-    """No test here reads a figure or the run report: the objective's figures are not rendered, and the runs
-    leave out the report (``report=False``)."""
-    with pytest.MonkeyPatch.context() as mp:
-        unrendered_figures(mp)
-        yield
+# No test here reads a figure or the run report: the objective's figures are not rendered, and the runs
+# leave out the report (report=False).
+pytestmark = pytest.mark.usefixtures("unrendered")
 
 
 def _tiny_run(tmp, objective, parameters=None, name="deploy"):

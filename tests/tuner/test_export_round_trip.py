@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tests.tuner.jobs import unrendered_figures
+from tests.tuner.jobs import unrendered  # noqa: F401 (the module fixture)
 from tuner.export import export
 from tuner.export_formats import json_load
 from tuner.registry import REGISTRY
@@ -36,13 +36,9 @@ LOOP_OBJECTIVE = {"kind": "closed_loop", "period_s": 0.05,
                   "scenario": {"duration_s": 3.0, "reference": [{"t": 0.5, "value": 1.0}]}}
 
 
-@pytest.fixture(autouse=True, scope="module")
-def _unrendered():
-    """No test here reads a figure or the run report: the objective's figures are not rendered, and the runs
-    leave out the report (``report=False``)."""
-    with pytest.MonkeyPatch.context() as mp:
-        unrendered_figures(mp)
-        yield
+# No test here reads a figure or the run report: the objective's figures are not rendered, and the runs
+# leave out the report (report=False).
+pytestmark = pytest.mark.usefixtures("unrendered")
 
 
 def _tiny_run(tmp, objective):
