@@ -49,7 +49,7 @@ def _add_run(sub) -> None:
     p.add_argument("--run-dir", help="use this run directory instead of runs/<time>-<name>-<hex>")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.add_argument("--no-report", action="store_true",
-                   help="leave out the final report (report.md/.html and figures; `tuner report RUN` writes it later)")
+                   help="no report, live or final (report.md/.html, figures; `tuner report RUN` writes it later)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -66,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("resume", help="continue an interrupted run from its checkpoint")
     p.add_argument("run_dir")
     p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--no-report", action="store_true", help="write no report, as for `tuner run --no-report`")
 
     p = sub.add_parser("show", help="summary of a run or a sweep directory")
     p.add_argument("path")
@@ -195,7 +196,7 @@ def _failure_summary(run_dir: Path) -> str:
 def _cmd_resume(a) -> int:
     from tuner.run import resume
 
-    return _print_result(resume(a.run_dir, quiet=a.quiet))
+    return _print_result(resume(a.run_dir, quiet=a.quiet, report=not a.no_report))
 
 
 def _cmd_show(a) -> int:

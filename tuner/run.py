@@ -246,7 +246,7 @@ class Run:
             self._write_meta(n_evals=g.stats.n_evals, n_failed=g.n_failed, generations=state["gens"],
                              timing=Timing(wall0 + time.perf_counter() - t_session,
                                            tm.objective_s + sum(r.seconds for r in g.records), tm.sessions))
-            if not replay.replaying:
+            if not replay.replaying and self.report:
                 self._live_report()
             now = time.perf_counter()
             self._progress(g, stages, now - state["t0"])
@@ -260,7 +260,8 @@ class Run:
         if self.progress and hasattr(optimizer, "describe"):  # e.g. the method `auto` picked
             self.progress(f"optimizer: {optimizer.describe()}")
         try:
-            _preload_report()
+            if self.report:
+                _preload_report()
             while True:
                 res = minimize(SeededCall(self.objective), space, optimizer, replay, on_generation,
                                seed=self.cfg.seed, stage=stage, first_eval=n_evals, best=best, n_failed=n_failed)
@@ -296,7 +297,8 @@ class Run:
         timing = Timing(wall0 + time.perf_counter() - t_session, tm.objective_s, tm.sessions)
         if interrupted:
             self._write_meta(status="interrupted", interrupted=_now(), timing=timing)
-            self._live_report(final=True)
+            if self.report:
+                self._live_report(final=True)
             if self.progress:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
@@ -421,8 +423,9 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
     """Create a run directory for ``cfg`` and run it to the end (or until interrupted); ``on_generation(g)``
     is called after each generation is written. Everything that can be refused (objective, parameters,
     optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
-    ``report=False`` leaves out the final report (report.md, report.html and their figures; ``tuner report
-    RUN_DIR`` writes it later); the records and best.yaml are written as always.
+    ``report=False`` leaves out the report, the live view during the run as well as the final one (report.md,
+    report.html and their figures; ``tuner report RUN_DIR`` writes it later); the records and best.yaml are
+    written as always.
     """
     objective, space = _build(cfg)
     n_jobs, notes = worker_count(cfg, space)
@@ -452,8 +455,10 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         return r.execute()
 
 
-def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], None] | None = None) -> RunResult:
-    """Continue an interrupted (or killed) run: replay its recorded generations, then go on.
+def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], None] | None = None,
+           report: bool = True) -> RunResult:
+    """Continue an interrupted (or killed) run: replay its recorded generations, then go on; ``report=False``
+    writes no report, as for :func:`run`.
 
     A finished run, a run in use by another process, a changed ``config.yaml`` and a legacy pickled
     checkpoint are refused with :class:`RunError`. A directory killed before ``meta.json`` existed is
@@ -490,7 +495,7 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
             rows: list[dict[str, str]] = []
         else:
             rows = rd.history(space.names, meta.config_hash).truncate(ck.n_evals)
-        r = Run(cfg, rd, objective, space, printer, meta, n_jobs)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, report=report)
         if printer:
             printer(f"resuming {rd.path} after {len(rows)} evaluations")
         return r.execute(rows)

@@ -97,6 +97,32 @@ def test_run_without_report_writes_the_same_records(tmp_path):
     assert (b.run_dir / "best.yaml").exists() and a.best_params == b.best_params and b.status == "finished"
 
 
+def test_without_report_no_live_view_is_written_and_resume_writes_none_either(tmp_path, monkeypatch):
+    """``report=False`` also leaves out the live view (here due after every generation), in ``run`` and in
+    ``resume``; records are those of the same run and resume with their report."""
+    import tuner.report
+
+    monkeypatch.setattr(tuner.report, "LIVE_MIN_INTERVAL_S", 0.0)
+
+    def stop_after_two(g):
+        if g.generation == 1:
+            raise KeyboardInterrupt
+
+    runs = {}
+    for name, report in (("with", True), ("without", False)):
+        cut = run(job(tmp_path), run_dir=tmp_path / name, quiet=True, on_generation=stop_after_two, report=report)
+        assert cut.status == "interrupted"
+        assert (cut.run_dir / "report.html").exists() is report  # an interrupted run's page is its live view
+        runs[name] = resume(cut.run_dir, quiet=True, report=report)
+        assert runs[name].status == "finished"
+        assert {p.name for p in cut.run_dir.iterdir()} >= {"history.csv", "best.yaml", "meta.json"}
+        for f in ("report.md", "report.html", "figures"):
+            assert (cut.run_dir / f).exists() is report, f
+    pd.testing.assert_frame_equal(history(tmp_path / "with").drop(columns="seconds"),
+                                  history(tmp_path / "without").drop(columns="seconds"))
+    assert runs["with"].best_params == runs["without"].best_params
+
+
 def test_run_leaves_global_rng_alone(tmp_path):
     state = np.random.get_state()[1].copy()
     run(job(tmp_path, optimizer={"method": "cmaes"}), run_dir=tmp_path / "g", quiet=True)
