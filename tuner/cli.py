@@ -123,6 +123,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dir", help="sweep directory (default: runs/sweeps/<name>)")
     p.add_argument("--jobs", type=int, help="concurrent jobs (default: from the sweep file, else 1)")
     p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--no-report", action="store_true", help="no reports, the jobs' nor the sweep's (results.csv and "
+                                                            "summary.csv are written; `tuner report DIR` later)")
 
     p = sub.add_parser("report", help="(re)write the report of a sweep directory or a run directory, or the "
                                       "dashboard (index.html) of a folder of runs")
@@ -148,10 +150,10 @@ def _cmd_run(a) -> int:
     from tuner.sweep import is_sweep_file
 
     if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
-        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir or a.no_report:
-            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir/--no-report apply to job "
-                             "files")
-        return _cmd_sweep(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet))
+        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir:
+            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir apply to job files")
+        return _cmd_sweep(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet,
+                                             no_report=a.no_report))
     cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
     res = run(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report)
     return _print_result(res)
@@ -447,21 +449,23 @@ def _cmd_cv(a) -> int:
 def _cmd_sweep(a) -> int:
     from tuner.sweep import collect, run_sweep, summary_text
 
-    res = run_sweep(a.sweep, sweep_dir=a.dir, jobs=a.jobs, quiet=a.quiet)
+    res = run_sweep(a.sweep, sweep_dir=a.dir, jobs=a.jobs, quiet=a.quiet, report=not a.no_report)
     if res.get("interrupted"):
         print(f"sweep interrupted; run the same command again to continue: {res['dir']}", file=sys.stderr)
         return 1
     print(summary_text(collect(res["dir"]), res["dir"]))
     print(f"sweep directory: {res['dir']}")
-    print(f"report: {res['report']}")
+    if res["report"] is not None:
+        print(f"report: {res['report']}")
     return 0 if res["ok"] else 1
 
 
 def _cmd_report(a) -> int:
     path = Path(a.path)
     if (path / "sweep.yaml").exists():
-        from tuner.sweep import write_sweep_report
+        from tuner.sweep import write_missing_job_reports, write_sweep_report
 
+        write_missing_job_reports(path)  # jobs of a sweep run with --no-report
         print(write_sweep_report(path))
     elif (path / "meta.json").exists() or (path / "config.yaml").exists():
         from tuner.replay import verify_history

@@ -182,7 +182,7 @@ def _job_list(sw: dict[str, Any]) -> dict[str, Any]:
             "jobs": [{k: j[k] for k in ("id", "method", "variant", "grid", "seed")} for j in sw["jobs"]]}
 
 
-def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> dict[str, Any]:
+def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool, report: bool = True) -> dict[str, Any]:
     """Run, resume or skip one job (module-level so a process pool can call it)."""
     from tuner.run import resume, run
 
@@ -201,17 +201,19 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool) -> di
     if status == "finished":
         return {"id": job["id"], "status": "finished", "action": "skipped"}
     if status != "new" or (run_dir / "config.yaml").exists():  # killed or interrupted: resume holds the lock,
-        res = resume(run_dir, progress=printer, quiet=quiet)      # replays the history and goes on
+        res = resume(run_dir, progress=printer, quiet=quiet, report=report)  # replays the history, goes on
         return {"id": job["id"], "status": res.status, "action": "resumed"}
     cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
     atomic_write(stamp, resolved)  # whole or absent: a torn stamp (disk full, kill) reads as "not started"
-    res = run(cfg, run_dir=run_dir, progress=printer, quiet=quiet)
+    res = run(cfg, run_dir=run_dir, progress=printer, quiet=quiet, report=report)
     return {"id": job["id"], "status": res.status, "action": "ran"}
 
 
 def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int | None = None,
-              quiet: bool = False) -> dict[str, Any]:
-    """Run (or continue) every job of a sweep, then write its report."""
+              quiet: bool = False, report: bool = True) -> dict[str, Any]:
+    """Run (or continue) every job of a sweep, then write its report. ``report=False`` writes no report, the
+    jobs' nor the sweep's (``results.csv`` and ``summary.csv`` are written; ``tuner report SWEEP_DIR`` writes
+    the reports later)."""
     sw = load_sweep(path)
     out = Path(sweep_dir) if sweep_dir else Path(sw["output"]) / sw["name"]
     n_par, n_cap = sweep_jobs(sw["parallel_jobs"] if jobs is None else jobs, len(sw["jobs"]))
@@ -238,7 +240,8 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
         from joblib import Parallel, delayed
 
         try:  # a stop signal here makes joblib kill its workers (their runs resume as after a kill -9)
-            results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True) for j, d in todo)
+            results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True, report)
+                                                             for j, d in todo)
         except KeyboardInterrupt:
             return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:
@@ -246,13 +249,17 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
 
         results = []
         for j, d in todo:  # the report is rewritten between jobs (throttled): a live view of the sweep
-            results.append(_run_job(j, d, False, quiet))
+            results.append(_run_job(j, d, False, quiet, report))
             if results[-1]["status"] == "interrupted":  # Ctrl-C, SIGTERM or SIGHUP: stop the sweep here
                 return {"dir": out, "report": None, "ok": False, "results": results, "interrupted": True}
-            if len(results) < len(todo):
+            if report and len(results) < len(todo):
                 throttled(f"sweep:{out.resolve()}", lambda: write_sweep_report(out, live=True))
-    report = write_sweep_report(out)
-    return {"dir": out, "report": report, "ok": all(r["status"] == "finished" for r in results),
+    if report:
+        path_md = write_sweep_report(out)
+    else:
+        write_sweep_tables(out)
+        path_md = None
+    return {"dir": out, "report": path_md, "ok": all(r["status"] == "finished" for r in results),
             "results": results}
 
 
@@ -394,6 +401,33 @@ def _hash(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
 
 
+def write_sweep_tables(sweep_dir: str | Path) -> tuple[Any, Any, Any]:
+    """The sweep's records, written with or without its report: ``results.csv`` (one row per job) and
+    ``summary.csv`` (statistics over seeds, flat columns). Returns the jobs' frame, the summary and its flat
+    form."""
+    sweep_dir = Path(sweep_dir)
+    df = collect(sweep_dir)
+    df.to_csv(sweep_dir / "results.csv", index=False, float_format="%.17g")
+    summ = summarize(df)
+    flat = summ.copy()
+    flat.columns = [f"{a}.{b}" if b else a for a, b in flat.columns]
+    flat.to_csv(sweep_dir / "summary.csv", float_format="%.17g")
+    return df, summ, flat
+
+
+def write_missing_job_reports(sweep_dir: str | Path) -> int:
+    """The report of every job run without one (``tuner sweep --no-report``); returns how many were written."""
+    from tuner.report import write_run_report
+
+    n = 0
+    for job in load_sweep_from_dir(Path(sweep_dir))["jobs"]:
+        rd = RunDir(Path(sweep_dir) / "jobs" / job["id"])
+        if rd.is_run() and not rd.file("report.md").exists():
+            write_run_report(rd.path)
+            n += 1
+    return n
+
+
 def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     """``report.md``, ``report.html`` (figures embedded), ``results.csv``, ``summary.csv`` and figures.
 
@@ -404,12 +438,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
 
     sweep_dir = Path(sweep_dir)
     sw = load_sweep_from_dir(sweep_dir)
-    df = collect(sweep_dir)
-    df.to_csv(sweep_dir / "results.csv", index=False, float_format="%.17g")
-    summ = summarize(df)
-    flat = summ.copy()
-    flat.columns = [f"{a}.{b}" if b else a for a, b in flat.columns]
-    flat.to_csv(sweep_dir / "summary.csv", float_format="%.17g")
+    df, summ, flat = write_sweep_tables(sweep_dir)
     figs = sweep_figures(sweep_dir, df)
     jobs_dir = sweep_dir / "jobs"
     versions = {}

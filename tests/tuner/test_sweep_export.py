@@ -49,15 +49,15 @@ def test_killed_sweep_rerun_gives_the_same_table(tmp_path):
     # reference: uninterrupted (sleep does not change results, only timing)
     (tmp_path / "a").mkdir()
     p_ref = write_sweep(tmp_path / "a")
-    out = tuner_cli("sweep", str(p_ref), "--dir", str(ref_dir), "-q")
+    out = tuner_cli("sweep", str(p_ref), "--dir", str(ref_dir), "-q", "--no-report")  # tables only
     assert out.returncode == 0, out.stderr
     ref = pd.read_csv(ref_dir / "results.csv")
     assert len(ref) == 8 and (ref["status"] == "finished").all()
 
     (tmp_path / "b").mkdir()
     p = write_sweep(tmp_path / "b", sleep=0.01)
-    proc = subprocess.Popen([sys.executable, "-m", "tuner", "sweep", str(p), "--dir", str(kill_dir), "-q"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen([sys.executable, "-m", "tuner", "sweep", str(p), "--dir", str(kill_dir), "-q",
+                             "--no-report"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
     while time.time() < deadline:
         metas = list((kill_dir / "jobs").glob("*/meta.json")) if (kill_dir / "jobs").exists() else []
@@ -69,7 +69,7 @@ def test_killed_sweep_rerun_gives_the_same_table(tmp_path):
     proc.wait()
     statuses = [json.loads(m.read_text())["status"] for m in (kill_dir / "jobs").glob("*/meta.json")]
     assert statuses.count("finished") < 8, "the sweep must have been killed part-way"
-    out = tuner_cli("sweep", str(p), "--dir", str(kill_dir), "-q")
+    out = tuner_cli("sweep", str(p), "--dir", str(kill_dir), "-q", "--no-report")
     assert out.returncode == 0, out.stderr
     got = pd.read_csv(kill_dir / "results.csv")
     cols = ["job", "method", "seed", "status", "best_fitness", "n_evals"] + [c for c in ref if c.startswith("param.")]
@@ -82,6 +82,29 @@ def test_killed_sweep_rerun_gives_the_same_table(tmp_path):
     assert show.returncode == 0 and "pso__function-rastrigin__seed-1" in show.stdout
     lst = tuner_cli("list", "runs", "--dir", str(kill_dir))
     assert lst.returncode == 0 and lst.stdout.count("finished") == 8
+
+
+def test_sweep_without_report_writes_its_tables_and_tuner_report_writes_every_report_later(tmp_path, capsys):
+    """``--no-report``: results.csv and summary.csv, no report of the sweep or of its jobs; ``tuner report
+    SWEEP_DIR`` then writes both, and the tables are the ones a sweep with its report writes."""
+    from tuner.cli import main
+
+    doc = json.loads(json.dumps(SWEEP))
+    doc["sweep"].pop("grid")
+    doc["sweep"]["seeds"] = [1]
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump(doc))
+    d = tmp_path / "sw"
+    assert main(["sweep", str(tmp_path / "sweep.yaml"), "--dir", str(d), "-q", "--no-report"]) == 0
+    out = capsys.readouterr().out
+    assert "sweep directory:" in out and "report:" not in out
+    assert (d / "results.csv").exists() and (d / "summary.csv").exists()
+    assert not list(d.glob("**/report.md")) and not list(d.glob("**/report.html"))
+    tables = {f: (d / f).read_text() for f in ("results.csv", "summary.csv")}
+    assert main(["report", str(d)]) == 0
+    jobs = pd.read_csv(d / "results.csv")["job"]
+    assert len(jobs) == 2 and all((d / "jobs" / j / "report.md").exists() for j in jobs)
+    assert (d / "report.html").exists() and all(f"jobs/{j}/report.md" in (d / "report.md").read_text() for j in jobs)
+    assert {f: (d / f).read_text() for f in tables} == tables
 
 
 class _Checker(html.parser.HTMLParser):
@@ -211,8 +234,9 @@ def test_filter_from_run_in_three_lines(run_dir):
 
 def test_parallel_sweep_equals_sequential(sweep_dir, tmp_path):
     p = write_sweep(tmp_path)
-    out = tuner_cli("sweep", str(p), "--dir", str(tmp_path / "par"), "--jobs", "2", "-q")
+    out = tuner_cli("sweep", str(p), "--dir", str(tmp_path / "par"), "--jobs", "2", "-q", "--no-report")
     assert out.returncode == 0, out.stderr
+    assert not list((tmp_path / "par").glob("**/report.md"))  # the pool's jobs got --no-report too
     a = pd.read_csv(sweep_dir / "results.csv")
     b = pd.read_csv(tmp_path / "par" / "results.csv")
     cols = ["job", "best_fitness"] + [c for c in a if c.startswith("param.")]
