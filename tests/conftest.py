@@ -7,14 +7,17 @@
 - The ``broad_dir`` fixture is that directory; a test that takes it, or is marked ``broad``, is skipped
   with the reason when the data is absent (and gets the ``broad`` marker, so ``-m "not broad"`` leaves
   it out).
-- ``run_tuner`` runs the command line in a subprocess; ``one_error_line`` asserts that a run ended in
-  exactly one ``error:`` line with exit 2 and no traceback.
+- ``run_tuner`` runs the command line (in this process, or in a subprocess when asked);
+  ``one_error_line`` asserts that a run ended in exactly one ``error:`` line with exit 2 and no traceback.
 - ``slow`` marks the tests that take seconds each (tunings, subprocess runs, whole BROAD trials);
   ``make test-fast`` runs ``-m "not slow"``, ``make test`` (CI) runs everything.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
 import signal
 import subprocess
 import sys
@@ -44,10 +47,33 @@ def broad_dir() -> Path:
     return BROAD_DIR
 
 
-def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300) -> subprocess.CompletedProcess:
-    """``python -m tuner *args`` in a subprocess, output captured as text."""
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=timeout, env=env)
+def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300,
+              process: bool = False) -> subprocess.CompletedProcess:
+    """The command line ``tuner *args``, output captured as text, as a finished process.
+
+    It runs in this process through :func:`tuner.cli.main` (stdout and stderr captured, the working
+    directory changed for the call): a new interpreter would spend about 0.5 s importing numpy, numba and
+    pandas for each call. ``python -m tuner`` runs in a subprocess when ``env`` is given (an environment is
+    read at import) or ``process`` is set (what only a process shows: signals, exit status of the
+    interpreter, modules a command imports).
+    """
+    if env is not None or process:
+        return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
+                              timeout=timeout, env=env)
+    from tuner.cli import main
+
+    out, err, here = io.StringIO(), io.StringIO(), os.getcwd()
+    try:
+        if cwd is not None:
+            os.chdir(cwd)
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = main([str(a) for a in args])
+            except SystemExit as exc:  # argparse: usage errors (2), --help and --version (0)
+                code = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+    finally:
+        os.chdir(here)
+    return subprocess.CompletedProcess(["tuner", *args], code, out.getvalue(), err.getvalue())
 
 
 def one_error_line(out: subprocess.CompletedProcess, *expected: str) -> str:
