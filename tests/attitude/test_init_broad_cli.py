@@ -9,9 +9,6 @@ The default start (``init: auto`` -> first-sample accmag) is off by up to 0.4 de
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -19,7 +16,7 @@ import yaml
 
 from objectives.attitude.filters.mahony import Mahony
 from tests.conftest import BROAD_DIR as BROAD
-from tests.conftest import REPO
+from tests.conftest import REPO, run_tuner
 
 KEYS = ("total_rmse_deg", "heading_rmse_deg", "inclination_rmse_deg")
 
@@ -31,10 +28,7 @@ def _evaluate(tmp_path: Path, trials: list[str], params: dict) -> dict:
         "optimizer": {"method": "pso", "population": 4, "generations": 1}}
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
     (tmp_path / "p.yaml").write_text(yaml.safe_dump(params))
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(REPO / ".cache" / "numba")}
-    out = subprocess.run([sys.executable, "-m", "tuner", "evaluate", str(tmp_path / "c.yaml"), "--params",
-                          str(tmp_path / "p.yaml"), "--json"], cwd=REPO, env=env, capture_output=True, text=True,
-                         timeout=600)
+    out = run_tuner("evaluate", tmp_path / "c.yaml", "--params", tmp_path / "p.yaml", "--json", cwd=REPO)
     assert out.returncode == 0, out.stderr
     return json.loads(out.stdout)
 

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
+from tests.conftest import run_tuner
 from tests.tuner.jobs import unrendered  # noqa: F401 (the module fixture)
 
 # the pendulum's controllers and those of any plant, with the plant the latter run on
@@ -364,8 +365,7 @@ def test_older_run_without_deployment_is_rebuilt_and_a_malformed_one_is_an_error
     assert load_deployment(run_dir).values == recorded.values
     assert yaml.safe_load(export(run_dir, "yaml"))["params"]["rest_bias"] is True
     (run_dir / "best.yaml").write_text(yaml.safe_dump({**old, "deployment": {"kind": "filter"}}))
-    out = subprocess.run([sys.executable, "-m", "tuner", "export", str(run_dir), "--format", "c"],
-                         capture_output=True, text=True, timeout=300)
+    out = run_tuner("export", run_dir, "--format", "c")
     assert out.returncode == 2 and out.stderr.startswith("error: ") and "best.yaml" in out.stderr
     assert "deployment.values: missing" in out.stderr
 

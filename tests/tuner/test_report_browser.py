@@ -9,12 +9,12 @@ import json
 import math
 import re
 import shutil
-import subprocess
 from pathlib import Path
 
 import pytest
 import yaml
 
+from tests.conftest import run_tuner
 from tests.tuner.browser import Browser, chromium, measure, screenshot
 from tests.tuner.test_render import _assert_inert, _assert_inert_attrs, _parse
 from tuner.config import config_from_dict
@@ -207,7 +207,6 @@ def test_live_report_reloads_while_running_and_not_after(tmp_path, monkeypatch):
 
 
 def test_interrupted_run_gets_a_report_that_stops_reloading(evil_run, tmp_path):
-    import sys
 
     from tuner.report import write_live_report
 
@@ -219,7 +218,7 @@ def test_interrupted_run_gets_a_report_that_stops_reloading(evil_run, tmp_path):
     assert write_live_report(d, running, final=True) is None  # no live report yet: nothing to replace
     assert write_live_report(d, running, min_interval_s=0.0) == d / "report.md"
     assert 'http-equiv="refresh"' in (d / "report.html").read_text()
-    show = subprocess.run([sys.executable, "-m", "tuner", "show", str(d)], capture_output=True, text=True, timeout=120)
+    show = run_tuner("show", str(d))
     assert show.returncode == 0 and "running" in show.stdout  # tuner show works on a running run
     stopped = {**meta, "status": "interrupted"}
     assert write_live_report(d, stopped, final=True) == d / "report.md"
@@ -228,30 +227,22 @@ def test_interrupted_run_gets_a_report_that_stops_reloading(evil_run, tmp_path):
 
 
 def test_show_prints_warnings(evil_run):
-    import sys
 
-    out = subprocess.run([sys.executable, "-m", "tuner", "show", str(evil_run)], capture_output=True, text=True,
-                         timeout=120)
+    out = run_tuner("show", str(evil_run))
     assert out.returncode == 0 and "warning: " in out.stdout and "evaluations failed" in out.stdout
-    js = subprocess.run([sys.executable, "-m", "tuner", "show", str(evil_run), "--json"], capture_output=True,
-                        text=True, timeout=120)
+    js = run_tuner("show", str(evil_run), "--json")
     assert any(w["kind"] == "failed" for w in json.loads(js.stdout)["warnings"])
 
 
 @pytest.fixture(scope="module")
 def sweep_dir(tmp_path_factory, evil_run):
-    import sys
 
     def build(tmp):
         base = _raw("s")
         doc = {"sweep": {"name": "hostile", "description": EVIL_TEXT, "base": base,
                          "variants": {"pso": {}, "de": {"optimizer.method": "de"}}, "seeds": [1, 2]}}
         (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
-        import os  # the objective lives in this test module: its package on the path, as a user's would be
-
-        env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
-        out = subprocess.run([sys.executable, "-m", "tuner", "sweep", str(tmp / "sweep.yaml"), "--dir",
-                              str(tmp / "sw"), "-q"], capture_output=True, text=True, timeout=600, env=env)
+        out = run_tuner("sweep", tmp / "sweep.yaml", "--dir", tmp / "sw", "-q")  # the objective: this module
         assert out.returncode == 0, out.stderr
 
     return _built_once(tmp_path_factory, "sweep", build) / "sw"
@@ -338,7 +329,6 @@ def test_filter_report_shows_the_worst_recording_first(filter_run):
 
 @pytest.fixture(scope="module")
 def dashboard_dir(tmp_path_factory, evil_run, sweep_dir, filter_run):
-    import sys
 
     def build(tmp):
         root = tmp / "runs"
@@ -346,8 +336,7 @@ def dashboard_dir(tmp_path_factory, evil_run, sweep_dir, filter_run):
         shutil.copytree(evil_run, root / "evil")
         shutil.copytree(filter_run, root / "madgwick")
         shutil.copytree(sweep_dir, root / "sweeps" / "hostile")
-        out = subprocess.run([sys.executable, "-m", "tuner", "report", str(root)], capture_output=True, text=True,
-                             timeout=300)
+        out = run_tuner("report", root)
         assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
 
     return _built_once(tmp_path_factory, "dashboard", build) / "runs"
@@ -400,10 +389,8 @@ def test_dashboard_refreshes_while_a_run_is_going(dashboard_dir, tmp_path):
 
 
 def test_dashboard_of_a_folder_without_runs_is_an_error(tmp_path):
-    import sys
 
-    out = subprocess.run([sys.executable, "-m", "tuner", "dashboard", str(tmp_path)], capture_output=True, text=True,
-                         timeout=120)
+    out = run_tuner("dashboard", tmp_path)
     assert out.returncode == 2 and out.stderr.startswith("error: ") and "no run or sweep" in out.stderr
 
 

@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 import tuner
+from tests.conftest import run_tuner
 from tuner.config import config_from_dict
 from tuner.export import export
 from tuner.run import run
@@ -32,8 +33,8 @@ SWEEP = {"sweep": {
 }}
 
 
-def tuner_cli(*args, **kw):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, timeout=300, **kw)
+def tuner_cli(*args):
+    return run_tuner(*args)
 
 
 def write_sweep(tmp_path, sleep=0.0):
