@@ -65,12 +65,12 @@ def load_job(path, tmp_path):
     return config_from_dict(yaml.safe_load(Path(path).read_text()), base_dir=tmp_path)
 
 
-def start_cli_run(job_file, run_dir, **popen) -> subprocess.Popen:
+def start_cli_run(job_file, run_dir, report: bool = True, **popen) -> subprocess.Popen:
     """``python -m tuner run <job_file> --run-dir <run_dir> -q`` in a child process (output discarded
-    unless ``popen`` says otherwise)."""
+    unless ``popen`` says otherwise); ``report=False`` adds ``--no-report``."""
     kw = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, **popen}
-    return subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q"],
-                            **kw)
+    return subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(run_dir), "-q",
+                             *([] if report else ["--no-report"])], **kw)
 
 
 def kill_after_generations(proc: subprocess.Popen, run_dir, generations: int, timeout_s: float = 60.0) -> None:

@@ -71,7 +71,7 @@ def test_missing_data_file_in_objective(tmp_path):
 @pytest.mark.slow
 def test_set_overrides_and_outputs(tmp_path):
     p = write(tmp_path, merged(output=str(tmp_path / "runs")))
-    out = tuner("run", str(p), "--set", "optimizer.generations=3", "--seed", "5", "-q")
+    out = tuner("run", str(p), "--set", "optimizer.generations=3", "--seed", "5", "-q", "--no-report")
     assert out.returncode == 0, out.stderr
     run_dir = out.stdout.split("run directory: ")[1].split()[0]
     meta = json.loads(open(f"{run_dir}/meta.json").read())
@@ -87,5 +87,5 @@ def test_set_overrides_and_outputs(tmp_path):
 
 @pytest.mark.slow
 def test_progress_lines(tmp_path):
-    out = tuner("run", str(write(tmp_path, merged(output=str(tmp_path / "runs")))))
+    out = tuner("run", str(write(tmp_path, merged(output=str(tmp_path / "runs")))), "--no-report")
     assert "gen 1/2  best" in out.stderr and "eval/s" in out.stderr and "ETA" in out.stderr

@@ -105,15 +105,15 @@ def test_full_disk_is_one_error_line_and_the_run_resumes(tmp_path, monkeypatch, 
 
     monkeypatch.setattr(rundir, "atomic_write", failing)
     rd = tmp_path / "run"
-    assert cli.main(["run", str(p), "--run-dir", str(rd), "-q"]) == 2
+    assert cli.main(["run", str(p), "--run-dir", str(rd), "-q", "--no-report"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"error: {calls[-1]}: No space left on device"), err
     rows_before = len(list(csv.DictReader(open(rd / "history.csv"))))
     assert rows_before >= 4
     monkeypatch.setattr(rundir, "atomic_write", real)
-    assert cli.main(["resume", str(rd), "-q"]) == 0
+    assert cli.main(["resume", str(rd), "-q", "--no-report"]) == 0
     ref = tmp_path / "ref"
-    assert cli.main(["run", str(p), "--run-dir", str(ref), "-q"]) == 0
+    assert cli.main(["run", str(p), "--run-dir", str(ref), "-q", "--no-report"]) == 0
     a = [r["fitness"] for r in csv.DictReader(open(rd / "history.csv"))]
     b = [r["fitness"] for r in csv.DictReader(open(ref / "history.csv"))]
     assert a == b and len(a) == 16

@@ -24,7 +24,7 @@ def _cfg(tmp_path, backend="serial", generations=4):
 
 
 def _interrupted(tmp_path, name="r"):
-    """A run stopped (as by Ctrl-C) after 3 of its 4 generations."""
+    """A run stopped (as by Ctrl-C) after 3 of its 4 generations, without its report."""
     seen = []
 
     def progress(msg):
@@ -33,7 +33,7 @@ def _interrupted(tmp_path, name="r"):
             if len(seen) == 3:
                 raise KeyboardInterrupt
 
-    res = run(_cfg(tmp_path), run_dir=tmp_path / name, progress=progress)
+    res = run(_cfg(tmp_path), run_dir=tmp_path / name, progress=progress, report=False)
     assert res.status == "interrupted"
     return res.run_dir
 
@@ -72,8 +72,8 @@ def test_the_chain_is_the_same_for_serial_and_parallel_rows_and_ignores_seconds(
     row = {"eval": 0, "x0": "0.5", "fitness": "1.0", "status": "ok", "error": "", "seconds": "0.1"}
     assert row_digest("h", row) == row_digest("h", {**row, "seconds": "9.9"}) != row_digest("h2", row)
     assert row_digest("h", row) != row_digest("h", {**row, "fitness": "1.0000001"})
-    a = run(_cfg(tmp_path), run_dir=tmp_path / "a", quiet=True)
-    b = run(_cfg(tmp_path, backend="loky"), run_dir=tmp_path / "b", quiet=True)
+    a = run(_cfg(tmp_path), run_dir=tmp_path / "a", quiet=True, report=False)
+    b = run(_cfg(tmp_path, backend="loky"), run_dir=tmp_path / "b", quiet=True, report=False)
     ha = pd.read_csv(a.run_dir / "history.csv").drop(columns="seconds")
     pd.testing.assert_frame_equal(ha, pd.read_csv(b.run_dir / "history.csv").drop(columns="seconds"))
     assert tuner("show", a.run_dir).returncode == 0
@@ -81,7 +81,7 @@ def test_the_chain_is_the_same_for_serial_and_parallel_rows_and_ignores_seconds(
 
 def test_resumed_history_continues_the_chain_and_an_old_history_stays_readable(tmp_path):
     d = _interrupted(tmp_path)
-    assert resume(d, quiet=True).status == "finished"
+    assert resume(d, quiet=True, report=False).status == "finished"
     out = tuner("show", d)
     assert out.returncode == 0 and "note:" not in out.stdout, out.stderr
     (d / "history.chain").unlink()  # as written by an older tuner

@@ -39,9 +39,9 @@ def test_loky_history_equals_serial(tmp_path, method):
 
     The ``seconds`` column (wall time of each evaluation) is the only one allowed to differ.
     """
-    a = run(job(tmp_path, optimizer={"method": method}), run_dir=tmp_path / "a", quiet=True)
+    a = run(job(tmp_path, optimizer={"method": method}), run_dir=tmp_path / "a", quiet=True, report=False)
     b = run(job(tmp_path, optimizer={"method": method}, parallel={"backend": "loky", "n_jobs": 2}),
-            run_dir=tmp_path / "b", quiet=True)
+            run_dir=tmp_path / "b", quiet=True, report=False)
     ha, hb = history(a.run_dir).drop(columns="seconds"), history(b.run_dir).drop(columns="seconds")
     pd.testing.assert_frame_equal(ha, hb)
     assert a.best_params == b.best_params and a.best_fitness == b.best_fitness
@@ -50,7 +50,7 @@ def test_loky_history_equals_serial(tmp_path, method):
 
 def test_failures_are_recorded_and_run_goes_on(tmp_path):
     res = run(job(tmp_path, objective={"fail_every": 5, "nan_every": 7}, optimizer={"generations": 5}),
-              run_dir=tmp_path / "f", quiet=True)
+              run_dir=tmp_path / "f", quiet=True, report=False)
     h = history(res.run_dir)
     failed = h[h["status"] == "failed"]
     assert res.status == "finished" and len(h) == 40
@@ -131,7 +131,7 @@ def test_run_leaves_global_rng_alone(tmp_path):
 
 def test_refinement_stages_narrow_bounds(tmp_path):
     res = run(job(tmp_path, optimizer={"generations": 4, "refine": {"stages": 2, "shrink": 0.2}}),
-              run_dir=tmp_path / "r", quiet=True)
+              run_dir=tmp_path / "r", quiet=True, report=False)
     h = history(res.run_dir)
     assert sorted(h["stage"].unique()) == [0, 1] and len(h) == 64
     s1 = h[h["stage"] == 1]
@@ -147,15 +147,16 @@ def _write_job(tmp_path, name, **objective):
 
 @pytest.mark.slow
 def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
-    ref = run(load_job(_write_job(tmp_path, "ref"), tmp_path), run_dir=tmp_path / "ref", quiet=True)
+    ref = run(load_job(_write_job(tmp_path, "ref"), tmp_path), run_dir=tmp_path / "ref", quiet=True, report=False)
     run_dir = tmp_path / "killed"
-    kill_after_generations(start_cli_run(_write_job(tmp_path, "killed", sleep_s=0.02), run_dir), run_dir, 3)
+    proc = start_cli_run(_write_job(tmp_path, "killed", sleep_s=0.02), run_dir, report=False)
+    kill_after_generations(proc, run_dir, 3)
     ck = run_dir / "checkpoint.json"
     done = json.loads(ck.read_text())["n_evals"]
     assert 0 < done < 72, "the run must have been killed part-way"
     meta = yaml.safe_load((run_dir / "meta.json").read_text())
     assert meta["status"] == "running"  # killed: no chance to say otherwise
-    out = resume_cli(run_dir, "-q")
+    out = resume_cli(run_dir, "-q", "--no-report")
     assert out.returncode == 0, out.stderr
     res = yaml.safe_load((run_dir / "best.yaml").read_text())
     assert res["params"] == ref.best_params and res["fitness"] == ref.best_fitness
@@ -167,7 +168,7 @@ def test_sigkill_then_resume_matches_uninterrupted(tmp_path):
 def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     job_file = _write_job(tmp_path, "int", sleep_s=0.1)
     run_dir = tmp_path / "int"
-    proc = start_cli_run(job_file, run_dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = start_cli_run(job_file, run_dir, report=False, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     ck = run_dir / "checkpoint.json"
     deadline = time.time() + 60
     while not ck.exists() and time.time() < deadline:
@@ -176,7 +177,7 @@ def test_interrupt_sets_status_and_resume_refuses_finished(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 1, (err, (run_dir / "meta.json").read_text())
     assert yaml.safe_load((run_dir / "meta.json").read_text())["status"] == "interrupted"
-    res = resume(run_dir, quiet=True)
+    res = resume(run_dir, quiet=True, report=False)
     assert res.status == "finished" and res.n_evals == 72
     out = resume_cli(run_dir)
     assert out.returncode == 2 and "already finished" in out.stderr

@@ -36,8 +36,9 @@ def history(run_dir):
     return pd.read_csv(Path(run_dir) / "history.csv", keep_default_na=False).drop(columns="seconds")
 
 
-def interrupted_run(cfg, run_dir, after_gens=2):
-    """A real run interrupted (as by Ctrl-C) after ``after_gens`` progress lines."""
+def interrupted_run(cfg, run_dir, after_gens=2, report=False):
+    """A real run interrupted (as by Ctrl-C) after ``after_gens`` progress lines; without its report unless
+    ``report``."""
     seen = []
 
     def progress(msg):
@@ -45,7 +46,7 @@ def interrupted_run(cfg, run_dir, after_gens=2):
         if " gen " in f" {msg} " and sum(" gen " in f" {m} " for m in seen) == after_gens:
             raise KeyboardInterrupt
 
-    res = run(cfg, run_dir=run_dir, progress=progress)
+    res = run(cfg, run_dir=run_dir, progress=progress, report=report)
     assert res.status == "interrupted"
     return res
 
@@ -66,7 +67,7 @@ class _Boom:
 
 def test_crafted_pickle_checkpoint_is_never_loaded(tmp_path):
     d = tmp_path / "r"
-    interrupted_run(job(tmp_path), d)
+    interrupted_run(job(tmp_path), d, report=True)  # its report among the files checked for pickles below
     marker = tmp_path / "pwned"
     (d / "checkpoint.pkl").write_bytes(pickle.dumps({"optimizer": _Boom(marker)}))
     assert not marker.exists()
@@ -80,12 +81,12 @@ def test_crafted_pickle_checkpoint_is_never_loaded(tmp_path):
 
 
 def test_resume_replays_history_and_refuses_an_edited_one(tmp_path):
-    ref = run(job(tmp_path, optimizer={"method": "cmaes"}), run_dir=tmp_path / "ref", quiet=True)
+    ref = run(job(tmp_path, optimizer={"method": "cmaes"}), run_dir=tmp_path / "ref", quiet=True, report=False)
     d = tmp_path / "r"
     interrupted_run(job(tmp_path, optimizer={"method": "cmaes"}), d)
     ck = json.loads((d / "checkpoint.json").read_text())
     assert set(ck) == {"n_evals", "stage", "generations", "version"}  # data only: a row count
-    res = resume(d, quiet=True)
+    res = resume(d, quiet=True, report=False)
     pd.testing.assert_frame_equal(history(ref.run_dir), history(d))
     assert res.best_params == ref.best_params and res.best_fitness == ref.best_fitness
 
@@ -109,7 +110,8 @@ def test_second_process_on_a_running_directory_fails_at_once(tmp_path):
     job_file = tmp_path / "lock.yaml"
     job_file.write_text(yaml.safe_dump(cfg))
     d = tmp_path / "r"
-    first = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(d), "-q"],
+    first = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job_file), "--run-dir", str(d), "-q",
+                              "--no-report"],
                              cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         deadline = time.time() + 60
@@ -147,7 +149,7 @@ def test_resume_refuses_changed_config_naming_the_key(tmp_path):
     out = tuner_cli("resume", str(d))
     assert out.returncode == 2 and "parameters.x0.high" in out.stderr and "Traceback" not in out.stderr
     (d / "config.yaml").write_text(original)
-    assert resume(d, quiet=True).status == "finished"
+    assert resume(d, quiet=True, report=False).status == "finished"
 
 
 # --- 13.6 (run-directory part): corrupt files give one error line --------------------------------
@@ -161,7 +163,7 @@ def test_resume_refuses_changed_config_naming_the_key(tmp_path):
 ])
 @pytest.mark.slow
 def test_corrupt_run_files_are_one_error_line(tmp_path, name, text, expect):
-    d = run(job(tmp_path), run_dir=tmp_path / "r", quiet=True).run_dir
+    d = run(job(tmp_path), run_dir=tmp_path / "r", quiet=True, report=False).run_dir
     if text is None:
         (d / name).unlink()
     else:
@@ -208,19 +210,19 @@ def test_bad_options_leave_no_directory(tmp_path):
 @pytest.mark.slow
 def test_directory_killed_before_meta_is_reused_or_resumed(tmp_path):
     cfg = job(tmp_path)
-    ref = run(cfg, run_dir=tmp_path / "ref", quiet=True)
+    ref = run(cfg, run_dir=tmp_path / "ref", quiet=True, report=False)
     d = tmp_path / "unstarted"
     d.mkdir()
     (d / ".config.yaml.tmp123").write_text("half")
     lines = []
-    res = run(cfg, run_dir=d, progress=lines.append)
+    res = run(cfg, run_dir=d, progress=lines.append, report=False)
     assert res.best_fitness == ref.best_fitness and not list(d.glob(".*.tmp*"))
     # only config.yaml written: resume starts it from the beginning and says so
     e = tmp_path / "e"
     e.mkdir()
     (e / "config.yaml").write_text((ref.run_dir / "config.yaml").read_text())
     lines = []
-    res = resume(e, progress=lines.append)
+    res = resume(e, progress=lines.append, report=False)
     assert any("no meta.json" in m and "from the beginning" in m for m in lines)
     pd.testing.assert_frame_equal(history(ref.run_dir), history(e))
     # an empty directory: the message says how to reuse it
@@ -252,13 +254,13 @@ def _noisy_build(cfg):
 def test_stochastic_objective_same_history_serial_loky_and_resumed(tmp_path, monkeypatch, method):
     monkeypatch.setattr(run_mod, "_build", _noisy_build)
     a = run(job(tmp_path, optimizer={"method": method, "refine": {"stages": 2, "shrink": 0.5}}),
-            run_dir=tmp_path / "a", quiet=True)
+            run_dir=tmp_path / "a", quiet=True, report=False)
     b = run(job(tmp_path, optimizer={"method": method, "refine": {"stages": 2, "shrink": 0.5}},
-                parallel={"backend": "loky", "n_jobs": 2}), run_dir=tmp_path / "b", quiet=True)
+                parallel={"backend": "loky", "n_jobs": 2}), run_dir=tmp_path / "b", quiet=True, report=False)
     c = tmp_path / "c"
     interrupted_run(job(tmp_path, optimizer={"method": method, "refine": {"stages": 2, "shrink": 0.5}}), c,
                     after_gens=3)
-    resume(c, quiet=True)
+    resume(c, quiet=True, report=False)
     ha, hb, hc = history(a.run_dir), history(b.run_dir), history(c)
     pd.testing.assert_frame_equal(ha, hb)
     pd.testing.assert_frame_equal(ha, hc)
@@ -285,7 +287,7 @@ def test_minimize_is_a_plain_loop_with_typed_result():
 
 
 def test_rundir_typed_records_round_trip(tmp_path):
-    d = run(job(tmp_path), run_dir=tmp_path / "r", quiet=True).run_dir
+    d = run(job(tmp_path), run_dir=tmp_path / "r", quiet=True, report=False).run_dir
     rd = RunDir(d)
     meta, best = rd.meta(), rd.best()
     assert meta.status == "finished" and meta.n_evals == 24 and meta.timing.sessions == 1

@@ -45,9 +45,10 @@ def _status(run_dir) -> str:
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
 def test_run_and_resume_stop_on_the_signal_and_resume_to_the_uninterrupted_history(tmp_path, sig):
-    ref = run(load_job(_job(tmp_path, "ref", 0.0), tmp_path), run_dir=tmp_path / "ref", quiet=True)
+    ref = run(load_job(_job(tmp_path, "ref", 0.0), tmp_path), run_dir=tmp_path / "ref", quiet=True, report=False)
     run_dir = tmp_path / "sig"
-    proc = start_cli_run(_job(tmp_path, "sig"), run_dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = start_cli_run(_job(tmp_path, "sig"), run_dir, report=False, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
     _wait_for(run_dir / "checkpoint.json")
     proc.send_signal(sig)
     out, err = proc.communicate(timeout=60)
@@ -59,8 +60,8 @@ def test_run_and_resume_stop_on_the_signal_and_resume_to_the_uninterrupted_histo
     assert 0 < len(h) < 60 and len(h) % 6 == 0
 
     # the resume is stopped by the same signal, then continued to the end
-    proc = subprocess.Popen([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q", "--no-report"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     n0 = len(h)
     deadline = time.time() + 60
     while len(_history(run_dir)) <= n0 + 6 and time.time() < deadline:
@@ -69,7 +70,7 @@ def test_run_and_resume_stop_on_the_signal_and_resume_to_the_uninterrupted_histo
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 1 and "status: interrupted" in out, err
     assert (_history(run_dir)["status"] == "ok").all()
-    done = resume_cli(run_dir, "-q")
+    done = resume_cli(run_dir, "-q", "--no-report")
     assert done.returncode == 0, done.stderr
     pd.testing.assert_frame_equal(_history(ref.run_dir), _history(run_dir))
     assert yaml.safe_load((run_dir / "best.yaml").read_text())["fitness"] == ref.best_fitness
@@ -156,7 +157,7 @@ def test_threads_backend_stops_on_sigterm_without_serial_rerun(tmp_path, batch_k
     raw = {"name": "thr", "seed": 1, "objective": {"kind": batch_kind}, "output": str(tmp_path),
            "optimizer": {"method": "pso", "population": 4, "generations": 5},
            "parallel": {"backend": "threads", "n_jobs": 2}}
-    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "thr", quiet=True)
+    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "thr", quiet=True, report=False)
     assert res.status == "interrupted"
     assert "evaluated serially" not in capfd.readouterr().err
     h = _history(tmp_path / "thr")
@@ -174,8 +175,8 @@ def test_sigterm_during_the_cv_after_a_run_marks_it_interrupted_and_resume_finis
         if msg.startswith("validation:"):
             os.kill(os.getpid(), signal.SIGTERM)
 
-    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "cv", progress=progress)
+    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "cv", progress=progress, report=False)
     assert res.status == "interrupted" and _status(tmp_path / "cv") == "interrupted"
     assert not (tmp_path / "cv" / "validation.json").exists()
-    res = resume(tmp_path / "cv", quiet=True)
+    res = resume(tmp_path / "cv", quiet=True, report=False)
     assert res.status == "finished" and "cv" in json.loads((tmp_path / "cv" / "validation.json").read_text())

@@ -72,7 +72,7 @@ def history(out):
 @pytest.mark.slow
 def test_timed_out_evaluations_are_recorded_failures(tmp_path, backend, n_jobs):
     t0 = time.perf_counter()
-    out = run(tmp_path, job(tmp_path, "hang", backend, n_jobs, timeout_s=1.0))
+    out = run(tmp_path, job(tmp_path, "hang", backend, n_jobs, timeout_s=1.0), "--no-report")
     assert out.returncode == 0, out.stderr
     rows = history(out)
     hung = [r for r in rows if float(r["a"]) > 0.8]
@@ -84,9 +84,9 @@ def test_timed_out_evaluations_are_recorded_failures(tmp_path, backend, n_jobs):
 
 @pytest.mark.slow
 def test_timeout_changes_no_result_and_serial_equals_loky(tmp_path):
-    ref = history(run(tmp_path, job(tmp_path, "ok", name="ref")))
+    ref = history(run(tmp_path, job(tmp_path, "ok", name="ref"), "--no-report"))
     for backend, n in (("serial", 1), ("loky", 2)):
-        rows = history(run(tmp_path, job(tmp_path, "ok", backend, n, timeout_s=30, name=f"t{backend}")))
+        rows = history(run(tmp_path, job(tmp_path, "ok", backend, n, timeout_s=30, name=f"t{backend}"), "--no-report"))
         assert [(r["a"], r["b"], r["fitness"]) for r in rows] == [(r["a"], r["b"], r["fitness"]) for r in ref]
 
 
@@ -98,7 +98,7 @@ def test_timeout_must_be_positive(tmp_path):
 @pytest.mark.parametrize("mode, error", [("exit", "SystemExit: 3"), ("kbd", "KeyboardInterrupt")])
 @pytest.mark.slow
 def test_systemexit_and_keyboardinterrupt_raised_by_the_objective_are_failures(tmp_path, mode, error):
-    out = run(tmp_path, job(tmp_path, mode))
+    out = run(tmp_path, job(tmp_path, mode), "--no-report")
     assert out.returncode == 0, out.stderr
     rows = history(out)
     bad = [r for r in rows if float(r["a"]) > 0.7]
@@ -109,8 +109,8 @@ def test_systemexit_and_keyboardinterrupt_raised_by_the_objective_are_failures(t
 def test_ctrl_c_from_the_user_still_interrupts(tmp_path):
     p = job(tmp_path, "slow", pop=4, gens=50)
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
-    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(p)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
+    proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(p), "--no-report"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
     deadline = time.time() + 60
     while time.time() < deadline and not list((tmp_path / "runs").glob("*/history.csv")):
         time.sleep(0.2)
@@ -124,7 +124,7 @@ def test_ctrl_c_from_the_user_still_interrupts(tmp_path):
 def test_ctrl_c_swallowed_by_the_objective_stops_the_run_at_the_generation_end(tmp_path):
     """A KeyboardInterrupt that never reaches the run (caught by the objective, or raised in a
     ``__del__``) still stops it: the run counts SIGINTs and checks the count after each generation."""
-    out = run(tmp_path, job(tmp_path, "swallow", pop=4, gens=5))
+    out = run(tmp_path, job(tmp_path, "swallow", pop=4, gens=5), "--no-report")
     assert out.returncode == 1, out.stderr
     assert "status: interrupted" in out.stdout and "tuner resume" in out.stderr
     assert len(history(out)) == 4  # the generation in progress is completed and kept
@@ -143,7 +143,7 @@ def test_ctrl_c_ends_the_run_as_interrupted_even_when_the_report_cannot_be_impor
 
 @pytest.mark.slow
 def test_a_crashed_loky_worker_gives_recorded_failures(tmp_path):
-    out = run(tmp_path, job(tmp_path, "crash", "loky", 2))
+    out = run(tmp_path, job(tmp_path, "crash", "loky", 2), "--no-report")
     assert out.returncode == 0, out.stderr
     rows = history(out)
     dead = [r for r in rows if float(r["a"]) > 0.85]

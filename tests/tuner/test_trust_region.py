@@ -172,12 +172,12 @@ def test_engine_run_killed_and_resumed_equals_the_uninterrupted_one(tmp_path):
         return p
 
     ref = run(config_from_dict(yaml.safe_load(job("ref").read_text()), base_dir=tmp_path), run_dir=tmp_path / "ref",
-              quiet=True)
+              quiet=True, report=False)
     h_ref = pd.read_csv(ref.run_dir / "history.csv", keep_default_na=False).drop(columns="seconds")
     assert len(h_ref) == 30 * 4
     run_dir = tmp_path / "killed"
     proc = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job("killed", sleep_s=0.01)), "--run-dir",
-                             str(run_dir), "-q"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                             str(run_dir), "-q", "--no-report"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 60
     while time.time() < deadline:
         try:
@@ -189,8 +189,8 @@ def test_engine_run_killed_and_resumed_equals_the_uninterrupted_one(tmp_path):
     os.kill(proc.pid, signal.SIGKILL)
     proc.wait()
     assert len(pd.read_csv(run_dir / "history.csv")) < len(h_ref), "the run must be killed before its end"
-    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q"], capture_output=True,
-                         text=True, timeout=120)
+    out = subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), "-q", "--no-report"],
+                         capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     h_res = pd.read_csv(run_dir / "history.csv", keep_default_na=False).drop(columns="seconds")
     pd.testing.assert_frame_equal(h_ref, h_res)

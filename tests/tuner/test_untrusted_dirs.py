@@ -109,7 +109,7 @@ def test_read_only_commands_never_import_the_code_a_run_names(tmp_path, monkeypa
     monkeypatch.syspath_prepend(str(pkg))
     raw = _raw(tmp_path, objective={"kind": "python", "callable": "evilmod_u:f"},
                parameters={"x": {"low": 0.0, "high": 1.0}})
-    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "py", quiet=True)
+    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "py", quiet=True, report=False)
     assert res.status == "finished"
     marker.unlink()
     cwd = tmp_path / "cwd"  # the module also lies in the working directory, beside the handed-over run
@@ -199,8 +199,8 @@ def test_a_full_disk_names_the_file(tmp_path):
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
         resource.setrlimit(resource.RLIMIT_FSIZE, (24_000, 24_000))
 
-    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(job), "--run-dir", str(tmp_path / "r"), "-q"],
-                         capture_output=True, text=True, timeout=300, preexec_fn=small_files)
+    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(job), "--run-dir", str(tmp_path / "r"), "-q",
+                          "--no-report"], capture_output=True, text=True, timeout=300, preexec_fn=small_files)
     one_error(out, "error: " + str(tmp_path / "r"), "File too large")
     assert "error: ?" not in out.stderr
 
@@ -231,7 +231,7 @@ def test_a_huge_error_message_is_stored_cut_and_the_history_stays_readable(tmp_p
     job.write_text(yaml.safe_dump(_raw(tmp_path, objective={"kind": "python", "callable": "loud_u:f"},
                                        parameters={"x": {"low": 0.0, "high": 1.0}})))
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
-    out = tuner("run", job, "--run-dir", tmp_path / "r", "-q", env=env)
+    out = tuner("run", job, "--run-dir", tmp_path / "r", "-q", "--no-report", env=env)
     assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr  # every evaluation failed
     assert "200,027 characters, cut to 4,000" in (tmp_path / "r" / "history.csv").read_text()  # length noted
     for cmd in (["show", tmp_path / "r"], ["report", tmp_path / "r"]):
