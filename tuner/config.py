@@ -55,6 +55,9 @@ class ConfigError(ValueError):
         self.file, self.key, self.message = (str(file) if file else "<config>"), key, message
         super().__init__(f"{self.file}: {key}: {message}" if key else f"{self.file}: {message}")
 
+    def __reduce__(self):  # raised in a worker process (a parallel sweep's job), it must unpickle in the parent
+        return type(self), (self.file, self.key, self.message)
+
 
 _INPROC = re.compile(r"inproc://\S+")  # a scheduler in this process (a LocalCluster without processes)
 _ADDRESS = re.compile(r"(tcp|tls|ucx|ws|wss)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9][A-Za-z0-9.-]*):[0-9]{1,5}")

@@ -240,8 +240,10 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
         from joblib import Parallel, delayed
 
         try:  # a stop signal here makes joblib kill its workers (their runs resume as after a kill -9)
-            results = Parallel(n_jobs=n_par, backend="loky")(delayed(_run_job)(j, d, True, True, report)
-                                                             for j, d in todo)
+            # absolute directories: joblib reuses its worker processes, whose working directory is the one
+            # of the process that started them, maybe another than this sweep's (tuner.api after a chdir)
+            results = Parallel(n_jobs=n_par, backend="loky")(
+                delayed(_run_job)(j, str(Path(d).absolute()), True, True, report) for j, d in todo)
         except KeyboardInterrupt:
             return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:

@@ -135,3 +135,29 @@ def test_list_sections_come_from_the_registry():
     assert out.returncode == 0 and "filters (objective.kind: filter):" in out.stdout and "madgwick" in out.stdout
     assert "optimizers" not in out.stdout
     one_error_line(tuner("list", "gadgets"), "unknown section 'gadgets'", "controllers", "filters", "functions")
+
+
+def _error_types():
+    from objectives.attitude.data.recording import RecordingError
+    from tuner.config import ConfigError
+    from tuner.optimizers.base import OptionError
+    from tuner.registry import RegistryError
+    from tuner.rundir import RunError
+    from tuner.space import SpaceError
+
+    return [ConfigError("job.yaml", "optimizer.population", "must be >= 2"), ConfigError(None, "", "no key"),
+            OptionError("must be a number", key="optimizer.c1"), RegistryError("unknown kind 'x'"),
+            RunError("runs/r: in use by pid 1"), SpaceError("parameters.x: low >= high"),
+            RecordingError("a.csv: column 'time' missing")]
+
+
+@pytest.mark.parametrize("exc", _error_types(), ids=lambda e: type(e).__name__)
+def test_errors_survive_pickling_from_a_worker_process(exc):
+    """A job of a parallel sweep runs in a worker process: an error raised there is pickled to the parent,
+    which prints its one line. An exception whose __init__ takes other arguments than ``args`` would not
+    unpickle, and the sweep would end in a BrokenProcessPool traceback instead."""
+    import pickle
+
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is type(exc) and str(back) == str(exc)
+    assert vars(back) == vars(exc)
