@@ -89,6 +89,7 @@ def kill_after_generations(proc: subprocess.Popen, run_dir, generations: int, ti
 
 
 def resume_cli(run_dir, *args: str) -> subprocess.CompletedProcess:
-    """``python -m tuner resume <run_dir> [args]`` to completion, output captured."""
-    return subprocess.run([sys.executable, "-m", "tuner", "resume", str(run_dir), *args], capture_output=True,
-                          text=True, timeout=120)
+    """``tuner resume <run_dir> [args]`` to completion (in this process), output captured."""
+    from tests.conftest import run_tuner
+
+    return run_tuner("resume", run_dir, *args)

@@ -1,19 +1,18 @@
 """The command line: clear config errors with exit status 2, and the happy path."""
 
 import json
-import subprocess
-import sys
 
 import pytest
 import yaml
+
+from tests.conftest import run_tuner
 
 GOOD = {"name": "c", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
         "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
 
 
 def tuner(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=120)
+    return run_tuner(*args, cwd=cwd)
 
 
 def write(tmp_path, cfg, name="job.yaml"):

@@ -3,12 +3,10 @@ is refused by resume, show and report with the row named; histories of older ver
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pandas as pd
 import pytest
 
+from tests.conftest import run_tuner
 from tuner.config import config_from_dict
 from tuner.digest import row_digest
 from tuner.run import resume, run
@@ -39,7 +37,7 @@ def _interrupted(tmp_path, name="r"):
 
 
 def tuner(*args):
-    return subprocess.run([sys.executable, "-m", "tuner", *map(str, args)], capture_output=True, text=True, timeout=120)
+    return run_tuner(*args)
 
 
 def _edit(d, row, col, value):

@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 import tuner.run as run_mod
+from tests.conftest import run_tuner
 from tests.tuner.jobs import rastrigin_job
 from tuner.config import ConfigError
 from tuner.loop import evaluation_seed, minimize
@@ -51,9 +52,8 @@ def interrupted_run(cfg, run_dir, after_gens=2, report=False):
     return res
 
 
-def tuner_cli(*args, **kw):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=ROOT,
-                          timeout=120, **kw)
+def tuner_cli(*args):
+    return run_tuner(*args, cwd=ROOT)
 
 
 # --- 13.1: nothing from a run directory is executed ------------------------------------------

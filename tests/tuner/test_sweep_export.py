@@ -108,6 +108,23 @@ def test_sweep_without_report_writes_its_tables_and_tuner_report_writes_every_re
     assert {f: (d / f).read_text() for f in tables} == tables
 
 
+def test_parallel_sweep_in_a_relative_directory_after_a_chdir(tmp_path, monkeypatch):
+    """joblib reuses its worker processes, started in the working directory of their time: a sweep with a
+    relative ``--dir`` after a chdir (tuner.api in a notebook) still writes its jobs where it is run."""
+    doc = json.loads(json.dumps(SWEEP))
+    doc["sweep"].pop("grid")
+    doc["sweep"]["seeds"] = [1]
+    first, second = tmp_path / "first", tmp_path / "second"
+    for d in (first, second):
+        d.mkdir()
+        (d / "sweep.yaml").write_text(yaml.safe_dump(doc))
+        monkeypatch.chdir(d)  # the first sweep starts the workers in `first`
+        out = run_tuner("sweep", "sweep.yaml", "--dir", "out", "--jobs", "2", "-q", "--no-report")
+        assert out.returncode == 0, out.stderr
+        assert len(pd.read_csv(d / "out" / "results.csv")) == 2
+        assert sorted(p.name for p in (d / "out" / "jobs").iterdir() if p.is_dir()) == ["de__seed-1", "pso__seed-1"]
+
+
 class _Checker(html.parser.HTMLParser):
     def __init__(self):
         super().__init__()

@@ -16,15 +16,15 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.conftest import run_tuner
 from tuner.config import config_from_dict
 from tuner.run import run
 
 REPO = Path(__file__).resolve().parents[2]
 
 
-def tuner(*args, cwd=None, env=None, **kw):
-    return subprocess.run([sys.executable, "-m", "tuner", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd, env=env, timeout=300, **kw)
+def tuner(*args, cwd=None, env=None):
+    return run_tuner(*args, cwd=cwd, env=env)  # in this process, or a new one for an environment
 
 
 def one_error(out, *fragments):
