@@ -27,7 +27,7 @@ def test_tuned_madgwick_beats_published_tagp_on_held_out_trials(tmp_path):
            "optimizer": {"method": "pso", "population": 6, "generations": 4, "inertia": "linear",
                          "c1": 1.5, "c2": 1.5},
            "parallel": {"backend": "serial"}}
-    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "r", quiet=True)
+    res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "r", quiet=True, report=False)
     ev = res.extra
     tagp_test = np.mean([published[t]["tagp_parameters"]["total_rmse_deg"] for t in TEST])
     tagp_train = np.mean([published[t]["tagp_parameters"]["total_rmse_deg"] for t in TRAIN])

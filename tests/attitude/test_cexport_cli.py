@@ -31,8 +31,9 @@ def _tuner(*args, env=None, check=True):
 
 
 def _run(tmp: Path, config: Path, *sets: str) -> Path:
+    """A tiny run of ``config``; no test here reads its report."""
     run_dir = tmp / "run"
-    _tuner("run", config, "--run-dir", run_dir, "-q", "--set", "optimizer.population=2", "--set",
+    _tuner("run", config, "--run-dir", run_dir, "-q", "--no-report", "--set", "optimizer.population=2", "--set",
            "optimizer.generations=1", "--set", "parallel.backend=serial", *sum((["--set", s] for s in sets), []))
     return run_dir
 

@@ -175,7 +175,7 @@ def test_example_csv_is_what_its_generator_writes(tmp_path, monkeypatch):
 def test_example_job_on_own_csv_runs(tmp_path):
     for f in ("own_csv.yaml", "imu_columns.yaml", "imu.csv"):
         shutil.copy(EXAMPLES / f, tmp_path / f)
-    out = tuner("run", "own_csv.yaml", "--set", "optimizer.generations=2", cwd=tmp_path)
+    out = tuner("run", "own_csv.yaml", "--set", "optimizer.generations=2", "--no-report", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert "warning" not in out.stderr  # units declared right, starts at rest
     from objectives.attitude.data.loaders import load_recordings
@@ -270,7 +270,7 @@ def test_start_in_motion_is_one_warning_line_of_tuner_run(tmp_path, moving_and_r
                                                    "data": [{"csv": {"path": "moving.csv", "columns": CSV_MAP}}]},
            "optimizer": {"method": "pso", "population": 4, "generations": 1}, "parallel": {"backend": "serial"}}
     (tmp_path / "job.yaml").write_text(yaml.safe_dump(cfg))
-    out = tuner("run", "job.yaml", cwd=tmp_path)
+    out = tuner("run", "job.yaml", "--no-report", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     lines = [ln for ln in out.stderr.splitlines() if ln.startswith("warning:")]
     assert len(lines) == 1 and lines[0].startswith("warning: moving: starts in motion"), lines

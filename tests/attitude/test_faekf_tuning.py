@@ -48,7 +48,7 @@ def _tune(flt: str, tmp_path: Path) -> dict:
         "optimizer": dict(BUDGET),
         "parallel": {"backend": "serial", "n_jobs": 1},
     }
-    res = run(config_from_dict(raw, base_dir=Path(".")), run_dir=tmp_path / flt, quiet=True)
+    res = run(config_from_dict(raw, base_dir=Path(".")), run_dir=tmp_path / flt, quiet=True, report=False)
     assert res.status == "finished" and res.n_evals == BUDGET["population"] * BUDGET["generations"]
     return yaml.safe_load((tmp_path / flt / "best.yaml").read_text())
 

@@ -139,7 +139,7 @@ def _run(tmp_path, objective, backend, name, parameters=None):
     if parameters:
         raw["parameters"] = parameters
     run(config_from_dict(raw, source=str(tmp_path / f"{name}.yaml"), base_dir=tmp_path), run_dir=tmp_path / name,
-        quiet=True)
+        quiet=True, report=False)
     return _history(tmp_path / name)
 
 

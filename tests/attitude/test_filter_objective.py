@@ -149,7 +149,7 @@ def _tiny_kf_job(tmp_path):
 def test_tiny_pso_run_improves_thesis_initial_kf_parameters(tmp_path):
     """Thesis 3.1.3.1: PSO improves on the initial parameters (8 x 5 PSO, short tilt1d recording)."""
     cfg = config_from_dict(_tiny_kf_job(tmp_path), base_dir=tmp_path)
-    res = run(cfg, run_dir=tmp_path / "kf", quiet=True)
+    res = run(cfg, run_dir=tmp_path / "kf", quiet=True, report=False)  # scores.csv and figures/euler_*: the objective's
     from objectives.attitude.filters.kf1d import KF1D
 
     obj = FilterObjective("kf1d", [{"synthetic": {"generator": "tilt1d", "duration_s": 10, "seed": 1}}],

@@ -73,7 +73,7 @@ def test_history_of_a_pendulum_run_is_identical_serial_and_threads(tmp_path):
         raw = {**doc, "name": backend, "optimizer": {"method": "pso", "population": 8, "generations": 2},
                "parallel": {"backend": backend, "n_jobs": 2}, "output": str(tmp_path / "runs")}
         run(config_from_dict(raw, source=str(CONFIGS / "wmp_pid.yaml"), base_dir=CONFIGS),
-            run_dir=tmp_path / backend, quiet=True)
+            run_dir=tmp_path / backend, quiet=True, report=False)
         rows[backend] = _history(tmp_path / backend)
     assert len(rows["serial"]) == 16 and rows["threads"] == rows["serial"]
 

@@ -155,7 +155,8 @@ def short_run(tmp_path_factory):
     from tuner.run import run
 
     cfg = load_config(CONFIG, ["optimizer.population=8", "optimizer.generations=4"], n_jobs=1)
-    return run(cfg, tmp_path_factory.mktemp("fz") / "run", quiet=True)
+    # no report: the figures read below are the objective's (response, surfaces), written without it
+    return run(cfg, tmp_path_factory.mktemp("fz") / "run", quiet=True, report=False)
 
 
 @pytest.mark.slow

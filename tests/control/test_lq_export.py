@@ -28,7 +28,7 @@ def lq_run(request, tmp_path_factory):
            "objective": {"kind": "closed_loop", "controller": request.param, "profile": "thesis_2s",
                          "duration_s": 3.0, "requirements": None},
            "optimizer": {"method": "pso", "population": 4, "generations": 1}, "parallel": {"backend": "serial"}}
-    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True).run_dir
+    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True, report=False).run_dir
 
 
 def _reference(run_dir):

@@ -84,7 +84,8 @@ def test_dict_and_typed_config_give_the_same_history(tmp_path, job_run):
     assert _history(r_path.run_dir) == _history(r_dict.run_dir) == _history(r_cfg.run_dir)
     # seed and n_jobs override a dict and a typed config as they override a file
     r_seed = tuner.tune(load_config(path), seed=9, n_jobs=1, run_dir=tmp_path / "s", progress=False)
-    cli_main(["run", str(path), "--seed", "9", "--n-jobs", "1", "--run-dir", str(tmp_path / "s_cli"), "-q"])
+    cli_main(["run", str(path), "--seed", "9", "--n-jobs", "1", "--run-dir", str(tmp_path / "s_cli"), "-q",
+             "--no-report"])
     assert _history(r_seed.run_dir) == _history(tmp_path / "s_cli") != _history(r_path.run_dir)
 
 
@@ -129,7 +130,7 @@ def test_callback_exception_stops_the_run_resumably(tmp_path, job_run):
     with pytest.raises(RuntimeError, match="enough"):
         tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, callback=stop)
     assert len(_history(tmp_path / "r")) == 12  # the generation the callback saw is on disk
-    assert cli_main(["resume", str(tmp_path / "r"), "-q"]) == 0
+    assert cli_main(["resume", str(tmp_path / "r"), "-q", "--no-report"]) == 0
     assert _history(tmp_path / "r") == _history(job_run.run_dir)  # as the run never stopped
 
 

@@ -28,7 +28,7 @@ def _raw(tmp_path, data, **extra):
 def test_test_recordings_never_enter_the_folds_and_keep_their_own_score(tmp_path):
     cfg = config_from_dict(_raw(tmp_path, {"train": TRAIN, "test": TEST},
                                 validation={"cv": "kfold", "folds": 2, "budget_fraction": 0.5}))
-    res = run(cfg, quiet=True)
+    res = run(cfg, quiet=True, report=False)
     rd = RunDir(res.run_dir)
     val = rd.validation()["cv"]
     obj = FilterObjective("madgwick", TRAIN, TEST, metric="broad_mean_rmse")

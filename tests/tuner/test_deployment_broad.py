@@ -25,6 +25,7 @@ def test_broad_mahony_from_run_on_plain_arrays_gives_the_run_fitness(tmp_path):
     from objectives.attitude.objective_options import aggregate_scores, recording_groups
 
     out = subprocess.run([sys.executable, "-m", "tuner", "run", str(ROOT / "configs" / "broad_mahony.yaml"), "-q",
+                          "--no-report",
                           "--set", "optimizer.population=2", "--set", "optimizer.generations=1",
                           "--set", "parallel.backend=serial", "--set", f"output={tmp_path}"],
                          capture_output=True, text=True, timeout=600, cwd=ROOT)

@@ -129,7 +129,7 @@ def test_export_takes_provenance_and_tables_from_the_objective(tmp_path):
                             "optimizer": {"method": "random", "population": 5, "generations": 2},
                             "parallel": {"backend": "serial", "n_jobs": 1}},
                            source=str(tmp_path / "job.yaml"), base_dir=tmp_path)
-    res = run_job(cfg, run_dir=tmp_path / "r", quiet=True)
+    res = run_job(cfg, run_dir=tmp_path / "r", quiet=True, report=False)
     run = res.run_dir
     doc = json.loads(export(run, "json"))
     assert doc["objective"] == {"kind": "function", "function": "ackley"} and doc["data"] is None

@@ -87,9 +87,10 @@ def test_dask_local_cluster_equals_serial(tmp_path):
     pytest.importorskip("distributed")
     raw = {"name": "d", "seed": 2, "objective": {"kind": "function", "function": "ackley", "dim": 3},
            "optimizer": {"method": "pso", "population": 6, "generations": 3}, "output": str(tmp_path)}
-    a = run(config_from_dict({**raw, "parallel": {"backend": "serial"}}), run_dir=tmp_path / "s", quiet=True)
+    a = run(config_from_dict({**raw, "parallel": {"backend": "serial"}}), run_dir=tmp_path / "s", quiet=True,
+            report=False)
     b = run(config_from_dict({**raw, "parallel": {"backend": "dask", "n_jobs": 2}}), run_dir=tmp_path / "d",
-            quiet=True)
+            quiet=True, report=False)
     assert a.best_params == b.best_params and a.best_fitness == b.best_fitness
     ha = np.loadtxt(tmp_path / "s" / "history.csv", delimiter=",", skiprows=1, usecols=range(4, 8))
     hb = np.loadtxt(tmp_path / "d" / "history.csv", delimiter=",", skiprows=1, usecols=range(4, 8))

@@ -148,7 +148,7 @@ def ekf_run(tmp_path_factory):
                                                                                      "scale": "log"},
                           "acc_gate": {"fixed": INF}, "use_mag": True},
            "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
-    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True).run_dir
+    return run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "r", quiet=True, report=False).run_dir
 
 
 def _compile_and_run(tmp_path):

@@ -32,7 +32,7 @@ def test_the_same_value_in_both_places_is_accepted(tmp_path):
     job = filter_job(tmp_path, objective={"fixed": {"use_mag": False, "zeta": 0.0}},
                      parameters={"beta": {"low": 0.01, "high": 1.0}, "zeta": {"fixed": 0.0}},
                      optimizer={"method": "random", "population": 2, "generations": 1})
-    out = tuner("run", str(job))
+    out = tuner("run", str(job), "--no-report")
     assert out.returncode == 0, out.stderr
 
 
@@ -72,7 +72,7 @@ def test_show_names_a_truth_start_replaced_in_the_deployment_and_prefix_only_for
     job = filter_job(tmp_path, objective={"fixed": {"use_mag": False, "init": "truth"}},
                      parameters={"beta": {"low": 0.01, "high": 1.0}},
                      optimizer={"method": "random", "population": 2, "generations": 1})
-    out = tuner("run", str(job), "--run-dir", str(tmp_path / "run"))
+    out = tuner("run", str(job), "--run-dir", str(tmp_path / "run"), "--no-report")
     assert out.returncode == 0, out.stderr
     dep = yaml.safe_load((tmp_path / "run" / "best.yaml").read_text())["deployment"]
     assert dep["values"]["init"] == "accmag" and dep["scoring"]["init"] == "truth"
@@ -113,7 +113,7 @@ def test_from_run_refuses_a_deployment_value_the_filter_does_not_know(tmp_path):
     write_csv(tmp_path / "rec.csv")
     job = filter_job(tmp_path, parameters={"beta": {"low": 0.01, "high": 1.0}},
                      optimizer={"method": "random", "population": 2, "generations": 1})
-    assert tuner("run", str(job), "--run-dir", str(tmp_path / "run")).returncode == 0
+    assert tuner("run", str(job), "--run-dir", str(tmp_path / "run"), "--no-report").returncode == 0
     assert AttitudeFilter.from_run(tmp_path / "run").values["use_mag"] is False
     best = yaml.safe_load((tmp_path / "run" / "best.yaml").read_text())
     best["deployment"]["values"]["mag_rejections"] = True

@@ -87,10 +87,10 @@ def test_bad_recordings_are_errors_naming_the_data_entry(tmp_path, kw, expected)
 @pytest.mark.slow
 def test_gyro_in_deg_s_declared_rad_s_warns_and_runs(tmp_path):
     write_csv(tmp_path / "rec.csv", gyr_scale=180 / np.pi * 100)  # peaks ~ 2900 "rad/s"
-    out = tuner("run", str(filter_job(tmp_path)))
+    out = tuner("run", str(filter_job(tmp_path)), "--no-report")
     assert "warning: rec: gyr is declared rad/s" in out.stderr and "deg/s?" in out.stderr
     write_csv(tmp_path / "rec.csv", gyr_scale=0.1)  # 0.3 rad/s at the start would be a start in motion
-    out = tuner("run", str(filter_job(tmp_path)))
+    out = tuner("run", str(filter_job(tmp_path)), "--no-report")
     assert out.returncode == 0 and "warning" not in out.stderr, out.stderr
 
 
@@ -131,7 +131,7 @@ def test_objective_raising_at_the_defaults_is_an_error(tmp_path):
 
 def test_run_where_every_evaluation_failed_exits_nonzero_and_says_why(tmp_path):
     p = python_job(tmp_path, "def f(p):\n    return float('nan')\n")
-    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(p)], capture_output=True, text=True,
+    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(p), "--no-report"], capture_output=True, text=True,
                          cwd=tmp_path, timeout=120, env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"})
     assert out.returncode == 1, out.stderr
     assert "warning: the default parameters score as failed (non-finite fitness nan)" in out.stderr

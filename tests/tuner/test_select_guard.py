@@ -89,7 +89,7 @@ def test_defaults_win_the_final_selection_when_tuning_overfits(tmp_path, kind):
 
 def test_without_defaults_the_selection_keeps_a_tuned_candidate(tmp_path, kind):
     res = run(config_from_dict(_raw(tmp_path, kind, {"top_k": 5, "holdout": "hold", "include_defaults": False})),
-              quiet=True)
+              quiet=True, report=False)
     best = RunDir(res.run_dir).best()
     sel = best.evaluation["selection"]
     assert "defaults" not in sel and not sel.get("defaults_chosen") and best.eval >= 0
