@@ -199,7 +199,7 @@ def _check_kwargs(overrides: Any, seed: Any, n_jobs: Any) -> list[str]:
 def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None = None, n_jobs: int | None = None,
          run_dir: str | Path | None = None, progress: bool | Callable[[str], None] = True,
          callback: Callable[[GenerationSummary], None] | None = None,
-         overrides: list[str] | None = None) -> Result:
+         overrides: list[str] | None = None, report: bool = True) -> Result:
     """Tune a job, as ``tuner run`` does, and return its :class:`Result`.
 
     Parameters
@@ -220,6 +220,8 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
         ``tuner resume`` continues it) and propagates.
     overrides : list of str, optional
         ``key.path=value`` strings, as ``--set`` (one string is one override).
+    report : bool
+        False: no report, live or final (``--no-report``; ``tuner report RUN_DIR`` writes it later).
 
     Raises
     ------
@@ -234,7 +236,8 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
     cfg = _config(config, overrides, seed, n_jobs)
     printer = progress if callable(progress) else None
     on_generation = (lambda g: callback(GenerationSummary.from_generation(g))) if callback is not None else None
-    res = run(cfg, run_dir=run_dir, quiet=not progress, progress=printer, on_generation=on_generation)
+    res = run(cfg, run_dir=run_dir, quiet=not progress, progress=printer, on_generation=on_generation,
+              report=report)
     return load(res.run_dir)
 
 

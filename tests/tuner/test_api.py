@@ -34,7 +34,8 @@ def _unrendered_figures():
 @pytest.fixture(scope="module")
 def job_run(tmp_path_factory) -> tuner.Result:
     """``tuner.tune(JOB)``, the plain run several tests compare against; they only read it."""
-    return tuner.tune(dict(JOB), run_dir=tmp_path_factory.mktemp("api") / "job", progress=False)
+    return tuner.tune(dict(JOB), run_dir=tmp_path_factory.mktemp("api") / "job", progress=False,
+                      report=False)
 
 
 def _write_job(tmp_path: Path, job: dict = JOB) -> Path:
@@ -74,16 +75,25 @@ def test_tune_equals_cli_run(tmp_path, capsys):
     assert res.validation is None
 
 
+def test_tune_without_report_equals_cli_run_without_report(tmp_path):
+    path = _write_job(tmp_path)
+    assert cli_main(["run", str(path), "--run-dir", str(tmp_path / "cli"), "-q", "--no-report"]) == 0
+    res = tuner.tune(path, run_dir=tmp_path / "api", progress=False, report=False)
+    assert _files(tmp_path / "cli") == _files(res.run_dir) and "report.md" not in _files(res.run_dir)
+    assert _history(tmp_path / "cli") == _history(res.run_dir)
+
+
 def test_dict_and_typed_config_give_the_same_history(tmp_path, job_run):
     from tuner.config import load_config
 
     path = _write_job(tmp_path)
-    r_path = tuner.tune(path, run_dir=tmp_path / "p", progress=False)
+    r_path = tuner.tune(path, run_dir=tmp_path / "p", progress=False, report=False)
     r_dict = job_run
-    r_cfg = tuner.tune(load_config(path), run_dir=tmp_path / "c", progress=False)
+    r_cfg = tuner.tune(load_config(path), run_dir=tmp_path / "c", progress=False, report=False)
     assert _history(r_path.run_dir) == _history(r_dict.run_dir) == _history(r_cfg.run_dir)
     # seed and n_jobs override a dict and a typed config as they override a file
-    r_seed = tuner.tune(load_config(path), seed=9, n_jobs=1, run_dir=tmp_path / "s", progress=False)
+    r_seed = tuner.tune(load_config(path), seed=9, n_jobs=1, run_dir=tmp_path / "s", progress=False,
+                        report=False)
     cli_main(["run", str(path), "--seed", "9", "--n-jobs", "1", "--run-dir", str(tmp_path / "s_cli"), "-q",
              "--no-report"])
     assert _history(r_seed.run_dir) == _history(tmp_path / "s_cli") != _history(r_path.run_dir)
@@ -107,7 +117,7 @@ def test_load_gives_the_same_result(tmp_path):
 
 def test_callback_gets_a_typed_summary_per_generation(tmp_path):
     seen: list[tuner.GenerationSummary] = []
-    res = tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, callback=seen.append)
+    res = tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, callback=seen.append, report=False)
     assert [s.generation for s in seen] == [0, 1, 2, 3]
     assert [s.n_evals for s in seen] == [6, 12, 18, 24]
     hist = res.history
@@ -128,7 +138,7 @@ def test_callback_exception_stops_the_run_resumably(tmp_path, job_run):
             raise RuntimeError("enough")
 
     with pytest.raises(RuntimeError, match="enough"):
-        tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, callback=stop)
+        tuner.tune(dict(JOB), run_dir=tmp_path / "r", progress=False, callback=stop, report=False)
     assert len(_history(tmp_path / "r")) == 12  # the generation the callback saw is on disk
     assert cli_main(["resume", str(tmp_path / "r"), "-q", "--no-report"]) == 0
     assert _history(tmp_path / "r") == _history(job_run.run_dir)  # as the run never stopped
@@ -136,11 +146,11 @@ def test_callback_exception_stops_the_run_resumably(tmp_path, job_run):
 
 def test_progress_lines(tmp_path, capsys):
     lines: list[str] = []
-    tuner.tune(dict(JOB), run_dir=tmp_path / "a", progress=lines.append)
+    tuner.tune(dict(JOB), run_dir=tmp_path / "a", progress=lines.append, report=False)
     assert any(line.startswith("gen 4/4") for line in lines), lines
-    tuner.tune(dict(JOB), run_dir=tmp_path / "b", progress=True)
+    tuner.tune(dict(JOB), run_dir=tmp_path / "b", progress=True, report=False)
     assert "gen 4/4" in capsys.readouterr().err
-    tuner.tune(dict(JOB), run_dir=tmp_path / "c", progress=False)
+    tuner.tune(dict(JOB), run_dir=tmp_path / "c", progress=False, report=False)
     assert capsys.readouterr().err == ""
 
 
@@ -186,7 +196,8 @@ def test_bad_keyword_arguments_are_config_errors(tmp_path, kwargs, message):
 
 def test_one_override_string_is_one_override(tmp_path):
     """overrides="a.b=1" is that override (it was split into characters: "--set: ... got 'o'")."""
-    res = tuner.tune(dict(JOB), overrides="optimizer.generations=2", run_dir=tmp_path / "r", progress=False)
+    res = tuner.tune(dict(JOB), overrides="optimizer.generations=2", run_dir=tmp_path / "r", progress=False,
+                     report=False)
     assert set(res.history["generation"]) == {0, 1}
 
 
@@ -243,7 +254,7 @@ def test_build_gives_the_tuned_controller(tmp_path):
 
     job = yaml.safe_load(starter_text("pid"))
     job.update(optimizer={"method": "pso", "population": 4, "generations": 1}, parallel={"backend": "serial"})
-    res = tuner.tune(job, run_dir=tmp_path / "pid", progress=False)
+    res = tuner.tune(job, run_dir=tmp_path / "pid", progress=False, report=False)
     ctl = res.build()
     assert type(ctl).__name__ == "PID" and dict(ctl.values) == res.best
     assert set(res.best) > set(res.params) and res.deployment.kind == "closed_loop"
