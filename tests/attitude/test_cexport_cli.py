@@ -8,7 +8,6 @@ from __future__ import annotations
 import os
 import re
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -17,14 +16,14 @@ import yaml
 from objectives.attitude.cexport.build import STRICT_FLAGS, find_compiler
 from objectives.attitude.data.broad import default_broad_dir
 from tests.attitude.cexport_cases import needs_cc
+from tests.conftest import run_tuner
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {**os.environ, "NUMBA_CACHE_DIR": str(ROOT / ".cache" / "numba")}
 
 
 def _tuner(*args, env=None, check=True):
-    out = subprocess.run([sys.executable, "-m", "tuner", *map(str, args)], cwd=ROOT, env=env or ENV,
-                         capture_output=True, text=True, timeout=900)
+    out = run_tuner(*args, cwd=ROOT, env=env)  # in this process unless an environment is given
     if check:
         assert out.returncode == 0, out.stderr
     return out

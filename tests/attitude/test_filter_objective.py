@@ -14,6 +14,7 @@ from objectives.attitude.data.synthetic import synthetic
 from objectives.attitude.filters import get_filter
 from objectives.attitude.fused_errors import error_sums
 from objectives.attitude.objective import FilterObjective
+from tests.conftest import run_tuner
 from tuner.config import config_from_dict
 from tuner.run import run
 
@@ -170,16 +171,14 @@ def test_tuner_evaluate_json_on_other_data(tmp_path):
     res = run(cfg, run_dir=tmp_path / "kf", quiet=True)
     data = tmp_path / "other.yaml"
     data.write_text(yaml.safe_dump({"data": [{"synthetic": {"generator": "tilt1d", "duration_s": 5, "seed": 9}}]}))
-    out = subprocess.run([sys.executable, "-m", "tuner", "evaluate", str(res.run_dir), "--data", str(data), "--json"],
-                         capture_output=True, text=True, timeout=300)
+    out = run_tuner("evaluate", res.run_dir, "--data", data, "--json")
     assert out.returncode == 0, out.stderr
     doc = json.loads(out.stdout)
     assert set(doc["recordings"]) == {"tilt1d-9"} and doc["fitness"] > 0
     obj = FilterObjective("kf1d", [{"synthetic": {"generator": "tilt1d", "duration_s": 5, "seed": 9}}],
                           metric="mse_1d")
     assert doc["fitness"] == pytest.approx(obj(res.best_params).fitness, rel=1e-12)
-    same = subprocess.run([sys.executable, "-m", "tuner", "evaluate", str(res.run_dir), "--json"],
-                          capture_output=True, text=True, timeout=300)
+    same = run_tuner("evaluate", res.run_dir, "--json")
     assert json.loads(same.stdout)["fitness"] == pytest.approx(res.best_fitness, rel=1e-12)
     assert Path(res.run_dir / "report.html").exists()
 

@@ -5,8 +5,6 @@ the motion samples), combined as the config says (group-balanced CVaR(0.5) over 
 Before the deployment carried ``objective.fixed``, ``Mahony.from_run`` lost ``mag_rejection`` and
 ``rest_bias`` and scored several degrees worse."""
 
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -14,6 +12,7 @@ import yaml
 
 from tests.conftest import BROAD_DIR as BROAD
 from tests.conftest import REPO as ROOT
+from tests.conftest import run_tuner
 
 
 @pytest.mark.slow
@@ -24,17 +23,14 @@ def test_broad_mahony_from_run_on_plain_arrays_gives_the_run_fitness(tmp_path):
     from objectives.attitude.metrics import broad_errors
     from objectives.attitude.objective_options import aggregate_scores, recording_groups
 
-    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(ROOT / "configs" / "broad_mahony.yaml"), "-q",
-                          "--no-report",
-                          "--set", "optimizer.population=2", "--set", "optimizer.generations=1",
-                          "--set", "parallel.backend=serial", "--set", f"output={tmp_path}"],
-                         capture_output=True, text=True, timeout=600, cwd=ROOT)
+    out = run_tuner("run", ROOT / "configs" / "broad_mahony.yaml", "-q", "--no-report",
+                    "--set", "optimizer.population=2", "--set", "optimizer.generations=1",
+                    "--set", "parallel.backend=serial", "--set", f"output={tmp_path}", cwd=ROOT)
     assert out.returncode == 0, out.stderr
     run_dir = next(p for p in tmp_path.iterdir() if p.is_dir() and (p / "best.yaml").exists())
     best = yaml.safe_load((run_dir / "best.yaml").read_text())
     cfg = yaml.safe_load((ROOT / "configs" / "broad_mahony.yaml").read_text())
-    exported = yaml.safe_load(subprocess.run([sys.executable, "-m", "tuner", "export", str(run_dir), "--format",
-                                              "yaml"], capture_output=True, text=True, timeout=300, cwd=ROOT).stdout)
+    exported = yaml.safe_load(run_tuner("export", run_dir, "--format", "yaml", cwd=ROOT).stdout)
     assert exported["params"]["mag_rejection"] is True and exported["params"]["rest_bias"] is True
     flt = Mahony.from_run(run_dir)
     assert flt.values == Mahony(**exported["params"]).values

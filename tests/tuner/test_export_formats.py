@@ -11,6 +11,7 @@ import sys
 import pytest
 import yaml
 
+from tests.conftest import run_tuner
 from tuner.config import config_from_dict
 from tuner.export import export
 from tuner.export_formats import c_prefix, json_load, to_c, to_json, to_python, to_yaml
@@ -159,8 +160,8 @@ def _compile_and_run(tmp_path):
     assert subprocess.run([str(tmp_path / "m")], timeout=30).returncode == 0
 
 
-def _tuner(*args, **kw):
-    return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, timeout=300, **kw)
+def _tuner(*args):
+    return run_tuner(*args)
 
 
 @pytest.mark.slow

@@ -10,6 +10,8 @@ import sys
 import pytest
 import yaml
 
+from tests.conftest import run_tuner
+
 
 @pytest.mark.parametrize("body, how", [
     ("os._exit(3)", "exited with status 3"),
@@ -37,6 +39,6 @@ def test_an_impossible_validation_section_is_refused_before_tuning(tmp_path):
         "name": "nocv", "objective": {"kind": "function", "function": "sphere", "dim": 2},
         "optimizer": {"method": "random", "population": 4, "generations": 2}, "parallel": {"backend": "serial"},
         "validation": {"cv": "kfold", "folds": 3}, "output": str(tmp_path / "runs")}))
-    out = subprocess.run([sys.executable, "-m", "tuner", "run", str(job)], capture_output=True, text=True, timeout=120)
+    out = run_tuner("run", job)
     assert out.returncode == 2 and out.stderr.startswith(f"error: {job}: validation.cv: "), out.stderr
     assert "cannot be cross-validated" in out.stderr and not (tmp_path / "runs").exists()
