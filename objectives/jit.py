@@ -15,7 +15,12 @@ from the cache while the parent compiled could then score the same candidate twi
 2. **No cached callee**: a jitted function called by another jitted function is either inlined by
    numba (``inline="always"``) or not cached, so its caller is compiled from its IR and the caller's
    own cache entry holds the whole call tree. A kernel also called from Python keeps its cache and gives
-   the kernels that call it an uncached twin (:func:`uncached`).
+   the kernels that call it an uncached twin (:func:`uncached`). A twin is a second compile of the same
+   body on a cold cache, so the largest kernels (the UKF, Madgwick, Mahony) do it the other way round:
+   their body is the uncached function the other kernels call, and Python calls a cached one-line
+   wrapper of it; a process compiles the body once. Numba-level inlining also types the callee's IR
+   again at every call site, so a helper called from several places or several kernels is better an
+   uncached call (with the caller's ``error_model``) than ``inline="always"``.
 3. **The cache follows the package**: numba keys a cache entry on the caller's own source file only, so a
    cached kernel that calls a kernel of another module (compiled into it by rule 2) would keep running the
    old callee after an edit there. Importing this module (``objectives/__init__.py`` does, before any

@@ -101,7 +101,6 @@ from objectives.attitude.filters._ukf_scalar import (
     _sorted_update,
     _store_sym3,
 )
-from objectives.jit import uncached
 
 __all__ = ["N_STATE_FIXED", "WORK_SIZE", "new_state", "new_work", "ukf_chunk"]
 
@@ -195,8 +194,9 @@ def _hampel_gain(v, med, thr):
 
 
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True, error_model="numpy")
-def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip, out_fallback):
+@njit(error_model="numpy")
+def _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip,
+                   out_fallback):
     """QUKF (eqs. 26-33) and, with ``robust``, QRAUKF (eqs. 34-38) over the samples of ``gyr``.
 
     gyr, acc, mag : (N, 3) rad/s, m/s^2, any unit.
@@ -401,8 +401,12 @@ def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, 
     istate[0], istate[1], istate[2] = seen, iwin, nwin
 
 
-#: the uncached twin other kernels call (objectives.jit)
-_ukf_run_inner = uncached(_ukf_run)
+@njit(cache=True, error_model="numpy")
+def _ukf_run(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip, out_fallback):
+    """:func:`_ukf_run_inner`, cached: the entry Python calls. The population and robust kernels call the uncached
+    body itself (rule 2 of :mod:`objectives.jit`), so a process compiles it once, not once more for a twin."""
+    _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_bias, out_lam, out_skip,
+                   out_fallback)
 
 
 # ----------------------------------------------------------------------------------------------

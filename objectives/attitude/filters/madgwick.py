@@ -44,7 +44,6 @@ from objectives.attitude.filters._bias_filter import (
     sample_inputs,
     with_robust,
 )
-from objectives.jit import uncached
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Madgwick", "madgwick_batch", "VARIANTS", "DECL"]
@@ -126,8 +125,8 @@ def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, 
     return q0_, q1, q2, q3, bx_, by_, bz_
 
 
-@njit(cache=True)
-def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
+@njit
+def _madgwick_kernel_inner(gyr, acc, mag, coef, state, out, bias_out):
     """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
 
     Parameters
@@ -163,8 +162,11 @@ def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
     sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
 
 
-#: the uncached twin other kernels call (objectives.jit)
-_madgwick_kernel_inner = uncached(_madgwick_kernel)
+@njit(cache=True)
+def _madgwick_kernel(gyr, acc, mag, coef, state, out, bias_out):
+    """:func:`_madgwick_kernel_inner`, cached: the entry Python calls. The population kernel calls the uncached body
+    itself (rule 2 of :mod:`objectives.jit`), so a process compiles it once, not once more for a twin."""
+    _madgwick_kernel_inner(gyr, acc, mag, coef, state, out, bias_out)
 
 
 #: the one declaration of Madgwick's parameters (defaults, search space, validation, docs)

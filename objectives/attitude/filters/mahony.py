@@ -44,7 +44,6 @@ from objectives.attitude.filters._bias_filter import (
     sample_inputs,
     with_robust,
 )
-from objectives.jit import uncached
 from objectives.params import NONNEG, Param, ParamSet
 
 __all__ = ["Mahony", "mahony_batch", "DECL"]
@@ -99,8 +98,8 @@ def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my,
     return q0_, q1, q2, q3, ix, iy, iz
 
 
-@njit(cache=True)
-def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
+@njit
+def _mahony_kernel_inner(gyr, acc, mag, coef, state, out, bias_out):
     """Mahony filter over whole arrays (see module docstring).
 
     Parameters
@@ -135,8 +134,11 @@ def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
     sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
 
 
-#: the uncached twin other kernels call (objectives.jit)
-_mahony_kernel_inner = uncached(_mahony_kernel)
+@njit(cache=True)
+def _mahony_kernel(gyr, acc, mag, coef, state, out, bias_out):
+    """:func:`_mahony_kernel_inner`, cached: the entry Python calls. The population kernel calls the uncached body
+    itself (rule 2 of :mod:`objectives.jit`), so a process compiles it once, not once more for a twin."""
+    _mahony_kernel_inner(gyr, acc, mag, coef, state, out, bias_out)
 
 
 #: the one declaration of Mahony's parameters (defaults, search space, validation, docs)
