@@ -18,9 +18,11 @@ from the cache while the parent compiled could then score the same candidate twi
    the kernels that call it an uncached twin (:func:`uncached`). A twin is a second compile of the same
    body on a cold cache, so the largest kernels (the UKF, Madgwick, Mahony) do it the other way round:
    their body is the uncached function the other kernels call, and Python calls a cached one-line
-   wrapper of it; a process compiles the body once. Numba-level inlining also types the callee's IR
-   again at every call site, so a helper called from several places or several kernels is better an
-   uncached call (with the caller's ``error_model``) than ``inline="always"``.
+   wrapper of it; a process compiles the body once (the UKF's 12 s CPU, twice before). Numba-level
+   inlining types the callee's IR again at every call site (most of the UKF's compile time), but an
+   uncached call in a per-sample path costs run time (LLVM does not inline numba's calls there: the QUKF
+   2-4 % slower with its per-sample helpers as calls, the robust Madgwick 15 % with its prologue), so the
+   kernels keep their helpers inlined.
 3. **The cache follows the package**: numba keys a cache entry on the caller's own source file only, so a
    cached kernel that calls a kernel of another module (compiled into it by rule 2) would keep running the
    old callee after an edit there. Importing this module (``objectives/__init__.py`` does, before any
