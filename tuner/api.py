@@ -233,6 +233,8 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
     """
     from tuner.run import run
 
+    if not isinstance(report, bool):  # report="no" would be true: a report the caller asked to leave out
+        raise ConfigError("tune()", "report", f"expected True or False, got {type(report).__name__} {report!r}")
     cfg = _config(config, overrides, seed, n_jobs)
     printer = progress if callable(progress) else None
     on_generation = (lambda g: callback(GenerationSummary.from_generation(g))) if callback is not None else None

@@ -186,6 +186,7 @@ def test_errors_for_dicts_and_run_dirs(tmp_path):
     ({"n_jobs": "two"}, r"^tune\(\): parallel.n_jobs: expected an int, got str 'two'"),
     ({"seed": 1.5}, r"^tune\(\): seed: expected an int, got float 1.5"),
     ({"overrides": [3]}, r"^tune\(\): overrides: expected a list of 'key.path=value' strings"),
+    ({"report": "no"}, r"^tune\(\): report: expected True or False, got str 'no'"),
 ])
 def test_bad_keyword_arguments_are_config_errors(tmp_path, kwargs, message):
     """seed/n_jobs/overrides of the wrong type: a ConfigError naming the argument, not a bare int() ValueError."""
