@@ -253,6 +253,8 @@ class FilterObjective:
         def specs(lst):
             out = []
             for spec in lst:
+                if isinstance(spec, tuple) and spec[0] == "subset":  # a CV fold or a held-out selection part
+                    return {"all": specs(list(spec[1])), "subset": sorted(spec[2])}
                 if isinstance(spec, tuple):
                     return {"all": spec[1], "kfold": {"k": spec[2], "fold": spec[3]}}
                 out.append(spec)

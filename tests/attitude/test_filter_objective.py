@@ -209,3 +209,19 @@ def test_prepare_computes_the_fixed_disturbance_inputs_once_and_stays_out_of_pic
     twin = pickle.loads(pickle.dumps(obj))
     assert twin._prepared == {} and twin._data.train is None
     assert twin(obj.default_params()).fitness == first.fitness
+
+
+def test_fold_objective_describes_and_deploys(tmp_path):
+    """A cross-validation fold's objective (and the held-out selection's parts, built the same way) has
+    recordings given as a ``("subset", specs, names)`` spec: its provenance and deployment name the data
+    and the recordings it keeps. ``describe`` read that spec as k-fold and raised ``IndexError`` after every
+    run with ``validation.select`` (configs/broad_realtime.yaml)."""
+    specs = [{"synthetic": {"generator": "bench6dof", "duration_s": 3, "seed": s}} for s in range(3)]
+    obj = FilterObjective.from_config({"kind": "filter", "filter": "madgwick", "data": specs}, tmp_path)
+    name, tune_on, held = obj.cv_folds(3)[0]
+    for side in (tune_on, held):
+        desc = side.describe()
+        assert desc["data"]["all"] == specs
+        assert set(desc["data"]["subset"]) == {r.name for r in side.recordings("train")}
+        dep = side.deployment(side.default_params())
+        assert dep is not None
