@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from objectives.control.controllers import get_controller
-from objectives.control.controllers.fuzzy import THESIS_OPTIMISED, LUTFuzzy, ProtectiveFuzzy
-from objectives.control.controllers.fuzzy_steps import _protective_step, lut_nearest
+from objectives.control.plants.wmp.controllers.fuzzy import THESIS_OPTIMISED, LUTFuzzy, ProtectiveFuzzy
+from objectives.control.plants.wmp.controllers.fuzzy_steps import _protective_step, lut_nearest
 from objectives.control.objective import ClosedLoopObjective
 from tests.reference import fuzzy_controller_reference as ref
 
