@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import yaml
 
-from objectives.control.plants.wmp.controllers.fuzzy import THESIS_OPTIMISED
-from objectives.control.plants.wmp.metrics import mae_weighted_cost, rise_time_s
 from objectives.control.objective import ClosedLoopObjective
+from objectives.control.plants.wmp.controllers.fuzzy import THESIS_OPTIMISED
 from objectives.control.plants.wmp.loop import THESIS_REQUIREMENTS
+from objectives.control.plants.wmp.metrics import mae_weighted_cost, rise_time_s
 
 CONFIGS = pathlib.Path(__file__).parents[2] / "configs"
 WMP_CONFIGS = ["wmp_fuzzy_protective.yaml", "wmp_pid.yaml", "wmp_lqr.yaml", "wmp_lqg.yaml"]
@@ -112,7 +112,8 @@ def test_every_wmp_config_shares_the_thesis_requirements(name):
     assert obj.loop.max_rise_time_s == THESIS_REQUIREMENTS["max_rise_time_s"] == 0.7
     assert obj.loop.max_mae_nu == THESIS_REQUIREMENTS["max_mae_nu"]
     assert obj.loop.max_mae_xi_deg_s == THESIS_REQUIREMENTS["max_mae_xi_deg_s"]
-    assert obj.loop.profile == "thesis_2s" and obj.loop.cost == {"alpha1": 1.4, "alpha2": 0.85, "beta": 1.6, "gamma": 0.4}
+    assert obj.loop.profile == "thesis_2s"
+    assert obj.loop.cost == {"alpha1": 1.4, "alpha2": 0.85, "beta": 1.6, "gamma": 0.4}
     ev = obj(obj.defaults)
     assert {"rise_time_nu_s", "rise_time_xi_s", "peak_theta3_deg", "peak_current_A"} <= set(ev.metrics)
 

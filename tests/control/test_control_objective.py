@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 import yaml
 
-from objectives.control.plants.wmp.metrics import log10_product, mae_weighted_cost, sae, sse, stae, stse
 from objectives.control.objective import ClosedLoopObjective
-from objectives.control.plants.wmp.report import plot_response
+from objectives.control.plants.wmp.metrics import log10_product, mae_weighted_cost, sae, sse, stae, stse
 from objectives.control.plants.wmp.profiles import THESIS_PROFILE, Profile, profile_from_config
+from objectives.control.plants.wmp.report import plot_response
 from tuner.objective import PENALTY
 
 CONFIGS = pathlib.Path(__file__).parents[2] / "configs"

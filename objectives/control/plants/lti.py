@@ -209,6 +209,7 @@ _LTI_DOC = ("{what}; options dt (discrete model's period), method (zoh | tustin)
 #: the registered kinds (objectives.control.plants.PLANTS): one builder for the three model forms
 TF = PlantKind("tf", frozenset(LTI_KEYS), lti_from_spec, "siso",
                _LTI_DOC.format(what="{num, den}: transfer function, highest power first"))
-ZPK = PlantKind("zpk", frozenset(LTI_KEYS), lti_from_spec, "siso", _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"))
+ZPK = PlantKind("zpk", frozenset(LTI_KEYS), lti_from_spec, "siso",
+                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"))
 SS = PlantKind("ss", frozenset(LTI_KEYS), lti_from_spec, "siso",
                _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"))

@@ -1,14 +1,15 @@
-"""Population evaluation of the closed-loop objective in one numba kernel (``backend: threads``).
+"""Population evaluation of the pendulum's loop in one numba kernel (``backend: threads``).
 
-:meth:`.loop.WMPLoop.evaluate_batch` (the objective's ``evaluate_batch`` for plant: wmp) comes here. The Python side builds each candidate's
-controller parameter array (a design that cannot be built fails as in the serial path); one
-``@njit(parallel=True)`` kernel then runs the closed-loop driver :func:`objectives.control.plants.wmp.model._simulate`
-for every candidate, threads sharing the reference profile and the sensor noise, and scores the run
-where it was simulated: the error measures of eqs. 2.34-2.35, the means and F of eq. 2.39, the rise
-times, IB settling time and peaks of :meth:`.loop.WMPLoop.evaluation`, with the summation order of NumPy
+:meth:`.loop.WMPLoop.evaluate_batch` (the objective's ``evaluate_batch`` for plant: wmp) comes here. The
+Python side builds each candidate's controller parameter array (a design that cannot be built fails as in
+the serial path); one ``@njit(parallel=True)`` kernel then runs the closed-loop driver
+:func:`objectives.control.plants.wmp.model._simulate` for every candidate, threads sharing the reference
+profile and the sensor noise, and scores the run where it was simulated: the error measures of eqs.
+2.34-2.35, the means and F of eq. 2.39, the rise times, IB settling time and peaks of
+:meth:`.loop.WMPLoop.evaluation`, with the summation order of NumPy
 (:func:`objectives.control.plants.wmp.metrics._measures_kernel`). Python only turns each candidate's row of
-:data:`_N_STATS` numbers into its :class:`~tuner.objective.Evaluation`, as ``_evaluation`` does, so each
-result equals what ``__call__`` returns, bit for bit (tests/control/test_closed_loop_batch.py).
+:data:`_N_STATS` numbers into its :class:`~tuner.objective.Evaluation`, as ``evaluation`` does, so each
+result equals what the objective's ``__call__`` returns, bit for bit (tests/control/test_closed_loop_batch.py).
 
 Candidates are claimed by the lanes one at a time (:mod:`objectives.batch_threads`): a robot that falls
 early costs little, and the other lane takes the next candidate instead of waiting. The simulation

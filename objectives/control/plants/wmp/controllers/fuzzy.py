@@ -94,6 +94,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.kinds import KIND_WMP_FLC, KIND_WMP_LUT_FUZZY, KIND_WMP_PROTECTIVE_FUZZY
 from objectives.control.plants.wmp.controllers.base import Controller
 from objectives.control.plants.wmp.controllers.fuzzy_steps import (
     _F1_C,
@@ -113,7 +114,6 @@ from objectives.control.plants.wmp.controllers.fuzzy_steps import (
     RULES_PROT,
     RULES_PROT_I,
 )
-from objectives.control.kinds import KIND_WMP_FLC, KIND_WMP_LUT_FUZZY, KIND_WMP_PROTECTIVE_FUZZY
 from objectives.fuzzy import TRAP, SugenoFIS, surface
 from objectives.params import Interval, Param, ParamSet
 

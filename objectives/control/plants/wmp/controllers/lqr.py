@@ -29,8 +29,8 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from objectives.control.plants.wmp.controllers.base import Controller
 from objectives.control.kinds import KIND_WMP_LQG, KIND_WMP_LQR
+from objectives.control.plants.wmp.controllers.base import Controller
 from objectives.control.plants.wmp.model import WMPParams, derivatives
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet
 

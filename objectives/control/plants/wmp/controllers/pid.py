@@ -38,8 +38,8 @@ import math
 
 import numpy as np
 
-from objectives.control.plants.wmp.controllers.base import Controller
 from objectives.control.kinds import KIND_WMP_PID
+from objectives.control.plants.wmp.controllers.base import Controller
 from objectives.control.plants.wmp.controllers.kernels import PID_STATE_SIZE
 from objectives.params import POSITIVE, Param, ParamSet
 
