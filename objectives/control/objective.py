@@ -92,10 +92,7 @@ class ClosedLoopObjective:
             return cls(plant=plant, controller=ctrl, fixed=dict(section.get("fixed") or {}), base_dir=base_dir,
                        **settings)
         except ValueError as exc:
-            error_key = getattr(loop, "error_key", None)
-            if error_key is None:
-                raise
-            raise ValueError(error_key(str(exc))) from None
+            raise ValueError(loop.error_key(str(exc))) from None
 
     # --- engine hooks (tuner.objective.TunableObjective) -----------------------------------------
     @property

@@ -178,6 +178,11 @@ class WMPLoop:
                 "fall_limit_deg": float(section.get("fall_limit_deg", 90.0)),
                 **{k: req.get(k) for k in _REQUIREMENT_KEYS}}
 
+    @staticmethod
+    def error_key(msg: str) -> str:
+        """``msg`` as it is: the pendulum's messages name their key (``plant_params``, ``profile``, ...)."""
+        return msg
+
     def settings(self) -> dict[str, Any]:
         """The settings this loop was built from (the objective pickles them)."""
         return {k: getattr(self, k) for k in _DEFAULTS}

@@ -18,6 +18,7 @@ import numpy as np
 
 from objectives.control.figure import new_figure, save_figure
 from objectives.control.plants.wmp.model import STATUS_OK
+from tuner.objective import Evaluation
 
 __all__ = ["plot_surfaces", "plot_response", "save_response", "traces_doc", "write_report"]
 
@@ -139,8 +140,6 @@ def save_response(loop: Any, params: Mapping[str, Any] | None, path: str | pathl
 
 def _score(loop: Any, params: Mapping[str, Any]) -> Any:
     """The objective's evaluation of ``params`` (a design that cannot be built fails, as in a run)."""
-    from tuner.objective import Evaluation
-
     try:
         sim = loop.simulate(params)
     except ValueError as exc:
