@@ -87,7 +87,7 @@ def build_plant(spec: Any, period_s: float, base_dir: Any, key: str = "objective
     """The plant of a mapping ``spec`` of the ``siso`` family (validated; ``ValueError`` starting with the
     key path otherwise)."""
     kind = plant_kind(spec, key)
-    return _load(kind.build)(spec, period_s, base_dir, key)
+    return kind.build(spec, period_s, base_dir, key)
 
 
 def loop_class(family: str) -> Any:

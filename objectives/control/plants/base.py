@@ -204,7 +204,7 @@ class PlantKind:
         The YAML type key (``plant: {tf: ...}``), or the bare name (``plant: wmp``) when ``named``.
     keys : frozenset of str
         Every key a plant mapping of this kind may hold (its own key included); checked before building.
-    build : callable or "module:function"
+    build : callable
         The builder the family's loop calls; for the ``siso`` family
         ``build(spec, period_s, base_dir, key) -> Plant``, ``ValueError`` starting with ``key`` for bad input.
     family : str
