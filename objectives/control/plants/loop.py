@@ -387,16 +387,12 @@ class SISOLoop:
         return self._heldout
 
     def runner(self, models: ModelSet, linear: bool = False) -> ItemRunner:
-        """An item runner of ``models`` over the scenarios; ``linear``: without actuator limits, quanta and
-        noise (the small-signal loop of :mod:`.robustness`)."""
+        """An item runner of ``models`` over the scenarios; ``linear``: without actuator limits, rate limit
+        and quanta (the small-signal loop of :mod:`.robustness`; the same noise)."""
         from objectives.control.plants.scenario import Realism
 
-        sigs = [c.sig.copy() for c in self.cases]
-        if linear:
-            for s in sigs:
-                s[:, 2:] = 0.0
-        return ItemRunner(models.plants, sigs, [c.win for c in self.cases], self.ctrl.kind,
-                          Realism() if linear else self._real)
+        real = Realism(noise_std=self._real.noise_std, seed=self._real.seed) if linear else self._real
+        return ItemRunner(models.plants, [c.sig for c in self.cases], [c.win for c in self.cases], self.ctrl.kind, real)
 
     @property
     def uncertainty_block(self) -> Any:

@@ -59,6 +59,8 @@ class ModelSet:
 
     def describe(self) -> str:
         """``"9 models (nominal, 8 corners)"``: the size and the make-up of the set."""
+        if len(self) == 1:
+            return "the nominal plant"
         kinds = {"nominal": 0, "corner": 0, "sample": 0}
         for lab in self.labels:
             kinds[lab.split(" ")[0]] += 1

@@ -5,9 +5,9 @@
 model set:
 
 - **tuning set**: the evaluation the optimiser saw (every model of the set, worst value, met on all);
-- **small signal**, whenever an actuator or controller limit exists: the same scenarios on the loop
-  without actuator limits, rate limit, quanta, controller output limits and measurement noise. For LTI
-  plants that loop is linear, so its overshoot, times and margins are those of any step small enough
+- **small signal**, whenever an actuator or controller limit exists: the same scenarios (the same
+  measurement noise) on the loop without actuator limits, rate limit, quanta and controller output
+  limits. For LTI plants that loop is linear, so its overshoot, times and margins are those of any step small enough
   that nothing saturates, and its amplitudes (errors, |u|) scale with the step: it is run at the
   scenario's own amplitude. A stepped plant (Python dynamics, FMU) is not linear, so its small-signal
   response is the loop driven at :data:`EPSILON` of the scenario's changes about its unforced run (the
@@ -77,7 +77,7 @@ class Assessment:
 
 def small_signal_method(loop: Any) -> str:
     """Which small-signal loop the checks use, and why (module docstring)."""
-    base = "the loop without actuator limits, rate limit, quanta, controller output limits and measurement noise"
+    base = "the loop without actuator limits, rate limit, quanta and controller output limits (the same noise)"
     if loop.linear:
         return (f"{base}, at the scenario's amplitude: the plant is linear, so overshoot, times and margins are those "
                 "of any step small enough that nothing saturates (errors and |u| scale with the step)")
@@ -86,7 +86,8 @@ def small_signal_method(loop: Any) -> str:
 
 
 def _limited(loop: Any, cp: np.ndarray, cp_lin: np.ndarray) -> bool:
-    return bool(loop._real.limited or loop._real.u_quantum > 0 or not np.array_equal(cp, cp_lin))
+    real = loop._real
+    return bool(real.limited or real.u_quantum > 0 or real.y_quantum > 0 or not np.array_equal(cp, cp_lin))
 
 
 def _set_result(loop: Any, name: str, models: Any, cp: np.ndarray, stats: np.ndarray) -> SetResult:

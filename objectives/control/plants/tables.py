@@ -31,9 +31,14 @@ def fmt(v: float) -> str:
     return f"{v:.4g}"
 
 
+def unit_words(unit: str) -> str:
+    """A unit as a column heading shows it: the plant's own ``output``/``input`` units in words."""
+    return f"{unit} units" if unit in ("output", "input") else unit
+
+
 def _limit(loop: Any, key: str, s: int | None) -> str:
     r = REQUIREMENTS[key]
-    unit = "" if r.unit == "1" else f" {r.unit}"
+    unit = "" if r.unit in ("1", "output", "input") else f" {r.unit}"
     lim = loop.cases[s].limits[key] if s is not None else loop._margin_req[key]
     text = f"{'<=' if r.sense == 'max' else '>='} {lim:g}{unit}"
     if key == "max_ss_error" and lim == 0.0 and s is not None:
@@ -68,7 +73,7 @@ def requirement_rows(loop: Any, tuned: Assessment, defaults: Assessment) -> list
         sets.append(("held-out", tuned.heldout, defaults.heldout, True))
     for key, s in loop.check_keys():
         r = REQUIREMENTS[key]
-        words = r.words + ("" if r.unit == "1" else f" ({r.unit})")
+        words = r.words + ("" if r.unit == "1" else f" ({unit_words(r.unit)})")
         scen = "-" if s is None or single else loop.cases[s].name
         for name, t_res, d_res, rate in sets:
             tv, tm, _ = _met(t_res, key, s, rate)
@@ -108,7 +113,7 @@ def saturation_notes(loop: Any, tuned: Assessment) -> list[str]:
     out = []
     for d in saturation_only(tuned):
         r = REQUIREMENTS[d["key"]]
-        unit = "" if r.unit == "1" else f" {r.unit}"
+        unit = "" if r.unit in ("1", "output", "input") else f" {r.unit}"
         scen = f" in scenario {loop.cases[d['scenario']].name}" if len(loop.cases) > 1 else ""
         out.append(f"{r.words}{scen} is met only through saturation: {fmt(d['tuned'])}{unit} in the tuning scenario, "
                    f"{fmt(d['small'])}{unit} small-signal (limit {_limit(loop, d['key'], d['scenario'])}); add a "
