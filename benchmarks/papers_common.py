@@ -41,7 +41,7 @@ MUCH = 2.0
 SCALES = ("ratio", "gain", "log10")
 KINDS = ("claim", "sensitivity", "untestable")
 
-RULES = f"""## Verdict rules (fixed before any result; `benchmarks/papers_common.py`)
+RULES = f"""## Verdict rules (computed by `benchmarks/papers_common.py`)
 
 Every row gives the paper's number as the interval its printed digits allow (a printed 0.73 is
 0.725-0.735, a printed range 0.5-0.6 is 0.45-0.65; a ratio or mean of printed numbers is computed
