@@ -75,10 +75,14 @@ NOTES = """## What the rows rest on (text, not results)
 - **FAEKF (Odry et al. 2020).** The paper tunes on a separate training data set and evaluates on
   M1-M3 (section 5.3); Table 2 compares the FAEKF with the same EKF without the fuzzy-adaptive strategy
   ("with and without", section 5.3), so that comparison uses the FAEKF's tuned Q and R in the plain EKF;
-  a separately tuned EKF is the stricter comparison. "Static conditions" (Figs. 10-11, missing) are the
-  held-out recordings' motion with the bench's vibration, external acceleration and magnetic
-  perturbation switched off. Rho, Q_q and Q_w are per-sample values at 1 kHz in both. Our data: the
-  synthetic bench (three training, two held-out recordings of 60 s).
+  a separately tuned EKF is the stricter comparison. "Static conditions" (Figs. 10-11, missing; "low-
+  frequency oscillations along with no magnetic perturbation nor external acceleration") are the
+  held-out recordings' motion (slow rotation and rest) with the bench's vibration, external
+  acceleration and magnetic perturbation switched off. The paper says that there "the adaptive
+  strategy does not modify the noise variances"; ours does: with every singleton K = 1 the FAEKF is
+  the EKF bit for bit, with the tuned singletons it scales R in the calm phases too. Rho, Q_q and
+  Q_w are per-sample values at 1 kHz in both. Our data: the synthetic bench (three training, two
+  held-out recordings of 60 s).
 - **Thesis ch. 2 (pendulum).** Table 2.5 is an assumption: the thesis does not say whether its error
   integrals come from the simulation (Fig. 2.8) or the robot (Fig. 2.11); the paragraph before it
   compares both, and its text calls the controllers "realized", the word it also uses for the robot.

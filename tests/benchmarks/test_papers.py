@@ -107,6 +107,22 @@ def test_ccf_with_alpha_one_is_the_ncf_in_both_readings():
         assert np.array_equal(get_filter("ccf")(alpha=1.0, Kp=3.0, Ki=0.05, alpha_mode=mode).run(rec), ncf)
 
 
+def test_faekf_without_adaptation_is_the_ekf_on_the_static_recordings():
+    """The static row compares the FAEKF with the EKF at the same Q, R: with every singleton K = 1 (no scaling of
+    R, what the paper says happens under static conditions) the two are the same filter, bit for bit, so the row
+    measures the adaptation alone."""
+    from benchmarks.papers_attitude import FAEKF_STATIC, _euler_geomean, _per_rec, _with_test
+
+    qr = {"rho": 5.0, "q_q": 2e-8, "q_w": 5e-9}
+    fa = objective(_with_test(section("faekf_bench6dof.yaml"), (101,), duration_s=8.0, **FAEKF_STATIC))
+    ekf = objective(_with_test(section("ekf_bench6dof.yaml"), (101,), duration_s=8.0, **FAEKF_STATIC))
+    ones = {k: 1.0 for k in fa.default_params() if k[:1] == "K" and k[1:].isdigit()}
+    assert len(ones) == 7
+    assert np.array_equal(_per_rec(fa, {**qr, **ones}, _euler_geomean), _per_rec(ekf, qr, _euler_geomean))
+    assert not np.array_equal(_per_rec(fa, {**qr, **ones, "K2": 24.0}, _euler_geomean),
+                              _per_rec(ekf, qr, _euler_geomean))
+
+
 def test_ccf_config_is_eq_14_over_alphas_0_to_1():
     from tuner.config import load_config
 
