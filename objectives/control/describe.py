@@ -30,7 +30,6 @@ def _plants() -> dict[str, Any]:
 def explain(name: str) -> dict[str, Any] | None:
     """The description of ``name`` (``tuner describe``), or None when it is none of the closed loop's."""
     from objectives.control.controllers import CONTROLLERS, get_controller
-
     from objectives.control.settings_doc import SETTINGS, describe_setting
 
     if name == "plant":

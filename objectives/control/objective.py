@@ -185,7 +185,6 @@ class ClosedLoopObjective:
         settings (``tuner list``)."""
         from objectives.control.controllers import CONTROLLERS
         from objectives.control.plants.wmp.profiles import PROFILES
-
         from objectives.control.settings_doc import SETTINGS
 
         return {"controllers": sorted(n for n in CONTROLLERS if n != "open_loop"),  # open_loop tunes nothing

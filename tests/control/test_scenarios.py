@@ -23,7 +23,8 @@ AGGRESSIVE = {"K": 155.55, "Ti_s": 0.180008, "Td_s": 0.0329339}
 
 
 def _obj(plant=None, controller="pid2dof", **kw):
-    sec = {"kind": "closed_loop", "plant": plant or MOTOR, "controller": controller, "period_s": kw.pop("period_s", 0.002)}
+    sec = {"kind": "closed_loop", "plant": plant or MOTOR, "controller": controller,
+           "period_s": kw.pop("period_s", 0.002)}
     sec.update(kw)
     return ClosedLoopObjective.from_config(sec)
 
@@ -62,8 +63,9 @@ BAD = {
                    "objective.aggregate.models.cvar: the tail mass alpha must be in (0, 1]"),
     "noise size": ({"scenarios": [{"duration_s": 1.0, "sensor": {"noise_std": [0.1, 0.2]}}]},
                    "objective.scenarios[0].sensor.noise_std: one value or 1 (one per measured signal), got 2"),
-    "negative overshoot in a scenario": ({"scenarios": [{"duration_s": 1.0, "requirements": {"max_overshoot_pct": -1}}]},
-                                         "objective.scenarios[0].requirements.max_overshoot_pct: -1 cannot be met"),
+    "negative overshoot in a scenario": (
+        {"scenarios": [{"duration_s": 1.0, "requirements": {"max_overshoot_pct": -1}}]},
+        "objective.scenarios[0].requirements.max_overshoot_pct: -1 cannot be met"),
 }
 
 
