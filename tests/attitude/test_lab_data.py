@@ -336,3 +336,14 @@ def test_align_spec_in_a_column_map_file_and_a_data_spec(tmp_path, level_log):
     rec = load_recording({"csv": {"path": str(level_log.path), "columns": "map.yaml", "start_s": 20,
                                   "stop_s": 30, "align": {"lag": 0.0137}}}, tmp_path)
     assert rec.name == "lab@20s-30s" and rec.n == 1000 and rec.meta["alignment"].lag_s == 0.0137
+
+
+@pytest.mark.slow
+def test_the_preflight_prints_what_reading_found(level_log):
+    """The run's preflight (what `tuner run` and `evaluate --data` print as warnings) carries the reading's lines."""
+    from objectives.attitude.objective import FilterObjective
+
+    spec = {"csv": {"path": str(level_log.path), **LAB_COLUMNS, "resample_hz": 100, "align": ALIGN_ALL}}
+    warnings = FilterObjective("madgwick", [spec], metric="broad_mean_rmse", warmup_s=1.0).preflight()
+    assert any("dropped 20 of 5402 rows" in w for w in warnings)
+    assert any("the IMU runs at 50" in w for w in warnings)
