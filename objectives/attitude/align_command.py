@@ -92,6 +92,11 @@ def align_rows(path: str | Path) -> list[dict[str, Any]]:
     return rows
 
 
+def _round(v: float, digits: int) -> float:
+    """``v`` rounded to ``digits`` decimals, 0.0 (never -0.0) when it rounds to zero."""
+    return round(v, digits) + 0.0
+
+
 def _line(row: Mapping[str, Any]) -> str:
     rates = f"{row['rate_hz']:.4g} Hz"
     if math.isfinite(row["imu_rate_hz"]) and abs(row["imu_rate_hz"] - row["log_rate_hz"]) > 1e-3 * row["rate_hz"]:
@@ -101,7 +106,7 @@ def _line(row: Mapping[str, Any]) -> str:
     a = row["alignment"]
     if a is None:
         return f"{row['name']}: {rates}; no truth to align"
-    b = ", ".join(f"{v:.4f}" for v in a["body"])
+    b = ", ".join(f"{_round(v, 4):.4f}" for v in a["body"])
     scale = ("gyro scale -" if not math.isfinite(a["gyro_scale"]) else
              f"gyro scale {a['gyro_scale']:.4f} (x {a['gyro_scale_axes'][0]:.4f}, y {a['gyro_scale_axes'][1]:.4f}, "
              f"z {a['gyro_scale_axes'][2]:.4f})")
@@ -114,7 +119,7 @@ def _line(row: Mapping[str, Any]) -> str:
 def _block(row: Mapping[str, Any]) -> str:
     a = row["alignment"]
     heading = "start" if "heading" in a["estimated"] else "none"
-    return (f"  align: {{lag: {a['lag_s']:.5f}, body: [{', '.join(f'{v:.5f}' for v in a['body'])}], "
+    return (f"  align: {{lag: {a['lag_s']:.5f}, body: [{', '.join(f'{_round(v, 5):.5f}' for v in a['body'])}], "
             f"heading: {heading}}}   # or lag: auto, body: auto to estimate them on every read")
 
 

@@ -40,7 +40,8 @@ _METRIC_OPTIONS = {"weights": "(3,) per-axis exponents of euler_mse_geomean (def
 _HEADING_OPTION = {"heading_offset": "none (default) or remove: per recording, the truth is first turned about "
                                      "the vertical by the constant heading offset that fits the estimate best "
                                      "(closed-form least squares, objectives.attitude.metrics.heading_offset)"}
-_CUT = {"start_s": "first second kept (optional)", "stop_s": "last second kept (optional)"}
+_CUT = {"start_s": "first second kept (optional); a window is named file@start-stop (e.g. imu@10s-70s)",
+        "stop_s": "last second kept (optional)"}
 
 
 def metric_names() -> list[str]:

@@ -299,7 +299,7 @@ class FilterObjective:
                                                                           self._mask(rec))
             if loaded is None:
                 self._data = self._data.with_split(split, recs)
-        return warnings
+        return list(dict.fromkeys(warnings))  # windows of one file read it once each: one line per finding
 
     def start_init(self) -> Any:
         """The start the filter uses: its fixed ``init`` option unless ``auto``, else ``q0``."""

@@ -347,3 +347,38 @@ def test_the_preflight_prints_what_reading_found(level_log):
     warnings = FilterObjective("madgwick", [spec], metric="broad_mean_rmse", warmup_s=1.0).preflight()
     assert any("dropped 20 of 5402 rows" in w for w in warnings)
     assert any("the IMU runs at 50" in w for w in warnings)
+
+
+@pytest.mark.slow
+def test_the_readme_walks_the_lab_example(tmp_path, monkeypatch, capsys):
+    """README "Another lab's data": the file make_lab_csv.py writes, `tuner align` on the job and the run print
+    what the README shows."""
+    import shutil
+
+    from tests.conftest import REPO
+    from tests.conftest import run_tuner as tuner
+
+    examples = REPO / "configs" / "examples"
+    monkeypatch.syspath_prepend(str(examples))
+    import make_lab_csv
+
+    make_lab_csv.main(tmp_path / "lab.csv")
+    for f in ("lab_columns.yaml", "lab_csv.yaml"):
+        shutil.copy(examples / f, tmp_path / f)
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("## Another lab's data"):readme.index("## Python API")]
+    monkeypatch.chdir(tmp_path)
+    assert _run_align("lab_csv.yaml") == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    shown = section[section.index("lab@10s-28s: 100 Hz"):]
+    assert " ".join(shown[:shown.index("```")].split()) == first
+    head = "\n".join((tmp_path / "lab.csv").read_text().splitlines()[:5])
+    assert [ln[:60] for ln in head.splitlines()] == [ln[:60] for ln in section.split("```")[1].strip().splitlines()]
+    out = tuner("run", "lab_csv.yaml", "--no-report", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    for text in ("dropped 20 of 3602 rows (0.555 %) whose stamp is not after the one before them",
+                 "the IMU runs at 50.01 Hz, the log at 89.85 Hz", "21 truth sample(s) NaN"):
+        assert text in out.stderr, text
+    scores = re.findall(r"madgwick\s+(train|test)\s+([\d.]+)", out.stdout)
+    assert [(s, f"{float(v):.2f}") for s, v in scores] == [("train", "3.72"), ("test", "4.90")]
+    assert "`broad_mean_rmse` 3.72 deg tuned, 4.90 deg held out" in " ".join(section.split())

@@ -206,7 +206,7 @@ def test_csv_errors_name_file_and_column(tmp_path):
     p4, _ = _csv(tmp_path / "time.csv", edit=twice)
     rec = load_csv(p4, COLS, time_unit="ms")  # the repeated stamp's row dropped, with one warning
     assert rec.n == 40 and rec.meta["read"].dropped_stamps == 1
-    assert rec.meta["warnings"] == [f"{p4}: dropped 1 of 41 rows (2.44 %) have a stamp not after the one before "
+    assert rec.meta["warnings"] == [f"{p4}: dropped 1 of 41 rows (2.44 %) whose stamp is not after the one before "
                                     "them (first at row 11: 0.045 s after 0.045 s)"]
     with pytest.raises(RecordingError, match=r"time\.csv: time: 1 of 41 rows .* more than max_dropped_share \(0\)"):
         load_csv(p4, COLS, time_unit="ms", max_dropped_share=0)

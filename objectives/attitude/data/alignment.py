@@ -256,7 +256,10 @@ def _quaternion(r: np.ndarray) -> tuple:
 
     x, y, z, w = Rotation.from_matrix(r).as_quat()
     q = np.array([w, x, y, z])
-    return tuple(float(v) for v in (q if w >= 0 else -q))
+    # w >= 0; within about a degree of a half turn (|w| < 0.01) the largest part > 0, so that the estimate of a
+    # half turn does not print as its negative for a difference of hundredths of a degree
+    lead = q[0] if abs(q[0]) >= 0.01 else q[1 + int(np.argmax(np.abs(q[1:])))]
+    return tuple(float(v) for v in (q if lead >= 0 else -q))
 
 
 def _angle_deg(q: tuple) -> float:

@@ -92,7 +92,7 @@ def csv_keys() -> list[dict[str, Any]]:
         return "one of " + ", ".join(table)
 
     return [
-        {"name": "path", "default": None, "doc": "the CSV file (header row of column names), relative to the config"},
+        {"name": "path", "default": None, "doc": "the CSV file (header rows: header_rows), relative to the config"},
         {"name": "columns", "default": None,
          "doc": "column map, inline or a YAML file: signal -> column name(s); signals "
                 + ", ".join(f"{k} ({n})" for k, n in _SIGNALS.items()) + "; gyr and acc required"},
@@ -105,7 +105,8 @@ def csv_keys() -> list[dict[str, Any]]:
         {"name": "rate_hz", "default": None, "doc": "a number > 0 (Hz): without a time column (or checked against it)"},
         {"name": "dt", "default": None, "doc": "a number > 0 (s): without a time column, instead of rate_hz"},
         {"name": "frame", "default": "ENU", "doc": "earth frame of the truth: ENU or NED"},
-        {"name": "name", "default": None, "doc": "recording name (default: the file stem)"},
+        {"name": "name", "default": None, "doc": "recording name (default: the file stem, and for a window of it "
+                                                 "file@start-stop)"},
         {"name": "quat_convention", "default": "sensor_to_earth",
          "doc": "sensor_to_earth or earth_to_sensor (conjugated on load)"},
         {"name": "delimiter", "default": ",", "doc": "field separator, e.g. ',' ';' or '\\t'"},
@@ -206,12 +207,13 @@ def _dropped_stamps(path: Path, t: np.ndarray, column: str, max_share: float) ->
         return keep, []
     i = int(np.argmax(~keep))
     share = n_drop / t.shape[0]
-    what = (f"{n_drop} of {t.shape[0]} rows ({100 * share:.3g} %) have a stamp not after the one before them "
-            f"(first at row {i + 1}: {t[i]:.6g} s after {t[:i].max():.6g} s)")
+    rows = f"{n_drop} of {t.shape[0]} rows ({100 * share:.3g} %)"
+    first = f"(first at row {i + 1}: {t[i]:.6g} s after {t[:i].max():.6g} s)"
     if share > max_share:
-        raise RecordingError(f"{path}: time: {what}; more than max_dropped_share ({max_share:g}) allows: is "
-                             f"{column!r} the time column, are the rows in order?")
-    return keep, [f"{path}: dropped {what}"]
+        raise RecordingError(f"{path}: time: {rows} have a stamp not after the one before them {first}; more than "
+                             f"max_dropped_share ({max_share:g}) allows: is {column!r} the time column, are the rows "
+                             "in order?")
+    return keep, [f"{path}: dropped {rows} whose stamp is not after the one before them {first}"]
 
 
 def _hint_uniform(exc: RecordingError, imu_rate: float | None) -> RecordingError:
