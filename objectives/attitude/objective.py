@@ -33,6 +33,12 @@ Metrics (lower is better):
 ``broad_mean_rmse``    mean over recordings of BROAD's total RMSE (deg) on motion samples: the
                        criterion of BROAD's trial-agnostic good parameters (TAGP).
 ``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
+``heading_rmse_mean``, ``inclination_rmse_mean``
+                       mean over recordings of BROAD's heading / inclination RMSE (deg): from the error
+                       quaternion, the same at any mounting (the Euler metrics warn near pitch +-90 deg).
+
+``metric_options.heading_offset: remove`` compares each recording with its truth turned by the constant heading
+offset that fits the estimate best (:func:`objectives.attitude.metrics.heading_offset`).
 
 A filter whose output is not finite, or whose error grows without bound (:mod:`objectives.attitude.divergence`)
 is a failed evaluation naming the recording. Each split's recordings load once per worker, on first use,

@@ -382,3 +382,21 @@ def test_the_readme_walks_the_lab_example(tmp_path, monkeypatch, capsys):
     scores = re.findall(r"madgwick\s+(train|test)\s+([\d.]+)", out.stdout)
     assert [(s, f"{float(v):.2f}") for s, v in scores] == [("train", "3.72"), ("test", "4.90")]
     assert "`broad_mean_rmse` 3.72 deg tuned, 4.90 deg held out" in " ".join(section.split())
+
+
+def test_a_bad_align_value_in_a_job_is_one_error_line(tmp_path):
+    import shutil
+
+    from tests.conftest import REPO, one_error_line
+    from tests.conftest import run_tuner as tuner
+
+    for f in ("imu.csv", "imu_columns.yaml"):
+        shutil.copy(REPO / "configs" / "examples" / f, tmp_path / f)
+    cfg = {"name": "a", "seed": 1, "objective": {
+        "kind": "filter", "filter": "madgwick", "metric": "broad_mean_rmse",
+        "data": [{"csv": {"path": "imu.csv", "columns": "imu_columns.yaml", "align": {"lag": "soon"}}}]},
+        "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
+    (tmp_path / "job.yaml").write_text(yaml.safe_dump(cfg))
+    one_error_line(tuner("run", "job.yaml", cwd=tmp_path), "job.yaml", "objective.data[0]", "imu.csv: align.lag: "
+                   "expected auto or a number of seconds, got 'soon'")
+    assert not (tmp_path / "runs").exists()

@@ -216,12 +216,15 @@ def _dropped_stamps(path: Path, t: np.ndarray, column: str, max_share: float) ->
     return keep, [f"{path}: dropped {rows} whose stamp is not after the one before them {first}"]
 
 
-def _hint_uniform(exc: RecordingError, imu_rate: float | None) -> RecordingError:
+def _hint_uniform(exc: RecordingError, imu_rate: float | None, warnings: list[str]) -> RecordingError:
+    """``exc`` of non-uniform stamps with the options that read such a file, and the rows dropped before."""
     msg = str(exc)
     if "not uniformly sampled" not in msg:
         return exc
     own = f" (the IMU's own rate is {imu_rate:.4g} Hz)" if imu_rate else ""
-    return RecordingError(msg.replace("resample the recording first", f"set resample_hz{own} or raise jitter_tol"))
+    dropped = [w.split(": ", 1)[1] for w in warnings if ": dropped " in w]
+    return RecordingError(msg.replace("resample the recording first", f"set resample_hz{own} or raise jitter_tol")
+                          + (f" ({dropped[0]})" if dropped else ""))
 
 
 def load_csv(
@@ -467,4 +470,4 @@ def _from_stamps(path: Path, t: np.ndarray, sig: dict, common: dict, column: str
     try:
         return Recording.from_time(grid, jitter_tol=jitter_tol, rate_hz=rate_hz, meta=meta, **signals, **common)
     except RecordingError as exc:
-        raise _hint_uniform(exc, imu_rate if hold else None) from None
+        raise _hint_uniform(exc, imu_rate if hold else None, warnings) from None
