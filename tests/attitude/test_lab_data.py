@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from objectives.attitude.align_command import ALIGN, align_rows
-from objectives.attitude.data.alignment import AlignSpec, estimate_alignment
+from objectives.attitude.data.alignment import AlignSpec, alignments, estimate_alignment
 from objectives.attitude.data.bench6dof import bench6dof
 from objectives.attitude.data.csv import load_csv
 from objectives.attitude.data.csv_table import column_names, read_table
@@ -224,6 +224,7 @@ def test_lab_log_read_with_options_only_estimates_within_1ms_and_01deg(which, re
     err = _angle_deg(rec.quat[np.isfinite(rec.quat).all(axis=1)], q_true[np.isfinite(rec.quat).all(axis=1)])
     assert np.percentile(err, 99) < 0.1 and err.max() < 0.2
     assert rec.meta["warnings"] and all(w.startswith(str(log.path)) for w in rec.meta["warnings"])
+    assert alignments([rec, _read(log, resample_hz=100)]) == {"lab" if which == "level_log" else "start": a.as_dict()}
 
 
 @pytest.mark.slow
@@ -400,3 +401,12 @@ def test_a_bad_align_value_in_a_job_is_one_error_line(tmp_path):
     one_error_line(tuner("run", "job.yaml", cwd=tmp_path), "job.yaml", "objective.data[0]", "imu.csv: align.lag: "
                    "expected auto or a number of seconds, got 'soon'")
     assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.slow
+def test_heading_mean_without_disturbances_and_a_short_rest(tmp_path):
+    """heading: mean averages every sample: on a log that rests 2 s only (too short for start's precision) and has
+    neither external accelerations nor field disturbances, it finds the frame within 0.05 deg."""
+    log = lab_log(tmp_path / "calm.csv", seed=2, disturbances=False, start_static_s=2.0)
+    a = _read(log, resample_hz=100, align={"lag": "auto", "body": "auto", "heading": "mean"}).meta["alignment"]
+    assert _angle_deg(a.frame, log.frame)[0] < 0.05 and abs(a.heading_offset_deg - log.heading_deg) < 0.05

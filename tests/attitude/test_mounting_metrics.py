@@ -86,6 +86,7 @@ def test_heading_and_inclination_metrics_are_broads_angles(bench):
         assert cvar == pytest.approx(max(e.as_dict()[key] for e in ref), rel=1e-9)
 
 
+@pytest.mark.slow  # the batch kernel compiles when its cache is cold
 def test_heading_offset_option_runs_serially_and_is_checked(bench):
     obj = _objective("broad_mean_rmse", [bench], heading_offset="remove")
     assert evaluate_batch(obj, [{}], 1) is None  # the truth depends on each candidate: no batch kernel

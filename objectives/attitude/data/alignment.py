@@ -51,7 +51,7 @@ import numpy as np
 from objectives.attitude.data.recording import RecordingError
 from objectives.attitude.data.timebase import body_rates, slerp
 
-__all__ = ["AlignSpec", "Alignment", "estimate_alignment", "ALIGN_KEYS", "MOTION_RAD_S", "MIN_SPREAD",
+__all__ = ["AlignSpec", "Alignment", "estimate_alignment", "alignments", "ALIGN_KEYS", "MOTION_RAD_S", "MIN_SPREAD",
            "START_MIN_S", "START_MAX_S"]
 
 #: the keys of an ``align:`` block
@@ -386,3 +386,9 @@ def estimate_alignment(t: np.ndarray, gyr: np.ndarray, acc: np.ndarray, mag: np.
     heading, tilt = _twist(q_frame)
     return Alignment(**{**out.__dict__, "frame": q_frame, "heading_offset_deg": heading, "frame_tilt_deg": tilt,
                         "estimated": (*estimated, "heading")})
+
+
+def alignments(recordings: Any) -> dict[str, dict[str, Any]]:
+    """``{recording name: Alignment.as_dict()}`` of the recordings read with an ``align:`` block (what a run
+    stores and prints; recordings without one are left out)."""
+    return {r.name: r.meta["alignment"].as_dict() for r in recordings if "alignment" in r.meta}

@@ -76,7 +76,8 @@ def lab_log(path: str | Path, *, duration_s: float = 60.0, seed: int = 3, imu_ra
             log_rate_hz: float = 90.0, lag_s: float = 0.0137, body_deg: tuple = (180.0, 2.5),
             heading_deg: float = 37.0, relative_to_start: bool = False, gyro_scale: float = 0.97,
             jitter_s: float = 0.002, duplicates: int = 20, gap_s: float = 0.19, dropouts: int = 2,
-            spikes: int = 3, zero_quaternions: int = 1, start_static_s: float = 15.0) -> LabLog:
+            spikes: int = 3, zero_quaternions: int = 1, start_static_s: float = 15.0,
+            disturbances: bool = True) -> LabLog:
     """Write another lab's log (module docstring) to ``path`` and return what it was written with.
 
     Parameters
@@ -107,6 +108,8 @@ def lab_log(path: str | Path, *, duration_s: float = 60.0, seed: int = 3, imu_ra
         Truth rows left empty, written with the marker turned by 120 deg, written as zeros.
     start_static_s : float
         The log starts at rest for about this long, s.
+    disturbances : bool
+        bench6dof's external accelerations and magnetic disturbances (off: gravity and the earth's field only).
     """
     from objectives.attitude.data.bench6dof import bench6dof
     from objectives.attitude.data.timebase import slerp
@@ -117,7 +120,8 @@ def lab_log(path: str | Path, *, duration_s: float = 60.0, seed: int = 3, imu_ra
         raise ValueError(f"imu_rate_hz must divide {_FINE_HZ:g} Hz, got {imu_rate_hz!r}")
     lead = 0.5  # s of motion before the first row: the lagged truth exists from the first row on
     rec = bench6dof(duration_s=duration_s + 2 * lead + 0.5, rate_hz=_FINE_HZ, seed=seed, frame="ENU",
-                    vibration=False, start_static_s=start_static_s + lead, gyr_scale=(gyro_scale - 1.0,) * 3)
+                    vibration=False, start_static_s=start_static_s + lead, gyr_scale=(gyro_scale - 1.0,) * 3,
+                    external_acc=disturbances, mag_perturbation=disturbances)
     rng = np.random.default_rng(np.random.SeedSequence([seed, 39]))
     t_fine = np.arange(rec.n) / _FINE_HZ
     n_imu = (rec.n - step) // step
