@@ -320,9 +320,10 @@ def test_filter_report_shows_the_worst_recording_first(filter_run):
     traces = read_traces(filter_run)
     assert [it["name"] for it in traces["items"]] == worst  # every recording, worst first
     assert {p["title"] for p in traces["items"][0]["panels"]} >= {"heading error", "inclination error"}
-    assert (filter_run / "figures" / f"errors_{worst[0]}.png").exists()
+    figure = f"errors_{worst[0].replace('@', '_')}.png"  # a 60 s window's name (trial@0s-60s) as a file name
+    assert (filter_run / "figures" / figure).exists()
     md = (filter_run / "report.md").read_text()
-    assert f"(figures/errors_{worst[0]}.png)" in md and "summary table" not in md  # the terminal table is not repeated
+    assert f"(figures/{figure})" in md and "summary table" not in md  # the terminal table is not repeated
     assert "| train fitness |" not in md and "| best fitness |" in md  # the best fitness is the train fitness
     assert "| beta | " in md and "rad/s |" in md  # units in the best-parameters table
 
