@@ -106,8 +106,8 @@ def test_fmu_parameters_under_uncertainty_are_the_transfer_function_models(fmu_d
     common = {"kind": "closed_loop", "controller": "pid2dof", "period_s": 0.01, "fixed": {"K": 2.0, "Ti_s": 0.3},
               "scenario": {"duration_s": 1.0, "reference": [{"t": 0.1, "value": 1.0}]}}
     tune = {"corners": True, "samples": 2, "seed": 3}
-    a = ClosedLoopObjective.from_config({**common, "plant": {"fmu": "first_order.fmu", "inputs": ["u"], "outputs": ["y"],
-                                                             "parameters": {"K": 2.0, "T": 0.5}},
+    fmu = {"fmu": "first_order.fmu", "inputs": ["u"], "outputs": ["y"], "parameters": {"K": 2.0, "T": 0.5}}
+    a = ClosedLoopObjective.from_config({**common, "plant": fmu,
                                          "uncertainty": {"parameters": {"parameters.K": {"rel": 0.3},
                                                                         "parameters.T": [0.3, 0.8]}, "tune": tune}},
                                         fmu_dir)

@@ -3,6 +3,7 @@ directly and python-control's frequency responses and margins, and the held-out 
 independent per-model computation."""
 
 import math
+from pathlib import Path
 
 import control
 import numpy as np
@@ -18,6 +19,7 @@ from objectives.control.plants.tables import heldout_summary
 from objectives.control.plants.uncertainty import draw_models, uncertainty_from_spec
 
 TF = {"tf": {"num": [2.0], "den": [0.5, 1.5, 1.0]}, "delay_s": 0.1}
+EXAMPLES = Path(__file__).resolve().parents[2] / "configs" / "examples"
 
 
 def _obj(plant=None, controller="pid2dof", **kw):
@@ -30,7 +32,8 @@ def _obj(plant=None, controller="pid2dof", **kw):
 BAD = {
     "unknown name": ({"parameters": {"tf.den[5]": [0, 1]}},
                      "objective.uncertainty.parameters.tf.den[5]: not a parameter of this plant (did you mean"),
-    "lists what it has": ({"parameters": {"mass": [0, 1]}}, "it has tf.num[0], tf.den[0], tf.den[1], tf.den[2], delay_s"),
+    "lists what it has": ({"parameters": {"mass": [0, 1]}},
+                          "it has tf.num[0], tf.den[0], tf.den[1], tf.den[2], delay_s"),
     "nominal outside": ({"parameters": {"tf.num[0]": [2.5, 3.0]}},
                         "objective.uncertainty.parameters.tf.num[0]: the nominal value 2 is outside [2.5, 3]"),
     "rel of one": ({"parameters": {"tf.num[0]": {"rel": 1.0}}},
@@ -177,3 +180,37 @@ def test_python_plant_parameters_share_one_compiled_loop():
     assert sum(1 for f in _JITTED if getattr(f, "__name__", "") == "stiff") == 1
     direct = _obj({**spec, "params": {"lam": 3.0}}, period_s=0.05, fixed={"K": 1.0, "Ti_s": 0.5})
     assert np.array_equal(o.loop.simulate({}, 2)["y"], direct.simulate({})["y"])
+
+
+@pytest.mark.slow
+def test_robust_run_on_threads_equals_the_serial_run(tmp_path):
+    """A short robust tuning (13 models x 2 scenarios per candidate): backend threads (the population kernel)
+    writes the history the serial backend writes, row for row."""
+    import yaml
+
+    from tuner.api import tune
+
+    raw = yaml.safe_load((EXAMPLES / "dc_motor_robust.yaml").read_text())
+    raw["optimizer"] = {"method": "pso", "population": 8, "generations": 3, "init_spread": 0.2,
+                        "x0": {"K": 185.0, "Ti_s": 1.7, "Td_s": 0.06}}  # near the robust optimum: some feasible
+    hist = {}
+    for backend in ("serial", "threads"):
+        raw["parallel"] = {"backend": backend, "n_jobs": 2}
+        raw["output"] = str(tmp_path / backend)
+        hist[backend] = tune(raw, report=False).history.drop(columns=["seconds"])
+    assert hist["serial"].equals(hist["threads"])
+    assert (hist["serial"]["status"] == "failed").any() and (hist["serial"]["status"] == "ok").any()
+
+
+def test_describe_answers_for_every_setting_of_the_generic_loop():
+    from tests.conftest import run_tuner
+
+    for name, words in (("requirements", "max_load_peak_error"), ("scenario", "duration_s"),
+                        ("scenarios", "weight"), ("actuator", "rate_limit"), ("sensor", "noise_std"),
+                        ("cost", "itae"), ("aggregate", "cvar"), ("uncertainty", "validate.samples")):
+        res = run_tuner("describe", name)
+        assert res.returncode == 0 and words in res.stdout, (name, res.stdout, res.stderr)
+    res = run_tuner("describe", "requirements")
+    line = next(x for x in res.stdout.splitlines() if x.strip().startswith("max_ms"))
+    assert " 1 " in line and "every model" in line  # unit and where it is measured
+    assert "settings" in run_tuner("list", "settings").stdout
