@@ -57,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="tuner", formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EPILOG,
         description="Tune attitude filters and robot controllers by global optimisation "
                     "(PSO, CMA-ES, differential evolution).")
-    from tuner import __version__
+    from tuner._version import __version__
 
     ap.add_argument("--version", action="version", version=f"tuner {__version__}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from tuner import signals as stop_signals
+from tuner._version import __version__
 from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import sigint_count
@@ -135,8 +136,6 @@ def _versions() -> dict[str, str]:
             out[mod] = version(dist)
         except PackageNotFoundError:  # pragma: no cover
             out[mod] = ""
-    from tuner import __version__
-
     out["tuner"] = __version__
     return out
 
