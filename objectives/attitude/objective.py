@@ -555,8 +555,8 @@ class FilterObjective:
         """The deployed filter instance of ``params`` (``.run(gyr, acc, mag, rate_hz=...)``, ``.stream()``)."""
         return _deployment.filter_build(self, params)
 
-    export_c_filter = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-filter)
-    verify_c_filter = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
+    export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
+    verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:
