@@ -16,7 +16,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from tuner.rundir import RunDir, RunError
+from tuner.records import RunError
+from tuner.rundir import RunDir
 from tuner.space import Real, Space, SpaceError
 
 __all__ = ["ReportWarning", "bound_warnings", "failure_warnings", "run_warnings", "BOUND_TOL"]

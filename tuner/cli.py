@@ -16,8 +16,8 @@ from tuner._version import __version__
 from tuner.commands import ENGINE, add_command, engine_command, load_plugin, plugin_names
 from tuner.commands.common import UsageError
 from tuner.config import ConfigError
+from tuner.records import RunError
 from tuner.registry import RegistryError
-from tuner.rundir import RunError
 from tuner.space import SpaceError
 
 __all__ = ["main", "build_parser", "UsageError"]

@@ -25,18 +25,13 @@ from pathlib import Path
 from typing import Any
 
 from tuner.objective import hook
+from tuner.records import plain
 
 __all__ = ["Deployment", "SOURCES", "DEFAULTS_MEANING", "as_deployment", "attach_deployment", "defaults_baseline",
            "deployment_for", "load_best", "load_deployment"]
 
 #: where a value of :attr:`Deployment.values` comes from
 SOURCES = ("searched", "fixed", "default")
-
-
-def _plain(v: Any) -> Any:
-    from tuner.rundir import plain
-
-    return plain(v)
 
 
 @dataclass(frozen=True)
@@ -113,7 +108,7 @@ class Deployment:
         doc["sample_rate_hz"] = self.sample_rate_hz
         if self.notes:
             doc["notes"] = list(self.notes)
-        return _plain(doc)
+        return plain(doc)
 
     @classmethod
     def from_doc(cls, doc: Any, where: str = "deployment") -> Deployment:
@@ -179,7 +174,7 @@ def deployment_for(objective: Any, params: Mapping[str, Any], searched: Collecti
         name = str(obj.get("function") or obj.get("callable") or obj.get("name") or getattr(objective, "__name__", ""))
         rate_fn = hook(objective, "sample_rate")
         rate = rate_fn()[0] if rate_fn is not None else None
-        dep = Deployment(kind, name, _plain(dict(params)), sources={k: "searched" for k in params},
+        dep = Deployment(kind, name, plain(dict(params)), sources={k: "searched" for k in params},
                          sample_rate_hz=rate)
     if searched is None and not fixed:
         return dep
@@ -199,10 +194,11 @@ def load_deployment(run_dir: str | Path) -> Deployment:
     """The deployment of a finished run: ``best.yaml``'s ``deployment:``, else rebuilt from its config.
 
     Runs written before ``best.yaml`` held the deployment are rebuilt from their resolved config and
-    best parameters (the objective must still build). Raises :class:`tuner.rundir.RunError` naming the
+    best parameters (the objective must still build). Raises :class:`tuner.records.RunError` naming the
     file when the run has no best or a malformed deployment.
     """
-    from tuner.rundir import RunDir, RunError
+    from tuner.records import RunError
+    from tuner.rundir import RunDir
 
     rd = RunDir(run_dir)
     best = rd.best()
@@ -230,7 +226,7 @@ def load_best(run_dir: str | Path) -> dict[str, Any]:
 
 
 def attach_deployment(best: Any, objective: Any, space: Any) -> Any:
-    """``best`` (a :class:`tuner.rundir.Best`) with its deployment under ``objective`` and ``space``.
+    """``best`` (a :class:`tuner.records.Best`) with its deployment under ``objective`` and ``space``.
 
     A deployment that cannot be built (the hook raises ``ValueError`` or ``TypeError``) is recorded as
     ``{"error": text}``, so the finished run is kept and :func:`load_deployment` says why it has none.

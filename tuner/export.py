@@ -109,9 +109,10 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
 def _deployment(run_dir: Path) -> Any:
     """The run's :class:`tuner.deployment.Deployment`, or None when ``best.yaml`` records none and the
     objective no longer builds (an older run: the parameters of ``best.yaml`` are exported then). A
-    recorded but malformed deployment is a :class:`tuner.rundir.RunError` naming the file."""
+    recorded but malformed deployment is a :class:`tuner.records.RunError` naming the file."""
     from tuner.deployment import load_deployment
-    from tuner.rundir import RunDir, RunError
+    from tuner.records import RunError
+    from tuner.rundir import RunDir
 
     if RunDir(run_dir).best().deployment:
         return load_deployment(run_dir)

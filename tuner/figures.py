@@ -79,8 +79,8 @@ def _log_y_if_wide(ax, values: np.ndarray) -> None:
 
 
 def load_history(run_dir: Path) -> pd.DataFrame:
-    """``history.csv`` as a frame; a missing or unparsable file raises :class:`tuner.rundir.RunError`."""
-    from tuner.rundir import RunError
+    """``history.csv`` as a frame; a missing or unparsable file raises :class:`tuner.records.RunError`."""
+    from tuner.records import RunError
 
     p = Path(run_dir) / "history.csv"
     if not p.is_file():
@@ -289,8 +289,9 @@ def responses_figure(sweep_dir: Path, done: pd.DataFrame):
     hook (e.g. a closed-loop sweep: speed, yaw rate, IB angle and current).
     """
     from tuner.objective import hook
+    from tuner.records import RunError
     from tuner.registry import build_objective
-    from tuner.rundir import RunDir, RunError
+    from tuner.rundir import RunDir
 
     jobs = Path(sweep_dir) / "jobs"
     curves: dict[str, tuple[float, dict[str, Any]]] = {}

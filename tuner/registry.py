@@ -107,7 +107,7 @@ class PythonObjective:
 
     def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
         """The parameters as they are: a user callable declares nothing else."""
-        from tuner.rundir import plain
+        from tuner.records import plain
 
         values = plain(dict(params))
         return {"kind": "python", "name": self.callable, "values": values,
