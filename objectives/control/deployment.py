@@ -12,6 +12,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from tuner.deployment import Deployment, build_deployment
+
 __all__ = ["controller_deployment", "controller_build"]
 
 #: the objective's fields that only serve scoring the closed loop in simulation
@@ -19,20 +21,14 @@ _SCORING = ("plant_params", "sensors", "profile", "cost", "noise_seed", "duratio
             "max_mae_nu", "max_mae_xi_deg_s", "max_rise_time_s", "max_settle_theta3_s")
 
 
-def controller_deployment(obj: Any, params: Mapping[str, Any]) -> dict[str, Any]:
-    """The deployment document of ``params`` (see :class:`tuner.deployment.Deployment`)."""
-    from tuner.deployment import param_annotations
-    from tuner.rundir import plain
-
+def controller_deployment(obj: Any, params: Mapping[str, Any]) -> Deployment:
+    """The deployment of ``params`` (:func:`tuner.deployment.build_deployment`)."""
     cls = obj._cls
-    values = cls.resolve({**obj.fixed, **params})
-    sources = {k: ("searched" if k in params else "fixed" if k in obj.fixed else "default") for k in values}
-    units, docs, choices = param_annotations(cls.decl)
-    scoring = {k: getattr(obj, k) for k in _SCORING if getattr(obj, k) is not None}
-    notes = [f"the controller runs every Ts_s = {obj._sensors.Ts_s:g} s"]
-    return plain({"kind": "closed_loop", "name": obj.controller, "values": values, "sources": sources,
-                  "units": units, "docs": docs, "choices": choices, "scoring": scoring,
-                  "sample_rate_hz": 1.0 / float(obj._sensors.Ts_s), "notes": notes})
+    return build_deployment("closed_loop", obj.controller, cls.resolve({**obj.fixed, **params}), searched=params,
+                            fixed=obj.fixed, decl=cls.decl,
+                            scoring={k: getattr(obj, k) for k in _SCORING if getattr(obj, k) is not None},
+                            sample_rate_hz=1.0 / float(obj._sensors.Ts_s),
+                            notes=[f"the controller runs every Ts_s = {obj._sensors.Ts_s:g} s"])
 
 
 def controller_build(obj: Any, params: Mapping[str, Any]) -> Any:

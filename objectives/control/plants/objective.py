@@ -42,6 +42,7 @@ from objectives.control.plants.scenario import (
     step_metrics,
 )
 from objectives.control.plants.simulate import simulate_loop
+from tuner.deployment import Deployment, build_deployment
 from tuner.objective import Evaluation
 from tuner.space import Real, Space
 
@@ -236,23 +237,16 @@ class LoopObjective:
             rows.append({"requirement": key, "what": what, "limit": lim, "value": v, "met": met})
         return rows
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned controller (every declared value) and its period; the plant, scenario,
         actuator, sensor, cost and requirements only serve scoring."""
-        from tuner.rundir import plain
-
-        values = self._decl.validate({**self.fixed, **params})
-        sources = {k: ("searched" if k in params else "fixed" if k in self.fixed else "default") for k in values}
-        units = {p.name: p.unit for p in self._decl if p.unit}
-        docs = {p.name: p.doc for p in self._decl if p.doc}
-        choices = {p.name: list(p.choices) for p in self._decl if p.choices}
-        scoring = {"plant": self.plant, "scenario": self.scenario, "actuator": self.actuator, "sensor": self.sensor,
-                   "cost": self.cost, "requirements": self.requirements}
-        notes = [f"the controller runs every period_s = {float(self.period_s):g} s; its discrete coefficients are "
-                 "in the export's tables"]
-        return plain({"kind": "closed_loop", "name": self.controller, "values": values, "sources": sources,
-                      "units": units, "docs": docs, "choices": choices, "scoring": scoring,
-                      "sample_rate_hz": 1.0 / float(self.period_s), "notes": notes})
+        return build_deployment(
+            "closed_loop", self.controller, self._decl.validate({**self.fixed, **params}), searched=params,
+            fixed=self.fixed, decl=self._decl, sample_rate_hz=1.0 / float(self.period_s),
+            scoring={"plant": self.plant, "scenario": self.scenario, "actuator": self.actuator,
+                     "sensor": self.sensor, "cost": self.cost, "requirements": self.requirements},
+            notes=[f"the controller runs every period_s = {float(self.period_s):g} s; its discrete coefficients "
+                   "are in the export's tables"])
 
     def build(self, params: Mapping[str, Any]) -> DeployedController:
         """The deployed controller of ``params``: every value and the kernel coefficients at the period."""
