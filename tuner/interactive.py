@@ -41,8 +41,8 @@ from importlib.util import find_spec
 from pathlib import Path
 from typing import Any
 
-from tuner.plots import Drawn, figures_md
-from tuner.render import md_escape, md_path
+from tuner.plots import Drawn, figures_md, objective_md
+from tuner.render import md_escape
 
 __all__ = ["available", "install_assets", "SCRIPTS", "run_figures", "page_data", "read_traces"]
 
@@ -125,11 +125,7 @@ def run_figures(run_dir: Path, drawn: list[Drawn], objective_pngs: list[Path],
         if traces.get("note"):
             md += [md_escape(traces["note"]), ""]
         md += ["{{plot:traces}}", ""]
-    for png in objective_pngs:
-        if png.name not in replaced:
-            name = png.stem.replace("_", " ")
-            md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
-    return md, data
+    return md + objective_md([p for p in objective_pngs if p.name not in replaced]), data
 
 
 def page_data(drawn: list[Drawn]) -> dict[str, Any]:

@@ -29,9 +29,9 @@ from tuner import interactive
 from tuner.bounds import run_space, run_warnings
 from tuner.dashboard import find_dashboard, write_dashboard
 from tuner.deployment import DEFAULTS_MEANING
-from tuner.plots import RUN_PLOTS, Drawn, draw, figures_md, plot_files
+from tuner.plots import RUN_PLOTS, Drawn, draw, figures_md, objective_md, plot_files
 from tuner.plots.context import RunContext, load_history
-from tuner.render import fmt_num, md_escape, md_path, write_text_atomic
+from tuner.render import fmt_num, md_escape, write_text_atomic
 from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
@@ -280,7 +280,8 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     md += _results_md(s)
     at_figures = len(md)
     drawn, own = _figures(run_dir, s, space, live)
-    md += ["## Figures", ""] + (figures_md(drawn, run_dir) + _own_md(own) if drawn else ["(no evaluation yet)", ""])
+    md += ["## Figures", ""] + (figures_md(drawn, run_dir) + objective_md(own) if drawn
+                                else ["(no evaluation yet)", ""])
     after_figures = len(md)
     files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
              ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
@@ -418,12 +419,3 @@ def _figures(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[
     mine = plot_files(RUN_PLOTS)
     own = [] if live and s["status"] == "running" else [p for p in sorted(figs.glob("*.png")) if p.name not in mine]
     return drawn, own
-
-
-def _own_md(own: list[Path]) -> list[str]:
-    """The objective's own figures, each under its file name."""
-    md = []
-    for png in own:
-        name = png.stem.replace("_", " ")
-        md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
-    return md

@@ -39,7 +39,7 @@ from tuner.plots import (
 )
 from tuner.render import md_escape, md_path
 
-__all__ = ["RUN_PLOTS", "SWEEP_PLOTS", "Drawn", "register", "draw", "figures_md", "plot_files"]
+__all__ = ["RUN_PLOTS", "SWEEP_PLOTS", "Drawn", "register", "draw", "figures_md", "objective_md", "plot_files"]
 
 #: a run report's plots, in the order the report shows them
 RUN_PLOTS: list[Any] = [convergence, importance, slices, parcoords, contour]
@@ -92,6 +92,15 @@ def figures_md(drawn: list[Drawn], base: Path, interactive: bool = False) -> lis
             md += [f"{{{{plot:{d.plot.NAME}}}}}", ""]
         else:
             md += [f"![{md_escape(d.title)}]({md_path(d.png.relative_to(base).as_posix())})", ""]
+    return md
+
+
+def objective_md(pngs: list[Path]) -> list[str]:
+    """The objective's own figures (the PNGs its ``finalize`` hook wrote into ``figures/``), each under its name."""
+    md: list[str] = []
+    for png in pngs:
+        name = png.stem.replace("_", " ")
+        md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
     return md
 
 
