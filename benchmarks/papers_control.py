@@ -66,7 +66,7 @@ def _objective(config: str = "wmp_fuzzy_protective.yaml", **over):
 
 
 def _table_24(obj, params: dict) -> dict[str, float]:
-    from objectives.control.metrics import settling_time_s
+    from objectives.control.plants.wmp.metrics import settling_time_s
 
     ev = obj(params)
     sim = obj.simulate(params)
@@ -119,7 +119,7 @@ def tables_24_25_rows(noise_seeds: Sequence[int]) -> list[Row]:
 def f_band_rows() -> list[Row]:
     """F at Table 2.7's initial values over the step spacings and run lengths the text leaves open; the
     ratio F(Table 2.7 optimised) / F(initial), which the run length does not move."""
-    from objectives.control.controllers.fuzzy import THESIS_OPTIMISED
+    from objectives.control.plants.wmp.controllers.fuzzy import THESIS_OPTIMISED
 
     yaw = (30.0, 0.0, -70.0, 0.0)
     f0s, ratios = [], []

@@ -68,6 +68,7 @@ from objectives.attitude.objective_options import (
     check_prior,
 )
 from objectives.attitude.prepared import DataSplit, Prepared, Split, check_split, prepare
+from tuner.deployment import Deployment
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
@@ -547,7 +548,7 @@ class FilterObjective:
             out.append((fname, sides[0], sides[1]))
         return out
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned filter: every value, scoring-only settings apart (objectives.attitude.deployment)."""
         return _deployment.filter_deployment(self, params)
 

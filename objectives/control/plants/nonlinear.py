@@ -37,7 +37,9 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["NonlinearPlant", "nonlinear_from_spec", "import_relative", "NL_KEYS"]
+from objectives.control.plants.base import PlantKind, SteppedPlant, rk4_stepper
+
+__all__ = ["NonlinearPlant", "nonlinear_from_spec", "import_relative", "NL_KEYS", "PYTHON"]
 
 NL_KEYS = {"python", "x0", "params", "n_inputs", "outputs", "output", "inner_output", "n_sub", "delay_s",
            "linearize_at"}
@@ -55,8 +57,9 @@ def _rk4_amp(z: complex) -> float:
 
 
 @dataclass
-class NonlinearPlant:
-    """A nonlinear plant ``dx/dt = f(x, u, t, params)`` (see the module docstring)."""
+class NonlinearPlant(SteppedPlant):
+    """A nonlinear plant ``dx/dt = f(x, u, t, params)`` (module docstring): the stepped variant of the
+    ``Plant`` protocol (:class:`~objectives.control.plants.base.SteppedPlant`), advanced by RK4."""
 
     callable: str
     x0: np.ndarray
@@ -81,6 +84,14 @@ class NonlinearPlant:
     @property
     def n_outputs(self) -> int:
         return self.outputs.size
+
+    def stepper(self):
+        """The loop kernel and RK4 compiled with ``fn`` when numba compiles it, else both in Python."""
+        return rk4_stepper(self.compiled)
+
+    def named_parameters(self) -> dict[str, float]:
+        """``params`` (the dynamics' named constants)."""
+        return dict(self.params._asdict())
 
     def rhs(self, x: np.ndarray, u: np.ndarray, t: float = 0.0) -> np.ndarray:
         return np.asarray(self.fn(np.asarray(x, dtype=float), np.asarray(u, dtype=float), t, self.params))
@@ -148,7 +159,7 @@ def _int(spec: Mapping[str, Any], name: str, default: int, lo: int, hi: int, key
 def nonlinear_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Path | None,
                         key: str = "objective.plant") -> NonlinearPlant:
     """Import, validate and (where numba can) compile the dynamics of ``spec`` (its keys among
-    :data:`NL_KEYS`, checked by :func:`~objectives.control.plants.build_plant`)."""
+    :data:`NL_KEYS`, checked by :func:`~objectives.control.plants.plant_kind`)."""
     target = spec["python"]
     if not isinstance(target, str) or ":" not in target:
         raise ValueError(f"{key}.python: expected 'module:function', got {target!r}")
@@ -215,3 +226,9 @@ def _compile(fn: Any, x0: np.ndarray, m: int, params: Any) -> tuple[Any, bool]:
                        else fn.py_func(x0.copy(), np.zeros(m), 0.0, params), equal_nan=True):
         return fn, False
     return jf, True
+
+
+#: the registered kind (objectives.control.plants.PLANTS)
+PYTHON = PlantKind("python", frozenset(NL_KEYS), nonlinear_from_spec, "siso",
+                   "'module:dynamics' with dynamics(x, u, t, params) -> dx; x0, params, n_inputs, outputs, "
+                   "n_sub (RK4 steps per period), linearize_at")

@@ -1,13 +1,16 @@
 """Run report of the generic loop: responses, Bode plot with margins, requirements table.
 
-Written by :meth:`LoopObjective.finalize` into the run directory:
+Written by :meth:`.loop.SISOLoop.finalize` (the objective's ``finalize`` hook) into the run directory:
 
 - ``figures/response.png``: reference, output and control signal of the defaults and the tuned
   controller over the scenario (a step response, and the load-disturbance response if it has one);
-- ``figures/bode.png`` (LTI plants): magnitude and phase of the loop ``L`` of both, with the gain and
+- ``figures/bode.png`` (linear plants): magnitude and phase of the loop ``L`` of both, with the gain and
   phase margins of the tuned one marked;
 - ``requirements.md``: every requirement with its limit, the tuned value and whether it is met,
   next to the defaults' values.
+
+Every figure is an explicit ``Figure`` (:mod:`objectives.control.figure`): the process's matplotlib backend
+and rcParams are left as the caller set them.
 """
 
 from __future__ import annotations
@@ -18,38 +21,31 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.figure import new_figure, save_figure
+from objectives.control.plants.analysis import loop_response
+from tuner.objective import Evaluation
+
 __all__ = ["write_report"]
 
 
-def _fig():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path: pathlib.Path) -> pathlib.Path:
-    """Lay out, write as PNG at 110 dpi (creating the folder), close."""
-    import matplotlib.pyplot as plt
-
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+def _score(loop: Any, params: dict[str, Any]) -> Evaluation:
+    """The objective's evaluation of ``params`` (a design that cannot be built fails, as in a run)."""
+    try:
+        sim = loop.simulate(params)
+    except ValueError as exc:
+        return Evaluation.failed(f"controller design failed: {exc}")
+    return loop.evaluation(sim, params)
 
 
 def plot_responses(obj: Any, runs: dict[str, dict[str, Any]], path: pathlib.Path) -> pathlib.Path:
-    plt = _fig()
-    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    fig = new_figure((8, 6))
+    ax = fig.subplots(2, 1, sharex=True)
     t = obj._sc.t
     for (label, params), color in zip(runs.items(), ("tab:blue", "tab:red")):
         s = obj.simulate(params)
-        ev = obj(params)
+        ev = obj.evaluation(s, params)
         lab = f"{label} (cost {ev.fitness:.4g})" if ev.status == "ok" else f"{label} ({ev.error[:40]})"
-        ax[0].plot(t, s["y"][:, obj._plant.output], color=color, label=lab)
+        ax[0].plot(t, s["y"][:, obj.plant.output], color=color, label=lab)
         ax[1].plot(t, s["u"][:, 0], color=color, lw=0.9)
     ax[0].plot(t, obj._sc.r, "k:", label="reference")
     if np.any(obj._sc.load != 0):
@@ -61,19 +57,17 @@ def plot_responses(obj: Any, runs: dict[str, dict[str, Any]], path: pathlib.Path
     ax[0].legend(loc="best")
     for a in ax:
         a.grid(True, alpha=0.3)
-    ax[0].set_title(f"closed loop, controller {obj.controller}, plant {obj._plant.model}")
-    return _save(fig, path)
+    ax[0].set_title(f"closed loop, controller {obj.controller}, plant {obj.plant.model}")
+    return save_figure(fig, path)
 
 
 def plot_bode(obj: Any, runs: dict[str, dict[str, Any]], path: pathlib.Path) -> pathlib.Path:
-    from objectives.control.plants.analysis import loop_response
-
-    plt = _fig()
-    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+    fig = new_figure((8, 6))
+    ax = fig.subplots(2, 1, sharex=True)
     w = obj._omega
     mg: dict[str, float] = {}
     for (label, params), color in zip(runs.items(), ("tab:blue", "tab:red")):
-        L = loop_response(obj._ctrl, obj.coeffs(params), obj._plant, w, obj._pr)
+        L = loop_response(obj.ctrl, obj.coeffs(params), obj.plant, w, obj._pr)
         mg = obj.loop_margins(params)
         ax[0].semilogx(w, 20 * np.log10(np.abs(L)), color=color,
                        label=f"{label}: GM {mg['gm_db']:.3g} dB, PM {mg['pm_deg']:.3g} deg, Ms {mg['ms']:.3g}")
@@ -93,13 +87,14 @@ def plot_bode(obj: Any, runs: dict[str, dict[str, Any]], path: pathlib.Path) -> 
     for a in ax:
         a.grid(True, which="both", alpha=0.3)
     ax[0].set_title("loop transfer function L = C P (broken at the plant input)")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
-def requirements_markdown(obj: Any, init: dict[str, Any], best: dict[str, Any]) -> str:
-    rows0 = {r["requirement"]: r for r in obj.requirement_rows(init)}
+def requirements_markdown(obj: Any, ev0: Evaluation, ev1: Evaluation) -> str:
+    """The requirements table of the defaults' evaluation ``ev0`` and the tuned one ``ev1``."""
+    rows0 = {r["requirement"]: r for r in obj.requirement_rows(ev0)}
     lines = ["| requirement | limit | tuned | met | defaults | met |", "|---|---|---|---|---|---|"]
-    for r in obj.requirement_rows(best):
+    for r in obj.requirement_rows(ev1):
         r0 = rows0[r["requirement"]]
         lines.append(f"| {r['what']} | {'<=' if r['requirement'].startswith('max') else '>='} {r['limit']:g} | "
                      f"{r['value']:.4g} | {'yes' if r['met'] else 'NO'} | {r0['value']:.4g} | "
@@ -110,7 +105,7 @@ def requirements_markdown(obj: Any, init: dict[str, Any], best: dict[str, Any]) 
 def write_report(obj: Any, run_dir: pathlib.Path, init: dict[str, Any], best: dict[str, Any]) -> dict[str, Any]:
     fig_dir = run_dir / "figures"
     runs = {"defaults": init, "tuned": best}
-    ev0, ev1 = obj(init), obj(best)
+    ev0, ev1 = _score(obj, init), _score(obj, best)
     out: dict[str, Any] = {"initial_fitness": ev0.fitness, "initial_status": ev0.status, "initial_error": ev0.error,
                            "best_fitness": ev1.fitness}
     for k in ("iae", "overshoot_pct", "settling_time_s", "ms", "gm_db", "pm_deg", "peak_u"):
@@ -119,11 +114,11 @@ def write_report(obj: Any, run_dir: pathlib.Path, init: dict[str, Any], best: di
             out[f"initial_{k}"] = ev0.metrics.get(k, math.nan)
     try:
         plot_responses(obj, runs, fig_dir / "response.png")
-        if obj.lti:
+        if obj.linear:
             plot_bode(obj, runs, fig_dir / "bode.png")
     except ValueError:  # a design that cannot be built (defaults outside the plant's reach): no figure
         pass
     (run_dir / "requirements.md").write_text(
-        "# Requirements\n\n" + (requirements_markdown(obj, init, best) if obj._req else "none given\n"))
-    out["requirements_met"] = not any(not r["met"] for r in obj.requirement_rows(best))
+        "# Requirements\n\n" + (requirements_markdown(obj, ev0, ev1) if obj._req else "none given\n"))
+    out["requirements_met"] = not any(not r["met"] for r in obj.requirement_rows(ev1))
     return out
