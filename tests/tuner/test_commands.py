@@ -138,8 +138,6 @@ def test_an_added_command_must_call_itself_by_its_entry_point_name(tmp_path, mon
 
 
 def test_the_export_format_of_the_tuned_system_is_named_without_a_domain_noun(small_run):
-    from tuner.commands.export import run as export_run  # noqa: F401 - the module imports at its top
-
     help_text = run_tuner("export", "--help").stdout
     assert "c-source" in help_text and "c-filter" in help_text  # the old name stays accepted
     for fmt in ("c-source", "c-filter"):  # the sphere function has no C export: the same error under both names
