@@ -78,6 +78,7 @@ from objectives.attitude.objective_options import (
     ungrouped_if_missing,
 )
 from objectives.attitude.prepared import DataSplit, Prepared, Split, check_split, prepare
+from tuner.deployment import Deployment
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
@@ -565,7 +566,7 @@ class FilterObjective:
             out.append((fname, sides[0], sides[1]))
         return out
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned filter: every value, scoring-only settings apart (objectives.attitude.deployment)."""
         return _deployment.filter_deployment(self, params)
 
@@ -573,8 +574,8 @@ class FilterObjective:
         """The deployed filter instance of ``params`` (``.run(gyr, acc, mag, rate_hz=...)``, ``.stream()``)."""
         return _deployment.filter_build(self, params)
 
-    export_c_filter = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-filter)
-    verify_c_filter = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
+    export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
+    verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:

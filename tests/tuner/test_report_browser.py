@@ -159,10 +159,13 @@ def test_interactive_run_page_holds_its_data_and_assets(evil_run):
     assert all((evil_run / s).is_file() for s in SCRIPTS)
     slots = re.findall(r'data-plot="([a-z]+)"', page)
     assert slots == ["convergence", "importance", "slices", "parcoords", "contour"]
-    assert [p["name"] for p in data["params"]] == ["x", "y"] and data["params"][0]["unit"] == "rad/s"
+    assert list(data) == slots  # one slot of data per plot: the data its PNG is drawn from
+    params = data["slices"]["params"]
+    assert [p["name"] for p in params] == ["x", "y"] and params[0]["unit"] == "rad/s"
     hist = __import__("pandas").read_csv(evil_run / "history.csv")
     ok = hist[hist["status"] == "ok"]
-    assert len(data["points"]["fitness"]) == len(ok) and min(data["points"]["fitness"]) == ok["fitness"].min()
+    points = data["slices"]["points"]
+    assert len(points["fitness"]) == len(ok) and min(points["fitness"]) == ok["fitness"].min()
     # x is the parameter that matters (its log10 distance to 2.9 dominates the fitness)
     assert data["importance"]["names"][0] == "x" and sum(data["importance"]["share"]) == pytest.approx(1.0)
     assert "functional ANOVA" in page and "matters most" in page
