@@ -13,7 +13,8 @@ Written by :meth:`.loop.SISOLoop.finalize` (the objective's ``finalize`` hook) i
   sets, and with ``uncertainty`` the held-out summary and the margins per model.
 
 It returns what the run keeps in ``best.yaml`` and prints: the table as text (``summary_table``, the
-terminal), the report's lead (``headline_md``: gains and table, :func:`tuner.report` shows it first),
+terminal), the report's lead (``headline_md``: gains and table, :func:`tuner.report` shows it first), every
+metric's name in words with its unit (``metric_words``, the report's metric tables),
 whether every requirement is met, small-signal too, and the held-out summary. A score the defaults
 could not get (a failed evaluation) is given as its reason, never as the failure's penalty value.
 Every figure is an explicit ``Figure`` (:mod:`objectives.control.figure`): the process's matplotlib
@@ -29,11 +30,12 @@ from typing import Any
 import numpy as np
 
 from objectives.control.figure import new_figure, save_figure
-from objectives.control.plants.requirements import REQUIREMENTS
+from objectives.control.plants.requirements import REQUIREMENTS, metric_words
 from objectives.control.plants.robustness import Assessment, assess, saturation_only, small_signal_method
 from objectives.control.plants.tables import (
     fmt,
     heldout_summary,
+    lead_table,
     markdown_table,
     requirement_rows,
     saturation_notes,
@@ -216,10 +218,14 @@ def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: d
     else:  # never the failure's penalty as if it were a cost
         out["initial_error"] = ev0.error
     out["best_fitness"] = ev1.fitness if ev1.status == "ok" else math.nan
+    keys = {*ev1.metrics, *(k.rpartition(".")[2] for k in ev1.metrics)}
+    out["metric_words"] = {k: metric_words(k) for k in sorted(keys)}
     for k in ("iae", "overshoot_pct", "settling_time_s", "ms", "gm_db", "pm_deg", "peak_u"):
         if k in ev1.metrics:
             out[f"best_{k}"] = ev1.metrics[k]
             out[f"initial_{k}"] = ev0.metrics.get(k, math.nan)
+            out["metric_words"].update({f"best_{k}": f"tuned: {metric_words(k)}",
+                                        f"initial_{k}": f"defaults: {metric_words(k)}"})
     try:
         plot_responses(loop, runs, fig_dir / "response.png")
         if loop.linear:
@@ -257,8 +263,22 @@ def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: d
             "".join(f"\nwarning: {n}" for n in notes)
     lead = ["## Tuned controller", "", *_gains_md(loop, best), ""]
     if rows:
-        lead += ["## Requirements", "", markdown_table(rows)] + [f"**{n[0].upper() + n[1:]}.**" for n in notes]
-        lead += ["", "Details: [requirements.md](requirements.md) (what each requirement measures, the model sets"
-                 + (", held-out models" if tuned.heldout is not None else "") + ")."]
+        lead += ["## Requirements", "", lead_table(rows)] + [f"**{n[0].upper() + n[1:]}.**" for n in notes]
+        lead += ["", "Details: [requirements.md](requirements.md) (the defaults' values, what each requirement "
+                 "measures, the model sets" + (", held-out models" if tuned.heldout is not None else "") + ")."]
     out["headline_md"] = "\n".join(lead) + "\n"
+    out["metric_words"].update({k: w for k, w in _RESULT_WORDS.items() if k in out})
     return out
+
+
+#: the results above in words (the report's "Other results")
+_RESULT_WORDS = {
+    "initial_status": "defaults: evaluation status", "requirements_met": "every requirement met on the tuning set",
+    "small_signal_met": "every requirement met small-signal too",
+    "heldout_pass_rate": "held-out models meeting every requirement (fraction)",
+    "heldout_cost_mean": "held-out models: cost, mean", "heldout_cost_median": "held-out models: cost, median",
+    "heldout_cost_p95": "held-out models: cost, 95th percentile", "heldout_cost_max": "held-out models: cost, worst",
+    "heldout_ms_max": "held-out models: maximum sensitivity Ms, worst",
+    "heldout_gm_db_min": "held-out models: gain margin (dB), worst",
+    "heldout_pm_deg_min": "held-out models: phase margin (deg), worst",
+}

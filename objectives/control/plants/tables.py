@@ -18,7 +18,8 @@ import numpy as np
 from objectives.control.plants.requirements import REQUIREMENTS, SS_TOLERANCE
 from objectives.control.plants.robustness import Assessment, SetResult, saturation_only, worst
 
-__all__ = ["requirement_rows", "markdown_table", "text_table", "HEAD", "saturation_notes", "heldout_summary"]
+__all__ = ["requirement_rows", "markdown_table", "lead_table", "text_table", "HEAD", "saturation_notes",
+           "heldout_summary"]
 
 HEAD = ("requirement", "scenario", "models", "limit", "tuned", "met", "small-signal", "met", "defaults", "met")
 
@@ -98,6 +99,21 @@ def markdown_table(rows: list[list[str]]) -> str:
         return str(x).replace("|", "\\|")
     lines = ["| " + " | ".join(HEAD) + " |", "|" + "---|" * len(HEAD)]
     lines += ["| " + " | ".join(cell(c) for c in r) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def lead_table(rows: list[list[str]]) -> str:
+    """The rows as the report's lead shows them, narrow enough for a phone: the verdict right after the
+    requirement (so it is on screen at 390 px), the tuned value, the limit, the small-signal value with its
+    verdict, then the scenario and model set (the defaults are in ``requirements.md``)."""
+    out = []
+    for words, scen, models, limit, tv, tm, sv, sm, _dv, _dm in rows:
+        where = ", ".join(x for x in (scen if scen != "-" else "", models) if x)
+        small = sv if sm in ("-", "") else f"{sv}: {sm}"
+        out.append([words, tm, tv, limit, small, where])
+    head = ("requirement", "met", "tuned", "limit", "small signal", "scenario, models")
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(str(c).replace("|", "\\|") for c in r) + " |" for r in out]
     return "\n".join(lines) + "\n"
 
 
