@@ -105,7 +105,7 @@ def _uncertainty() -> dict[str, Any]:
     return {"summary": "plant parameters known only within a range: the loop tunes on a seeded set of models (the "
                        "nominal plant, the corners, samples) and, after the run, scores the tuned controller on "
                        "held-out models (pass rate of every requirement, worst margins, the cost's distribution)",
-            "usage": _LOOP + "uncertainty: {parameters: {tf.num[0]: {rel: 0.3}, delay_s: [0.0, 0.05]}, "
+            "usage": _LOOP + "uncertainty: {parameters: {'tf.num[0]': {rel: 0.3}, delay_s: [0.0, 0.05]}, "
                              "tune: {corners: true, samples: 4, seed: 1}, validate: {samples: 200, seed: 2}}}",
             "params": [_p("parameters", "the parameter's",
                           "name -> [low, high] | {uniform: [low, high]} | {rel: r} (nominal x (1 -+ r)) | "

@@ -19,7 +19,7 @@ scenarios, actuator and sensor :mod:`.scenario`'s; cost and aggregation :mod:`.c
     cost: {iae: 1.0}
     aggregate: {scenarios: mean, models: worst}
     requirements: {max_overshoot_pct: 10, max_ms: 1.6}
-    uncertainty: {parameters: {tf.num[0]: {rel: 0.2}}, tune: {samples: 4}, validate: {samples: 200}}
+    uncertainty: {parameters: {"tf.num[0]": {rel: 0.2}}, tune: {samples: 4}, validate: {samples: 200}}
 
 A candidate is scored on every (model, scenario) pair of its tuning set (the nominal plant alone
 without ``uncertainty``) in one call of :class:`.batch.ItemRunner`; each pair's cost is aggregated over

@@ -11,6 +11,7 @@ YAML (``objective:``)::
       tune: {corners: true, samples: 4, seed: 1}   # the tuning set: nominal + 2^k corners + samples
       validate: {samples: 200, seed: 2}            # the held-out set, scored after the run
 
+(Inside a flow mapping ``{...}`` YAML reads ``[`` as a list: quote such names there, ``{"tf.num[0]": ...}``.)
 Which names a plant accepts is its kind's to say (:attr:`objectives.control.plants.base.PlantKind.uncertain`):
 LTI plants their coefficients (``tf.num[i]``, ``tf.den[i]``, ``zpk.z[i]``, ``zpk.p[i]``, ``zpk.k``,
 ``ss.A[i][j]``, ``ss.B[i][j]``, ...), Python plants their ``params.<name>``, FMU plants their
