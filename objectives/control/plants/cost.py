@@ -131,5 +131,7 @@ def _agg(values: np.ndarray, method: str, alpha: float, weights: np.ndarray | No
 def combine(costs: np.ndarray, weights: np.ndarray, agg: Aggregation) -> tuple[float, np.ndarray]:
     """``(J, J_m)``: the cost of a candidate from ``costs`` (models, scenarios) and the scenarios' weights,
     and each model's cost ``J_m`` (its scenarios aggregated)."""
+    if costs.size == 1:  # one model, one scenario: every form is the cost itself
+        return float(costs[0, 0]), costs[:, 0].astype(float)
     per_model = np.array([_agg(row, agg.scenarios, agg.scenarios_alpha, weights) for row in costs])
     return _agg(per_model, agg.models, agg.models_alpha, None), per_model

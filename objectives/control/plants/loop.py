@@ -67,6 +67,8 @@ __all__ = ["SISOLoop", "DeployedController", "Scored"]
 _SETTINGS = ("period_s", "scenario", "scenarios", "actuator", "sensor", "cost", "aggregate", "requirements",
              "uncertainty")
 _MAPPINGS = ("scenario", "actuator", "sensor", "requirements", "uncertainty")
+#: each requirement metric's scope (which scenarios define it)
+_SCOPE = {r.metric: r.scope for r in REQUIREMENTS.values()}
 #: the output and control limits a small-signal check lifts
 _LIMIT_PARAMS = {"u_min": -math.inf, "u_max": math.inf, "r_i_min": -math.inf, "r_i_max": math.inf}
 
@@ -89,7 +91,8 @@ class DeployedController:
 class Scored:
     """A candidate on a model set: each item's quantities ``q[m][s]`` (requirement metrics), costs
     ``costs`` (M, S), each model's cost ``per_model`` (M,), the aggregate ``fitness``, each model's
-    margins (linear plants; else empty) and the failure, if any (``status``, ``error``)."""
+    margins (linear plants; else empty) and the failure, if any (``error``, and the loop's ``status``:
+    2 diverged, 3 a wrong shape)."""
 
     q: list[list[dict[str, float]]]
     terms: list[list[dict[str, float]]]
@@ -98,6 +101,7 @@ class Scored:
     fitness: float
     margins: list[dict[str, float]]
     error: str = ""
+    status: float = 0.0
 
 
 class SISOLoop:
@@ -287,7 +291,8 @@ class SISOLoop:
                     where = (f" in scenario {self.cases[s].name}" if n_s > 1 else "") + \
                             (f" on model '{models.labels[m]}'" if n_m > 1 else "")
                     return Scored([], [], np.zeros((0, 0)), np.zeros(0), math.inf, [],
-                                  f"closed loop {why} at t={stats[m, s, S_DONE] * self.period:.3g} s{where}")
+                                  f"closed loop {why} at t={stats[m, s, S_DONE] * self.period:.3g} s{where}",
+                                  float(st))
         q, terms, costs = [], [], np.zeros((n_m, n_s))
         for m in range(n_m):
             qm, tm = [], []
@@ -306,7 +311,7 @@ class SISOLoop:
         """The :class:`~tuner.objective.Evaluation` of one candidate's statistics on the tuning set."""
         sc = self.score(cp, stats, self.models)
         if sc.error:
-            return Evaluation.failed(sc.error, {"status_code": 2.0})
+            return Evaluation.failed(sc.error, {"status_code": sc.status})
         m = self.metrics(sc)
         reasons, total = self.violations(sc, self.models)
         if reasons:
@@ -326,8 +331,7 @@ class SISOLoop:
             if n_s > 1:
                 m[pre + "cost"] = float(np.mean(sc.costs[:, s]))
             for k, v in sc.q[0][s].items():
-                scope = next((r.scope for r in REQUIREMENTS.values() if r.metric == k), "signal")
-                if case.defines(scope):
+                if case.defines(_SCOPE.get(k, "signal")):
                     m[pre + k] = float(max(sc.q[i][s][k] for i in range(n_m))) if n_m > 1 else v
         for k in MARGIN_KEYS if sc.margins else ():
             vals = [mg[k] for mg in sc.margins]
