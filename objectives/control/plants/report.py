@@ -3,9 +3,10 @@
 Written by :meth:`.loop.SISOLoop.finalize` (the objective's ``finalize`` hook) into the run directory:
 
 - ``figures/response.png``: per scenario, the output against the reference and the control signal of
-  the defaults and the tuned controller on the nominal plant; the tuned one's small-signal response
-  (dashed, :mod:`.robustness`) when a limit exists, and its response on the other models of the tuning
-  set (thin grey) with ``uncertainty``; the legend sits below the plots, off the curves;
+  the defaults and the tuned controller on the nominal plant; for an LTI plant with a limit the tuned
+  one's small-signal response (dashed, :mod:`.robustness`: the loop without limits at the scenario's
+  amplitude), and with ``uncertainty`` its response on the other models of the tuning set (thin grey, at
+  most 24); the legend sits below the plots, off the curves;
 - ``figures/bode.png`` (linear plants): magnitude and phase of the loop ``L`` of both on the nominal
   plant (and the tuned one on the other tuning models), the tuned one's margins marked;
 - ``requirements.md``: the pass/fail table per requirement, scenario and model set (:mod:`.tables`), the
