@@ -22,9 +22,11 @@ def new_figure(figsize: tuple[float, float]) -> Any:
     return fig
 
 
-def save_figure(fig: Any, path: str | pathlib.Path, dpi: int = 110) -> pathlib.Path:
-    """Lay out ``fig`` and write it as a PNG at ``dpi`` (creating the folder)."""
-    fig.tight_layout()
+def save_figure(fig: Any, path: str | pathlib.Path, dpi: int = 110,
+                rect: tuple[float, float, float, float] | None = None) -> pathlib.Path:
+    """Lay out ``fig`` (its axes inside ``rect``, figure fractions (left, bottom, right, top), if given:
+    room for a legend outside them) and write it as a PNG at ``dpi`` (creating the folder)."""
+    fig.tight_layout(rect=rect)
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)

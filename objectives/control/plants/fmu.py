@@ -185,6 +185,13 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
     return plant
 
 
+def fmu_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb: the ``parameters.<name>`` the spec sets and
+    ``delay_s``."""
+    params = spec.get("parameters") or {}
+    return {**{f"parameters.{k}": float(v) for k, v in params.items()}, "delay_s": float(spec.get("delay_s", 0.0))}
+
+
 #: the registered kind (objectives.control.plants.PLANTS)
 FMU = PlantKind("fmu", frozenset(FMU_KEYS), fmu_from_spec, "siso",
-                "path.fmu (FMI 2.0 co-simulation, extra fmu); inputs, outputs, parameters")
+                "path.fmu (FMI 2.0 co-simulation, extra fmu); inputs, outputs, parameters", uncertain=fmu_uncertain)

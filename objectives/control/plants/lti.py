@@ -204,12 +204,28 @@ def _index(spec: Mapping[str, Any], name: str, default: int, size: int, key: str
     return v
 
 
+def lti_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb, with their nominal values: every coefficient
+    of the model (``tf.num[i]``, ``tf.den[i]``, ``zpk.z[i]``, ``zpk.p[i]``, ``zpk.k``, ``ss.A[i][j]``,
+    ``ss.B[i][j]``, ``ss.C[i][j]``, ``ss.D[i][j]``) and ``delay_s``."""
+    from objectives.control.plants.uncertainty import spec_leaves
+
+    model = next(m for m in MODELS if m in spec)
+    body = spec[model]
+    out: dict[str, float] = {}
+    for part in {"tf": ("num", "den"), "zpk": ("z", "p", "k"), "ss": ("A", "B", "C", "D")}[model]:
+        if part in body:
+            out.update(spec_leaves(f"{model}.{part}", body[part]))
+    out["delay_s"] = float(spec.get("delay_s", 0.0))
+    return out
+
+
 _LTI_DOC = ("{what}; options dt (discrete model's period), method (zoh | tustin), delay_s, x0, output, "
             "inner_output")
 #: the registered kinds (objectives.control.plants.PLANTS): one builder for the three model forms
 TF = PlantKind("tf", frozenset(LTI_KEYS), lti_from_spec, "siso",
-               _LTI_DOC.format(what="{num, den}: transfer function, highest power first"))
+               _LTI_DOC.format(what="{num, den}: transfer function, highest power first"), uncertain=lti_uncertain)
 ZPK = PlantKind("zpk", frozenset(LTI_KEYS), lti_from_spec, "siso",
-                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"))
+                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"), uncertain=lti_uncertain)
 SS = PlantKind("ss", frozenset(LTI_KEYS), lti_from_spec, "siso",
-               _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"))
+               _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"), uncertain=lti_uncertain)

@@ -134,8 +134,17 @@ def _namedtuple(params: Mapping[str, Any], key: str) -> Any:
             raise ValueError(f"{key}.params: names must be identifiers, got {k!r}")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ValueError(f"{key}.params.{k}: must be a finite number, got {v!r}")
-    cls = collections.namedtuple("PlantParams", list(params))
+    names = tuple(params)
+    cls = _TUPLES.get(names)
+    if cls is None:  # one class per field list: a model set's plants share the compiled loop
+        cls = _TUPLES[names] = collections.namedtuple("PlantParams", list(names))
     return cls(*(float(v) for v in params.values()))
+
+
+#: the params namedtuple class of each field list, and the numba dispatcher of each dynamics function:
+#: reused, so the plants of a model set (the same dynamics, other values) compile the loop once
+_TUPLES: dict[tuple[str, ...], Any] = {}
+_JITTED: dict[Any, Any] = {}
 
 
 def _vec(key: str, v: Any, n: int | None = None) -> np.ndarray:
@@ -218,7 +227,9 @@ def _compile(fn: Any, x0: np.ndarray, m: int, params: Any) -> tuple[Any, bool]:
     import numba
 
     try:
-        jf = fn if isinstance(fn, numba.core.registry.CPUDispatcher) else numba.njit(fn)
+        jf = fn if isinstance(fn, numba.core.registry.CPUDispatcher) else _JITTED.get(fn)
+        if jf is None:
+            jf = _JITTED[fn] = numba.njit(fn)
         got = jf(x0.copy(), np.zeros(m), 0.0, params)
     except Exception:  # noqa: BLE001 - numba's typing errors have many classes: fall back to Python
         return fn, False
@@ -228,7 +239,13 @@ def _compile(fn: Any, x0: np.ndarray, m: int, params: Any) -> tuple[Any, bool]:
     return jf, True
 
 
+def python_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb: ``params.<name>`` of the dynamics and ``delay_s``."""
+    params = spec.get("params") or {}
+    return {**{f"params.{k}": float(v) for k, v in params.items()}, "delay_s": float(spec.get("delay_s", 0.0))}
+
+
 #: the registered kind (objectives.control.plants.PLANTS)
 PYTHON = PlantKind("python", frozenset(NL_KEYS), nonlinear_from_spec, "siso",
                    "'module:dynamics' with dynamics(x, u, t, params) -> dx; x0, params, n_inputs, outputs, "
-                   "n_sub (RK4 steps per period), linearize_at")
+                   "n_sub (RK4 steps per period), linearize_at", uncertain=python_uncertain)
