@@ -180,6 +180,15 @@ class TunableObjective(Objective, Protocol):
         {"python": s, "c": s}}``, optionally ``"max_angle_rad": {recording: float}`` (the largest angle between
         the two outputs); ``FileNotFoundError`` without a compiler."""
 
+    def export_formats(self) -> Mapping[str, str]:
+        """``{format: help}``: export formats of the objective's own (``tuner export --format NAME``), e.g. the
+        parameter file of the program that runs the deployed system; names the engine's formats do not take."""
+
+    def export_as(self, fmt: str, params: Mapping[str, Any], comment: str) -> str:
+        """The text of the objective's own format ``fmt`` (one of :meth:`export_formats`) for the deployed
+        ``params``; ``comment`` is the run's provenance and scores. ``ValueError`` naming every value the format
+        cannot express."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
@@ -188,7 +197,7 @@ class TunableObjective(Objective, Protocol):
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "parameter_names", "check_params", "preflight", "score", "has_test_data",
          "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize",
-         "deployment", "build", "export_c", "verify_c")
+         "deployment", "build", "export_c", "verify_c", "export_formats", "export_as")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

@@ -2,7 +2,7 @@
 
 A filter unit that a ROS node runs declares the node's parameters as a :class:`RosNode` (its class attribute
 ``ros``): the node's name, one :class:`RosParam` per deployed value the node takes (its ROS name, type, the node's
-default and a unit factor), and the node's documented parameter table with the defaults. ``tuner export RUN
+default and a unit change), and the node's documented parameter table with the defaults. ``tuner export RUN
 --format ros2-params`` (or ``ros1-params``) writes the node's YAML from it (:func:`ros_yaml`); no filter is named
 outside its unit.
 """
@@ -23,13 +23,14 @@ FORMATS = {"ros2-params": 2, "ros1-params": 1}
 @dataclass(frozen=True)
 class RosParam:
     """One node parameter: the deployed value ``value`` (the filter's name) written as ``name`` of type ``type``
-    (float, bool or str), times ``scale`` for a number (a unit change, said by ``unit``)."""
+    (float, bool or str); a number is divided by ``per``, the filter's units per node unit (1e6: the filter's uT
+    to the node's tesla; said by ``unit``)."""
 
     value: str
     name: str
     type: type
     default: Any
-    scale: float = 1.0
+    per: float = 1.0
     unit: str = ""
 
 
@@ -77,7 +78,7 @@ def ros_values(node: RosNode, values: Mapping[str, Any]) -> dict[str, Any]:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
                 bad.append(f"{p.value} = {v!r} (a finite number)")
                 continue
-            out[p.name] = float(v) * p.scale
+            out[p.name] = float(v) / p.per
     if bad:
         raise ValueError(f"{node.node} cannot express: " + "; ".join(bad))
     return out

@@ -69,9 +69,9 @@ DECL = ParamSet("imu_tools_madgwick", (
 ROS_NODE = RosNode("imu_filter_madgwick", (
     RosParam("gain", "gain", float, 0.1),
     RosParam("zeta", "zeta", float, 0.0),
-    RosParam("mag_bias_x", "mag_bias_x", float, 0.0, scale=1e-6, unit="T (from uT)"),
-    RosParam("mag_bias_y", "mag_bias_y", float, 0.0, scale=1e-6, unit="T (from uT)"),
-    RosParam("mag_bias_z", "mag_bias_z", float, 0.0, scale=1e-6, unit="T (from uT)"),
+    RosParam("mag_bias_x", "mag_bias_x", float, 0.0, per=1e6, unit="T (from uT)"),
+    RosParam("mag_bias_y", "mag_bias_y", float, 0.0, per=1e6, unit="T (from uT)"),
+    RosParam("mag_bias_z", "mag_bias_z", float, 0.0, per=1e6, unit="T (from uT)"),
     RosParam("world_frame", "world_frame", str, "enu"),
     RosParam("use_mag", "use_mag", bool, True),
 ), documented={"gain": 0.1, "zeta": 0.0, "mag_bias_x": 0.0, "mag_bias_y": 0.0, "mag_bias_z": 0.0,
