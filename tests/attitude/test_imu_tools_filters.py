@@ -196,3 +196,14 @@ def test_madgwick_stream_state_resumes():
                                   np.empty((0, 3)))
     assert st[MS.PHASE] == 1.0
     np.testing.assert_array_equal(out, whole)
+
+
+@pytest.mark.parametrize("cls, kw", [(ImuToolsMadgwick, {"zeta": 0.05}), (ImuToolsMadgwick, {"use_mag": False}),
+                                     (Valenti, {"use_mag": True}), (Valenti, {})])
+def test_stream_equals_run(cls, kw):
+    rec = bench6dof(duration_s=3.0, rate_hz=100.0, seed=4, frame="NED")
+    flt = cls(**kw)
+    whole = flt.run(rec)
+    s = flt.stream(rate_hz=100.0, frame="NED")
+    got = np.array([s.update(g, a, m if flt.values["use_mag"] else None) for g, a, m in zip(rec.gyr, rec.acc, rec.mag)])
+    assert angle(got, whole).max() < 1e-12

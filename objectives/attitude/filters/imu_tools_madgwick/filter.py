@@ -89,6 +89,14 @@ class ImuToolsMadgwick(AttitudeFilter):
     needs_mag = True
     working_frame = "ENU"
     ros = ROS_NODE
+    kernel = staticmethod(imu_tools_madgwick_kernel)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample filter (the kernel with its state carried; equal to :meth:`run` on the samples so far),
+        started from its first sample as the node is."""
+        from objectives.attitude.filters.node_stream import NodeStream
+
+        return NodeStream(self, rate_hz, dt, q0, frame)
 
     def __init__(self, **values: Any):
         super().__init__(**values)

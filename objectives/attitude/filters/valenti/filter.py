@@ -81,6 +81,14 @@ class Valenti(AttitudeFilter):
     needs_mag = True
     working_frame = "NWU"
     ros = ROS_NODE
+    kernel = staticmethod(valenti_kernel)
+
+    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
+        """O(1) per-sample filter (the kernel with its state carried; equal to :meth:`run` on the samples so far),
+        started from its first sample as the node is."""
+        from objectives.attitude.filters.node_stream import NodeStream
+
+        return NodeStream(self, rate_hz, dt, q0, frame)
 
     def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray | None, frame: str,
                      g_ref: float = G_SI) -> KernelSetup:
