@@ -19,6 +19,7 @@ no longer builds) exports its kind and the parameters only.
 from __future__ import annotations
 
 import datetime as _dt
+import math
 from pathlib import Path
 from typing import Any
 
@@ -210,9 +211,15 @@ def export_own(run_dir: str | Path, fmt: str) -> str:
                           f"{', '.join(own) or 'none'}; the engine's: {', '.join([*FORMATS, C_SOURCE])}")
     doc = provenance(run_dir, objective)
     best = RunDir(run_dir).best().to_doc()
-    scores = {k: v for k, v in (best.get("evaluation") or {}).items() if k.endswith("_fitness")}
+    scores = {k: v for k, v in (best.get("evaluation") or {}).items()
+              if k.endswith("_fitness") and isinstance(v, (int, float))}
+    worse = [f"{w} {scores[f'{w}_fitness']:.6g} against the defaults' {scores[f'defaults_{w}_fitness']:.6g}"
+             for w in ("cv", "test") if scores.get(f"{w}_fitness", -math.inf) > scores.get(f"defaults_{w}_fitness",
+                                                                                          math.inf)]
     lines = [f"run: {doc['run']}", f"fitness: {doc['fitness']!r} ({(doc['objective'] or {}).get('metric', '')})",
              *(f"{k}: {v!r}" for k, v in sorted(scores.items())),
+             *([f"note: on data the tuning did not see the defaults score better ({'; '.join(worse)})"] if worse
+               else []),
              f"optimizer: {doc['optimizer']}, seed {doc['seed']}, {doc['n_evals']} evaluations",
              f"data: {doc['data']}", f"git commit: {doc['git_commit']}", f"exported: {doc['exported']}"]
     try:
