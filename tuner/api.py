@@ -14,6 +14,7 @@ is written.
 
 from __future__ import annotations
 
+import io
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -23,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 from tuner.config import ConfigError, RunConfig, apply_overrides, config_from_dict, load_config
 from tuner.records import RunError
 from tuner.rundir import RunDir
+from tuner.safe_io import read_text, regular
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -255,8 +257,8 @@ def load(run_dir: str | Path) -> Result:
     if not rd.path.is_dir():
         raise RunError(f"{rd.path}: not a run directory (no such directory)")
     meta = rd.meta()
-    hist_path = rd.file("history.csv")
-    history = pd.read_csv(hist_path) if hist_path.is_file() and hist_path.stat().st_size else pd.DataFrame()
+    text = read_text(rd.file("history.csv")) if regular(rd.file("history.csv")) else ""
+    history = pd.read_csv(io.StringIO(text)) if text else pd.DataFrame()
     params: dict[str, Any] = {}
     best: dict[str, Any] = {}
     metrics: dict[str, Any] = {}

@@ -44,20 +44,13 @@ def pyplot():
 
 
 def _save(fig, path: Path) -> Path:
-    """Save through a temporary file and a rename, never through a symbolic link (:mod:`tuner.safe_io`)."""
-    import os
-
-    from tuner.safe_io import check_not_link, open_nofollow
+    """Save through a temporary file and a rename, never through a link (:func:`tuner.safe_io.write_atomic`)."""
+    from tuner.safe_io import check_not_link, write_atomic
 
     path = Path(path)
     check_not_link(path.parent)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    if os.path.lexists(tmp):
-        os.unlink(tmp)
-    with os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
-        fig.savefig(fh, dpi=DPI, format=path.suffix.lstrip(".") or "png")
-    os.replace(tmp, path)
+    write_atomic(path, lambda fh: fig.savefig(fh, dpi=DPI, format=path.suffix.lstrip(".") or "png"), fsync=False)
     pyplot().close(fig)
     return path
 
@@ -80,13 +73,16 @@ def _log_y_if_wide(ax, values: np.ndarray) -> None:
 
 def load_history(run_dir: Path) -> pd.DataFrame:
     """``history.csv`` as a frame; a missing or unparsable file raises :class:`tuner.records.RunError`."""
+    import io
+
     from tuner.records import RunError
+    from tuner.safe_io import read_text, regular
 
     p = Path(run_dir) / "history.csv"
-    if not p.is_file():
+    if not regular(p):
         raise RunError(f"{p}: missing (nothing evaluated yet?)")
     try:
-        df = pd.read_csv(p, keep_default_na=False, na_values=[""])
+        df = pd.read_csv(io.StringIO(read_text(p)), keep_default_na=False, na_values=[""])
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise RunError(f"{p}: unreadable: {str(exc).strip()}") from None
     missing = [c for c in ("eval", "stage", "generation", "fitness", "status") if c not in df.columns]

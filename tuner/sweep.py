@@ -35,13 +35,16 @@ import yaml
 
 from tuner import safe_yaml
 from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
+from tuner.records import RunError, load_json
 from tuner.rundir import RunDir, atomic_write
-from tuner.safe_io import check_not_link, read_text, refuse_links
+from tuner.safe_io import check_not_link, read_bytes, read_text, refuse_links, regular, write_atomic
 
 __all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file", "ranked_by",
            "RANKED_BY", "DEFAULTS_OF"]
 
 JOBS_FILE = "jobs.json"
+#: a job's ``meta.json`` status once it has ended: run again, it is skipped ("failed": every evaluation failed)
+ENDED = ("finished", "failed")
 
 
 def _plain_name(s: str) -> bool:
@@ -156,7 +159,7 @@ def _stamp(path: Path) -> str | None:
     """A job stamp's text, or None when absent or not whole (written by an older tuner and torn)."""
     try:
         text = read_text(path)
-        json.loads(text)
+        load_json(text)
     except FileNotFoundError:
         return None
     except (ValueError, UnicodeDecodeError):
@@ -198,9 +201,9 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool, repor
     status = _job_status(run_dir)
     label = job["id"]
     printer = None if quiet else (lambda m: print(f"[{label}] {m}", file=sys.stderr, flush=True))
-    if status == "finished":
-        return {"id": job["id"], "status": "finished", "action": "skipped"}
-    if status != "new" or (run_dir / "config.yaml").exists():  # killed or interrupted: resume holds the lock,
+    if status in ENDED:
+        return {"id": job["id"], "status": status, "action": "skipped"}
+    if status != "new" or regular(run_dir / "config.yaml"):  # killed or interrupted: resume holds the lock,
         res = resume(run_dir, progress=printer, quiet=quiet, report=report)  # replays the history, goes on
         return {"id": job["id"], "status": res.status, "action": "resumed"}
     cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
@@ -223,7 +226,7 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
     (out / "jobs").mkdir(exist_ok=True)
     spec_text = yaml.safe_dump(sw["doc"], sort_keys=False)
     old = out / "sweep.yaml"
-    if old.exists() and read_text(old) != spec_text:
+    if regular(old) and read_text(old) != spec_text:
         raise ConfigError(path, "sweep", f"{out} holds a different sweep; choose another --dir or delete it")
     atomic_write(old, spec_text)
     atomic_write(out / "command.txt", " ".join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
@@ -233,7 +236,7 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
         print(f"note: {n_cap}", file=sys.stderr, flush=True)
     todo = [(j, str(out / "jobs" / j["id"])) for j in sw["jobs"]]
     if not quiet:
-        done = sum(_job_status(Path(d)) == "finished" for _, d in todo)
+        done = sum(_job_status(Path(d)) in ENDED for _, d in todo)
         print(f"sweep {sw['name']}: {len(todo)} jobs ({done} already finished), {n_par} at a time -> {out}",
               file=sys.stderr, flush=True)
     if n_par > 1:
@@ -286,7 +289,7 @@ def collect(sweep_dir: Path) -> Any:
         row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
                                "status": _job_status(d)}
         rd = RunDir(d)
-        if row["status"] == "finished" and not rd.has_best():  # nothing to rank: say why
+        if row["status"] in ENDED and not rd.has_best():  # nothing to rank: say why
             row["status"] = "all failed"
             row["n_failed"] = rd.meta().n_failed
         if rd.has_best():
@@ -325,9 +328,9 @@ def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
     is rebuilt, nothing imported); a sweep directory of an older tuner is re-expanded from its sweep file."""
     sweep_dir = Path(sweep_dir)
     refuse_links(sweep_dir)
-    if (sweep_dir / JOBS_FILE).is_file():
+    if regular(sweep_dir / JOBS_FILE):
         try:
-            doc = json.loads(read_text(sweep_dir / JOBS_FILE))
+            doc = load_json(read_text(sweep_dir / JOBS_FILE))
             if not isinstance(doc, dict) or not isinstance(doc.get("jobs"), list) or \
                     not all(isinstance(j, dict) and isinstance(j.get("id"), str) and _plain_name(j["id"])
                             for j in doc["jobs"]):
@@ -335,7 +338,7 @@ def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
         except (ValueError, UnicodeDecodeError) as exc:
             raise ConfigError(sweep_dir / JOBS_FILE, "", f"unreadable: {exc}") from None
         return {"description": "", **doc, "name": str(doc.get("name", sweep_dir.name))}
-    cmd = (sweep_dir / "command.txt").read_text().split() if (sweep_dir / "command.txt").exists() else []
+    cmd = read_text(sweep_dir / "command.txt").split() if regular(sweep_dir / "command.txt") else []
     src = Path(cmd[2]) if len(cmd) > 2 else sweep_dir / "sweep.yaml"
     if not src.exists():
         src = sweep_dir / "sweep.yaml"
@@ -400,7 +403,7 @@ def summarize(df: Any) -> Any:
 
 
 def _hash(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+    return hashlib.sha256(read_bytes(path)).hexdigest()[:16]
 
 
 def write_sweep_tables(sweep_dir: str | Path) -> tuple[Any, Any, Any]:
@@ -409,11 +412,11 @@ def write_sweep_tables(sweep_dir: str | Path) -> tuple[Any, Any, Any]:
     form."""
     sweep_dir = Path(sweep_dir)
     df = collect(sweep_dir)
-    df.to_csv(sweep_dir / "results.csv", index=False, float_format="%.17g")
+    write_atomic(sweep_dir / "results.csv", df.to_csv(index=False, float_format="%.17g"), fsync=False)
     summ = summarize(df)
     flat = summ.copy()
     flat.columns = [f"{a}.{b}" if b else a for a, b in flat.columns]
-    flat.to_csv(sweep_dir / "summary.csv", float_format="%.17g")
+    write_atomic(sweep_dir / "summary.csv", flat.to_csv(float_format="%.17g"), fsync=False)
     return df, summ, flat
 
 
@@ -424,7 +427,7 @@ def write_missing_job_reports(sweep_dir: str | Path) -> int:
     n = 0
     for job in load_sweep_from_dir(Path(sweep_dir))["jobs"]:
         rd = RunDir(Path(sweep_dir) / "jobs" / job["id"])
-        if rd.is_run() and not rd.file("report.md").exists():
+        if rd.is_run() and not regular(rd.file("report.md")):
             write_run_report(rd.path)
             n += 1
     return n
@@ -453,7 +456,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
             hashes.append((job["id"], meta.config_hash[:16] or _hash(d / "config.yaml"), job["seed"]))
             if not versions:
                 versions = {**meta.versions, "git_commit": meta.git_commit}
-    command = read_text(sweep_dir / "command.txt").strip() if (sweep_dir / "command.txt").exists() else ""
+    command = read_text(sweep_dir / "command.txt").strip() if regular(sweep_dir / "command.txt") else ""
     key_col, what = summ.attrs.get("ranked_by", ranked_by(df)) if len(df) else RANKED_BY[-1]
     fit_cols = tuple(dict.fromkeys((key_col, *(("train_fitness", "test_fitness") if "train_fitness.median"
                                                 in flat.columns else ("best_fitness",)))))
@@ -465,7 +468,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
                              "cv_fitness", "cv_gap", "cv_gap_large", DEFAULTS_OF[key_col], "n_evals", "wall_s"]
                  if c in df.columns]
-    running = live and not (len(df) and (df["status"] == "finished").all())
+    running = live and not (len(df) and df["status"].isin(["finished", "all failed"]).all())
     md = [f"# Sweep {md_escape(sw['name'])}", "", md_escape(sw.get("description") or ""), "",
           f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
           f"Written {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}.", "",
@@ -488,7 +491,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     for title, p in figs:
         md += [f"### {title}", "", f"![{title}]({p.relative_to(sweep_dir).as_posix()})", ""]
     per_run = [(j["id"], jobs_dir / j["id"] / "report.md") for j in sw["jobs"]]
-    md += ["## Runs", ""] + [f"- [{i}](jobs/{i}/report.md)" for i, p in per_run if p.exists()] + [""]
+    md += ["## Runs", ""] + [f"- [{i}](jobs/{i}/report.md)" for i, p in per_run if regular(p)] + [""]
     md += ["## Reproduce", "", "```", command or f"tuner sweep {sw['source']}", "```", "",
            "Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()), "",
            "| job | config sha256 (16) | seed |", "|---|---|---|"] + \
@@ -537,25 +540,38 @@ def ranking_lines(df: Any) -> list[str]:
 
 
 def list_runs(runs_dir: Path) -> str:
-    """A table of the run directories under ``runs_dir`` (recursively): status, best fitness, age."""
+    """A table of the run directories under ``runs_dir`` (recursively): status, best fitness, age; a run that
+    cannot be read is listed as ``unreadable``, with the reason on a line after the table."""
     import pandas as pd
 
-    rows = []
+    rows, why = [], []
     now = _dt.datetime.now(_dt.UTC)
     for meta_p in sorted(Path(runs_dir).rglob("meta.json")):
-        rd = RunDir(meta_p.parent)
-        d, meta = rd.path, rd.meta()  # RunError naming the file if one is corrupt
-        best = rd.best() if rd.has_best() else None
-        created = meta.created
-        age = ""
-        if created:
-            dt = now - _dt.datetime.strptime(created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
-            age = str(dt).split(".")[0]
-        rows.append({"run": str(d.relative_to(runs_dir)), "status": meta.status, "optimizer": meta.optimizer,
+        name = str(meta_p.parent.relative_to(runs_dir))
+        try:
+            rd = RunDir(meta_p.parent)
+            meta = rd.meta()
+            best = rd.best() if rd.has_best() else None
+            age = ""
+            if meta.created:
+                dt = now - _dt.datetime.strptime(meta.created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
+                age = str(dt).split(".")[0]
+        except (RunError, OSError, ValueError) as exc:  # one damaged run is listed as such, the others as usual
+            rows.append({"run": name, "status": "unreadable", "optimizer": "", "evals": None, "best_fitness": None,
+                         "age": ""})
+            why.append(f"unreadable: {name}: {unreadable(exc)}")
+            continue
+        rows.append({"run": name, "status": meta.status, "optimizer": meta.optimizer,
                      "evals": meta.n_evals, "best_fitness": best.fitness if best else None, "age": age})
     if not rows:
         return f"no runs under {runs_dir}"
-    return pd.DataFrame(rows).to_string(index=False)
+    return "\n".join([pd.DataFrame(rows).to_string(index=False), *why])
+
+
+def unreadable(exc: BaseException) -> str:
+    """Why a run directory of a listing could not be read: the first line of the error, short."""
+    text = f"{exc.filename}: {exc.strerror}" if isinstance(exc, OSError) and exc.filename else str(exc)
+    return (text.splitlines() or [type(exc).__name__])[0][:160]
 
 
 def summary_text(df: Any, sweep_dir: Path) -> str:

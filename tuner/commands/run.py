@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from collections import Counter
 from pathlib import Path
@@ -11,8 +10,10 @@ from pathlib import Path
 from tuner.commands import sweep
 from tuner.commands.common import UsageError
 from tuner.config import load_config
+from tuner.records import RunError
 from tuner.run import RunResult
 from tuner.run import run as run_job
+from tuner.rundir import RunDir
 from tuner.sweep import is_sweep_file
 
 DESCRIPTION = "Run a tuning job and store it in its own run directory."
@@ -53,7 +54,7 @@ def print_result(res: RunResult) -> int:
     print(f"run directory: {res.run_dir}")
     if (res.run_dir / "report.md").exists():
         print(f"report: {res.run_dir / 'report.md'}")
-    if res.status == "finished" and res.n_evals and not res.best_params:
+    if res.status == "failed":
         print(f"error: {res.run_dir}: every one of {res.n_evals} evaluations failed; "
               f"{failure_summary(res.run_dir)}", file=sys.stderr)
         return 1
@@ -63,9 +64,8 @@ def print_result(res: RunResult) -> int:
 def failure_summary(run_dir: Path) -> str:
     """The most frequent error text of a run's history (why every evaluation failed)."""
     try:
-        with open(run_dir / "history.csv", newline="") as fh:
-            errors = Counter(row.get("error", "") for row in csv.DictReader(fh))
-    except OSError:
+        errors = Counter(row.get("error", "") for row in RunDir(run_dir).history_rows())
+    except (OSError, RunError):
         return "see history.csv"
     errors.pop("", None)
     if not errors:
