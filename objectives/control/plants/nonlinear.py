@@ -43,11 +43,12 @@ NL_KEYS = {"python", "x0", "params", "n_inputs", "outputs", "output", "inner_out
            "linearize_at"}
 
 
-def import_relative(spec: str, base_dir: pathlib.Path | None) -> Any:
-    """``"module:attr"`` imported with ``base_dir`` (the config's folder) searched first."""
-    from tuner.registry import resolve_callable
+def import_relative(spec: str, base_dir: pathlib.Path | None, key: str = "objective.plant.python") -> Any:
+    """``"module:attr"`` imported with ``base_dir`` (the config's folder) searched first, if the command may load
+    it (:func:`tuner.trust.import_code`: never in a read-only command, never from a handed-over run directory)."""
+    from tuner.trust import import_code
 
-    return resolve_callable(spec, base_dir)
+    return import_code(spec, base_dir, key)
 
 
 def _rk4_amp(z: complex) -> float:
@@ -153,7 +154,7 @@ def nonlinear_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: path
     if not isinstance(target, str) or ":" not in target:
         raise ValueError(f"{key}.python: expected 'module:function', got {target!r}")
     try:
-        fn = import_relative(target, base_dir)
+        fn = import_relative(target, base_dir, f"{key}.python")
     except (ImportError, AttributeError) as exc:
         raise ValueError(f"{key}.python: cannot import {target!r} ({exc}); modules are searched in the "
                          "config's folder first, then on sys.path") from None
