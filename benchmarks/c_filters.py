@@ -130,7 +130,7 @@ def sizes(tmp: Path, precisions=("double", "float"), configs=None) -> dict[str, 
             for name, text in render_c_filter(_filter(label), rate_hz=100.0, precision=precision,
                                               prefix="SZ").items():
                 (d / name).write_text(text)
-            subprocess.run([cc, *STRICT_FLAGS, "-O2", "-c", str(d / "sz.c"), "-o", str(d / "sz.o")], check=True)
+            subprocess.run([*cc, *STRICT_FLAGS, "-O2", "-c", str(d / "sz.c"), "-o", str(d / "sz.o")], check=True)
             sec = {}
             for line in subprocess.run(["size", "-A", str(d / "sz.o")], capture_output=True, text=True,
                                        check=True).stdout.splitlines():
