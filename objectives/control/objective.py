@@ -73,6 +73,7 @@ from objectives.control.profiles import profile_from_config
 from objectives.control.report import plot_surfaces, save_figure
 from objectives.control.wmp import STATUS_OK, SensorParams, WMPParams, simulate_closed_loop
 from tuner.objective import Evaluation
+from tuner.safe_io import write_atomic
 from tuner.space import Space
 
 __all__ = ["ClosedLoopObjective", "THESIS_REQUIREMENTS"]
@@ -499,7 +500,8 @@ class ClosedLoopObjective:
         self.save_response(best, run_dir / "response_best.npz")
         from objectives.control.report import traces_doc
 
-        (run_dir / "traces.json").write_text(json.dumps(traces_doc(self, init, best), separators=(",", ":")))
+        write_atomic(run_dir / "traces.json", json.dumps(traces_doc(self, init, best), separators=(",", ":")),
+                     fsync=False)
         if callable(getattr(self._ctrl, "surfaces", None)):
             values = dict(self.fixed)
             values.update(best)
@@ -514,8 +516,8 @@ class ClosedLoopObjective:
         s = self.simulate(params)
         path = pathlib.Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        np.savez(
-            path,
+        write_atomic(path, lambda fh: np.savez(
+            fh,
             t=s["t"],
             references=s["references"],
             outputs=s["outputs"],
@@ -523,7 +525,7 @@ class ClosedLoopObjective:
             n_done=s["n_done"],
             controller=self.controller,
             fitness=self(params).fitness,
-        )
+        ), fsync=False)  # never through a link or into a hard-linked file of the run directory (tuner.safe_io)
         return path
 
     def plot_response(

@@ -8,6 +8,8 @@ import pathlib
 from collections.abc import Mapping
 from typing import Any
 
+from tuner.safe_io import write_atomic
+
 __all__ = ["plot_surfaces", "save_figure", "traces_doc"]
 
 #: samples per plotted series
@@ -59,7 +61,7 @@ def save_figure(fig, path: str | pathlib.Path) -> pathlib.Path:
     fig.tight_layout()
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=110), fsync=False)
     plt.close(fig)
     return path
 
@@ -94,7 +96,7 @@ def plot_surfaces(
             ax.set_title(f"{name.upper()} {label}")
         fig.tight_layout()
         path = fig_dir / f"surface_{name}.png"
-        fig.savefig(path, dpi=100)
+        write_atomic(path, lambda fh, fig=fig: fig.savefig(fh, format="png", dpi=100), fsync=False)
         plt.close(fig)
         paths.append(path)
     return paths

@@ -129,9 +129,8 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
                   key: str = "objective.plant") -> FMUPlant:
     """Open, validate and instantiate the FMU of ``spec`` (its keys among :data:`FMU_KEYS`, checked by
     :func:`~objectives.control.plants.build_plant`); ``ValueError`` naming the key otherwise."""
-    from tuner.trust import check_code
-
     from objectives.control.plants.fmu_archive import read_description
+    from tuner.trust import check_code
 
     try:
         import fmpy  # noqa: F401

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from tuner.safe_io import write_atomic
+
 __all__ = ["write_report"]
 
 
@@ -36,7 +38,7 @@ def _save(fig, path: pathlib.Path) -> pathlib.Path:
 
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=110), fsync=False)
     plt.close(fig)
     return path
 
@@ -123,7 +125,7 @@ def write_report(obj: Any, run_dir: pathlib.Path, init: dict[str, Any], best: di
             plot_bode(obj, runs, fig_dir / "bode.png")
     except ValueError:  # a design that cannot be built (defaults outside the plant's reach): no figure
         pass
-    (run_dir / "requirements.md").write_text(
-        "# Requirements\n\n" + (requirements_markdown(obj, init, best) if obj._req else "none given\n"))
+    write_atomic(run_dir / "requirements.md", "# Requirements\n\n" + (requirements_markdown(obj, init, best)
+                                                                      if obj._req else "none given\n"), fsync=False)
     out["requirements_met"] = not any(not r["met"] for r in obj.requirement_rows(best))
     return out
