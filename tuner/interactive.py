@@ -234,8 +234,12 @@ def run_figures(run_dir: Path, hist: pd.DataFrame, space: Any, best: dict[str, A
 
 def best_so_far(run_dir: Path, points: int = 200) -> dict[str, list[float]] | None:
     """A run's best fitness so far against evaluations (``x``, ``y``; at most ``points``), or None."""
-    try:
-        h = pd.read_csv(run_dir / "history.csv", usecols=["eval", "fitness", "status"])
+    import io
+
+    from tuner.safe_io import read_text
+
+    try:  # through tuner.safe_io: a link or a FIFO named history.csv is no curve, never followed or waited on
+        h = pd.read_csv(io.StringIO(read_text(Path(run_dir) / "history.csv")), usecols=["eval", "fitness", "status"])
     except (OSError, ValueError, pd.errors.ParserError, pd.errors.EmptyDataError):
         return None
     f = pd.to_numeric(h["fitness"], errors="coerce").where(h["status"] == "ok")

@@ -81,6 +81,7 @@ th[aria-sort=descending]::after { content: " \25BC"; font-size: .7em; }
 .controls select, .controls input { font: inherit; max-width: 100%; }
 .muted { color: var(--muted); }
 td.txt, th.txt { text-align: left; white-space: nowrap; }
+td:first-child, td.txt.name { white-space: normal; overflow-wrap: anywhere; min-width: 8em; max-width: 22em; }
 img { max-width: 100%; height: auto; display: block; margin: .8em auto; }
 .missing-image { color: var(--muted); font-style: italic; }
 .status { display: inline-block; padding: .15em .7em; border-radius: 1em; font-weight: 600;

@@ -153,8 +153,10 @@ def open_nofollow(path: Path | str, flags: int, mode: int = 0o644) -> int:
     return fd
 
 
-def read_bytes(path: Path | str, limit: int = MAX_READ_BYTES) -> bytes:
-    """The content of the regular file ``path`` (no link followed, no FIFO opened, at most ``limit`` bytes)."""
+def read_bytes(path: Path | str, limit: int | None = None) -> bytes:
+    """The content of the regular file ``path`` (no link followed, no FIFO opened, at most ``limit`` bytes,
+    default :data:`MAX_READ_BYTES`)."""
+    limit = MAX_READ_BYTES if limit is None else limit
     fd = open_nofollow(path, os.O_RDONLY)
     with os.fdopen(fd, "rb") as fh:
         size = os.fstat(fd).st_size
@@ -168,7 +170,7 @@ def read_bytes(path: Path | str, limit: int = MAX_READ_BYTES) -> bytes:
     return data
 
 
-def read_text(path: Path | str, limit: int = MAX_READ_BYTES) -> str:
+def read_text(path: Path | str, limit: int | None = None) -> str:
     """The file's text (UTF-8) under the rules of :func:`read_bytes` (``UnicodeDecodeError`` for binary content)."""
     return read_bytes(path, limit).decode("utf-8")
 
@@ -226,13 +228,13 @@ def write_atomic(path: Path | str, data: bytes | str | Callable[[IO[bytes]], Non
                 fh.flush()
                 if fsync:
                     os.fsync(fh.fileno())
-    except BaseException:  # a full disk or a Ctrl-C: nothing half-written stays behind, the old file is untouched
+        if before_replace is not None:
+            before_replace()
+        os.replace(tmp, path)
+    except BaseException:  # a full disk, a Ctrl-C or SIGTERM: no temporary file stays behind, the old file is kept
         if os.path.lexists(tmp):
             os.unlink(tmp)
         raise
-    if before_replace is not None:
-        before_replace()
-    os.replace(tmp, path)
     if fsync:
         try:
             dfd = os.open(path.parent, os.O_RDONLY)

@@ -248,6 +248,7 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
             results = Parallel(n_jobs=n_par, backend="loky")(
                 delayed(_run_job)(j, str(Path(d).absolute()), True, True, report) for j, d in todo)
         except KeyboardInterrupt:
+            _mark_stopped([d for _, d in todo])
             return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:
         from tuner.report import throttled
@@ -266,6 +267,37 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
         path_md = None
     return {"dir": out, "report": path_md, "ok": all(r["status"] == "finished" for r in results),
             "results": results}
+
+
+def _mark_stopped(run_dirs: list[str], wait_s: float = 5.0) -> None:
+    """After a stop signal to a parallel sweep: a job whose ``meta.json`` still says ``running`` once no process
+    holds its lock (its worker was stopped with the pool) is marked ``interrupted``, as the run itself does when
+    it is stopped; ``tuner sweep`` (or ``tuner resume``) continues it."""
+    import time
+
+    from tuner.run import _now
+
+    left, deadline = list(run_dirs), time.monotonic() + wait_s
+    while left:
+        busy = []
+        for d in left:
+            try:
+                rd = RunDir(d)
+                if not rd.is_run() or rd.meta().status != "running":
+                    continue
+                with rd.lock():  # a RunError while a worker still holds it
+                    meta = rd.meta()
+                    if meta.status == "running":
+                        rd.write_meta(meta.replace(status="interrupted", interrupted=_now()))
+            except RunError as exc:
+                if "in use by pid" in str(exc):
+                    busy.append(d)
+            except (OSError, ValueError):
+                pass
+        if not busy or time.monotonic() > deadline:
+            return
+        left = busy
+        time.sleep(0.1)
 
 
 # --- results ------------------------------------------------------------------------------------
