@@ -130,6 +130,7 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
     """Open, validate and instantiate the FMU of ``spec`` (its keys among :data:`FMU_KEYS`, checked by
     :func:`~objectives.control.plants.build_plant`); ``ValueError`` naming the key otherwise."""
     from objectives.control.plants.fmu_archive import read_description
+    from tuner.sizes import check_samples
     from tuner.trust import check_code
 
     try:
@@ -164,8 +165,10 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ValueError(f"{key}.parameters.{n}: must be a finite number, got {v!r}")
     delay = spec.get("delay_s", 0.0)
-    if not (isinstance(delay, (int, float)) and delay >= 0) or abs(delay / period_s - round(delay / period_s)) > 1e-6:
+    if not (isinstance(delay, (int, float)) and math.isfinite(delay) and delay >= 0) \
+            or abs(delay / period_s - round(delay / period_s)) > 1e-6:
         raise ValueError(f"{key}.delay_s: a whole number of controller periods ({period_s} s) >= 0, got {delay!r}")
+    check_samples(f"{key}.delay_s", round(delay / period_s), "the input delay line")
     out_i, inner = spec.get("output", 0), spec.get("inner_output", -1)
     for name, v, lo in (("output", out_i, 0), ("inner_output", inner, -1)):
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v < len(outputs):

@@ -37,6 +37,8 @@ from typing import Any
 
 import numpy as np
 
+from tuner.sizes import check_samples
+
 __all__ = ["NonlinearPlant", "nonlinear_from_spec", "import_relative", "NL_KEYS"]
 
 NL_KEYS = {"python", "x0", "params", "n_inputs", "outputs", "output", "inner_output", "n_sub", "delay_s",
@@ -173,8 +175,10 @@ def nonlinear_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: path
     inner = _int(spec, "inner_output", -1, -1, outputs.size - 1, key)
     n_sub = _int(spec, "n_sub", 10, 1, 10000, key)
     delay = spec.get("delay_s", 0.0)
-    if not (isinstance(delay, (int, float)) and delay >= 0) or abs(delay / period_s - round(delay / period_s)) > 1e-6:
+    if not (isinstance(delay, (int, float)) and math.isfinite(delay) and delay >= 0) \
+            or abs(delay / period_s - round(delay / period_s)) > 1e-6:
         raise ValueError(f"{key}.delay_s: a whole number of controller periods ({period_s} s) >= 0, got {delay!r}")
+    check_samples(f"{key}.delay_s", round(delay / period_s), "the input delay line")
     lin = spec.get("linearize_at") or {}
     if not isinstance(lin, Mapping) or set(lin) - {"x", "u"}:
         raise ValueError(f"{key}.linearize_at: expected {{x: [...], u: [...]}}, got {lin!r}")

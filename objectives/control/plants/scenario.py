@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from tuner.sizes import samples
+
 __all__ = ["Scenario", "scenario_from_spec", "Realism", "realism_from_spec", "cost_from_spec", "loop_cost",
            "step_metrics", "REQUIREMENTS", "check_requirements", "TERMS"]
 
@@ -126,7 +128,7 @@ def scenario_from_spec(spec: Any, period_s: float, key: str = "objective.scenari
     if "duration_s" not in spec:
         raise ValueError(f"{key}.duration_s: missing; the simulated time (s)")
     dur = _num(f"{key}.duration_s", spec["duration_s"], 0.0, strict=True)
-    n = int(round(dur / period_s))
+    n = samples(f"{key}.duration_s", dur, period_s, "the scenario")  # before any array of that length
     if n < 2:
         raise ValueError(f"{key}.duration_s: {dur} s is shorter than two controller periods ({period_s} s)")
     t = np.arange(n) * period_s
