@@ -27,6 +27,7 @@ import datetime as _dt
 import hashlib
 import itertools
 import json
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -71,8 +72,9 @@ def _slug(v: Any) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in s)[:40]
 
 
-def load_sweep(path: str | Path) -> dict[str, Any]:
-    """Read and expand a sweep file into ``{"name", "jobs": [{id, method, seed, overrides, raw}], ...}``."""
+def load_sweep(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
+    """Read and expand a sweep file into ``{"name", "jobs": [{id, method, seed, overrides, raw}], ...}``;
+    ``overrides`` (``--set key.path=value``) apply to every job, after its variant and grid values."""
     path = Path(path)
     doc = read_yaml(path)
     if not isinstance(doc, dict) or "sweep" not in doc or not isinstance(doc["sweep"], dict):
@@ -132,6 +134,7 @@ def load_sweep(path: str | Path) -> dict[str, Any]:
             for seed in seeds or [base_raw.get("seed", 0)]:
                 over = {**vover, **dict(zip(keys, combo)), "seed": seed}
                 raw = apply_overrides(base_raw, _overrides(over), path)
+                raw = apply_overrides(raw, list(overrides or []), "--set")  # the command line's, over the file's
                 raw["output"] = "."  # unused: the sweep names each run directory
                 parts = ([_slug(vname)] if vname else []) + [f"{k.split('.')[-1]}-{_slug(v)}"
                                                              for k, v in zip(keys, combo)]
@@ -213,11 +216,13 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool, repor
 
 
 def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int | None = None,
-              quiet: bool = False, report: bool = True) -> dict[str, Any]:
+              quiet: bool = False, report: bool = True, overrides: list[str] | None = None) -> dict[str, Any]:
     """Run (or continue) every job of a sweep, then write its report. ``report=False`` writes no report, the
     jobs' nor the sweep's (``results.csv`` and ``summary.csv`` are written; ``tuner report SWEEP_DIR`` writes
-    the reports later)."""
-    sw = load_sweep(path)
+    the reports later). ``overrides`` (``--set key.path=value``) apply to every job; a sweep directory run
+    with other overrides is refused (its jobs' configurations differ)."""
+    overrides = list(overrides or [])
+    sw = load_sweep(path, overrides)
     out = Path(sweep_dir) if sweep_dir else Path(sw["output"]) / sw["name"]
     n_par, n_cap = sweep_jobs(sw["parallel_jobs"] if jobs is None else jobs, len(sw["jobs"]))
     check_not_link(out / "jobs")
@@ -229,8 +234,9 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
     if regular(old) and read_text(old) != spec_text:
         raise ConfigError(path, "sweep", f"{out} holds a different sweep; choose another --dir or delete it")
     atomic_write(old, spec_text)
-    atomic_write(out / "command.txt", " ".join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
-                                                                              if sweep_dir else [])) + "\n")
+    atomic_write(out / "command.txt", shlex.join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
+                                                                                if sweep_dir else [])
+                                                 + [a for o in overrides for a in ("--set", o)]) + "\n")
     atomic_write(out / JOBS_FILE, json.dumps(_job_list(sw), indent=1, default=str))  # show/report read this
     if n_cap and not quiet:
         print(f"note: {n_cap}", file=sys.stderr, flush=True)
@@ -370,7 +376,10 @@ def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
         except (ValueError, UnicodeDecodeError) as exc:
             raise ConfigError(sweep_dir / JOBS_FILE, "", f"unreadable: {exc}") from None
         return {"description": "", **doc, "name": str(doc.get("name", sweep_dir.name))}
-    cmd = read_text(sweep_dir / "command.txt").split() if regular(sweep_dir / "command.txt") else []
+    try:
+        cmd = shlex.split(read_text(sweep_dir / "command.txt")) if regular(sweep_dir / "command.txt") else []
+    except ValueError:  # not a command line
+        cmd = []
     src = Path(cmd[2]) if len(cmd) > 2 else sweep_dir / "sweep.yaml"
     if not src.exists():
         src = sweep_dir / "sweep.yaml"

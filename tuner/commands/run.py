@@ -33,9 +33,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(a: argparse.Namespace) -> int:
     if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
-        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir:
-            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir apply to job files")
-        return sweep.run(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet, no_report=a.no_report))
+        if a.seed is not None or a.n_jobs or a.run_dir:
+            raise UsageError(f"{a.config}: is a sweep file; --seed/--n-jobs/--run-dir apply to job files (--set "
+                             "applies to every job of the sweep)")
+        return sweep.run(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet, no_report=a.no_report,
+                                            overrides=a.overrides))
     cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
     return print_result(run_job(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report))
 
