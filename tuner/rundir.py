@@ -7,8 +7,8 @@ Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
 
 ``config.yaml``       the resolved config, defaults filled in, as run
 ``.config.json``      the same config as canonical JSON (to name what changed if config.yaml is edited)
-``meta.json``         status (running/finished/interrupted/failed), seed, config hash, times, versions,
-                      git commit, host, CPU count, backend, evaluation counts, stop reason, notes
+``meta.json``         status (running/finished/interrupted; failed: every evaluation failed), seed, config hash,
+                      times, versions, git commit, host, CPU count, backend, evaluation counts, stop reason, notes
 ``history.csv``       one row per evaluation: eval, stage, generation, index, every parameter,
                       fitness, status, error, seconds, metrics (the record of truth)
 ``best.yaml``         best parameters, fitness, metrics and where they were found, derived from the
@@ -20,8 +20,9 @@ Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
                       summary (tuning score, CV score, gap, large or not) and the final selection
 ``cv.md``, ``cv.csv`` the cross-validation tables (per fold, summary) of :mod:`tuner.cv`
 
-Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data.
-(A config with ``objective.kind: python`` imports the module it names by design: trust the config.)
+Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data. Every file
+is opened through :mod:`tuner.safe_io` (regular files only, no link of either kind where tuner writes, bounded
+size); the code a config names is loaded only as :mod:`tuner.trust` allows.
 
 Test hook: ``TUNER_FAULT_KILL_AT_WRITE=k`` (optionally ``k:after``) makes the process ``os._exit(137)``
 at its k-th write through this module: by default just before the write takes effect (an atomic write
