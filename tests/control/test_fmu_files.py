@@ -158,11 +158,18 @@ def test_a_loky_run_leaves_no_extraction_folder_in_any_process(fmu, tmp_path):
 
 
 @pytest.mark.slow
-def test_ctrl_c_leaves_no_extraction_folder(fmu, tmp_path):
+@pytest.mark.parametrize("backend", ["serial", "loky"])
+def test_ctrl_c_leaves_no_extraction_folder(fmu, tmp_path, backend):
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) during a run, on its own process or with
+    loky workers that each unpacked the FMU: no extraction folder is left in the temporary directory."""
     shutil.copy(fmu, tmp_path / "plant.fmu")
-    job = _job(tmp_path, optimizer={"method": "pso", "population": 4, "generations": 10_000})
+    job = _job(tmp_path, optimizer={"method": "pso", "population": 4, "generations": 10_000},
+               parallel={"backend": backend, "n_jobs": 2})
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
     p = subprocess.Popen([sys.executable, "-m", "tuner", "run", str(job), "--run-dir", str(tmp_path / "r"), "-q",
-                          "--no-report"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                          "--no-report"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         env={**os.environ, "TMPDIR": str(tmp)}, start_new_session=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:  # until the run is past its first generation (the FMU is extracted)
         try:
@@ -171,11 +178,13 @@ def test_ctrl_c_leaves_no_extraction_folder(fmu, tmp_path):
         except (OSError, ValueError):
             pass
         time.sleep(0.2)
-    assert list(Path(tempfile.gettempdir()).glob(f"tuner-fmu-{p.pid}-*")), "no extraction folder while running"
-    p.send_signal(signal.SIGINT)
+    time.sleep(1.0)  # the workers' first chunks unpacked their copies
+    assert list(tmp.glob("tuner-fmu-*")), "no extraction folder while running"
+    os.killpg(p.pid, signal.SIGINT)
     _, err = p.communicate(timeout=120)
     assert p.returncode == 1 and "Traceback" not in err, err
-    assert not list(Path(tempfile.gettempdir()).glob(f"tuner-fmu-{p.pid}-*"))
+    time.sleep(0.5)
+    assert not list(tmp.glob("tuner-fmu-*"))
 
 
 def test_the_fmu_of_a_handed_over_run_is_loaded_by_no_read_only_command(fmu, tmp_path):

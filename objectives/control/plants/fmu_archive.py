@@ -15,8 +15,9 @@ the process:
 - **extraction folders** (``tuner-fmu-<pid>-*`` in the temporary directory, mode 0700) belong to the process
   that made them: removed when the plant using it is garbage-collected, at the process's exit (workers
   included: they exit through ``sys.exit``), and on a Ctrl-C (which ends in one of those). A process killed
-  outright (``kill -9``, a pool's terminate) cannot clean up: the next extraction in any process of the user
-  removes the folders of processes that no longer exist.
+  outright (``kill -9``, a pool's terminate after a Ctrl-C) cannot clean up: at its exit the process that
+  started it, and at the next extraction any process of the user, removes the folders of processes that no
+  longer exist.
 """
 
 from __future__ import annotations
@@ -173,8 +174,11 @@ def _remove(folder: str, owner: int) -> None:
 
 @atexit.register
 def _remove_all() -> None:
+    """At exit: this process's folders, and those of processes that ended without cleaning up (workers a pool
+    killed on Ctrl-C end before the process that started them)."""
     for folder in list(_live):
         _remove(folder, os.getpid())
+    _sweep_stale()
 
 
 def extract(path: str | Path, key: str) -> Path:
