@@ -266,8 +266,11 @@ def load(run_dir: str | Path) -> Result:
     if not rd.path.is_dir():
         raise RunError(f"{rd.path}: not a run directory (no such directory)")
     meta = rd.meta()
-    text = read_text(rd.file("history.csv")) if regular(rd.file("history.csv")) else ""
-    history = pd.read_csv(io.StringIO(text)) if text else pd.DataFrame()
+    try:
+        text = read_text(rd.file("history.csv")) if regular(rd.file("history.csv")) else ""
+        history = pd.read_csv(io.StringIO(text)) if text else pd.DataFrame()
+    except (UnicodeDecodeError, ValueError, pd.errors.ParserError) as exc:  # EmptyDataError is a ValueError
+        raise RunError(f"{rd.file('history.csv')}: unreadable ({str(exc).strip().splitlines()[0][:200]})") from None
     params: dict[str, Any] = {}
     best: dict[str, Any] = {}
     metrics: dict[str, Any] = {}

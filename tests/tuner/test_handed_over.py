@@ -330,6 +330,38 @@ def test_code_commands_refuse_a_plant_module_inside_the_run_directory(plant_run,
     assert not marker.exists()
 
 
+def test_a_handed_over_sweep_report_never_imports_its_plant_module(plant_run, tmp_path):
+    """`tuner report SWEEP_DIR` rebuilt every job's objective for its response figure, importing the plant
+    module the jobs' configs named, from inside the sweep directory."""
+    cfg = yaml.safe_load((plant_run / "config.yaml").read_text())
+    base = {k: cfg[k] for k in ("name", "objective", "optimizer", "parallel")}
+    (tmp_path / "plant_h.py").write_text(PLANT.format(marker=str(tmp_path / "UNUSED")))
+    (tmp_path / "sw.yaml").write_text(yaml.safe_dump({"sweep": {"name": "sw", "base": base, "seeds": [1, 2]}}))
+    out = run_tuner("sweep", tmp_path / "sw.yaml", "--dir", tmp_path / "sweep", "-q", "--no-report")
+    assert out.returncode == 0, out.stderr
+    sys.modules.pop("plant_h", None)
+    handed = tmp_path / "handed"
+    shutil.copytree(tmp_path / "sweep", handed)
+    marker = tmp_path / "IMPORTED"
+    (handed / "plant_h.py").write_text(PLANT.format(marker=str(marker)))
+    for job in (handed / "jobs").iterdir():
+        if job.is_dir():
+            c = yaml.safe_load((job / "config.yaml").read_text())
+            (job / "config.yaml").write_text(yaml.safe_dump({**c, "base_dir": str(handed)}, sort_keys=False))
+    for cmd in (["report", handed], ["show", handed], ["dashboard", tmp_path]):
+        res = run_tuner(*cmd)
+        assert res.returncode == 0 and "Traceback" not in res.stderr, (cmd, res.stderr)
+        assert not marker.exists(), f"`tuner {cmd[0]}` imported the plant module of a handed-over sweep"
+    _interrupted(handed / "jobs" / "seed-1")  # the sweep run again resumes it: not with the code inside it
+    c = yaml.safe_load((handed / "jobs" / "seed-1" / "config.yaml").read_text())
+    meta = json.loads((handed / "jobs" / "seed-1" / "meta.json").read_text())
+    (handed / "jobs" / "seed-1" / "meta.json").write_text(json.dumps({**meta, "config_hash": config_hash(c)}))
+    (handed / "jobs" / "seed-1" / "history.chain").write_text(_chain(handed / "jobs" / "seed-1", None))
+    one_error(run_tuner("resume", handed / "jobs" / "seed-1", "-q"), "inside the run directory", str(handed))
+    assert not marker.exists()
+    sys.modules.pop("plant_h", None)
+
+
 def test_the_user_opts_in_with_a_config_of_their_own(plant_run, tmp_path):
     """The way the refusals point to: the module copied out beside a config of the user's."""
     d, marker = _handed_plant_run(plant_run, tmp_path)
