@@ -141,7 +141,7 @@ def sizes(tmp: Path, precisions=("double", "float"), configs=None) -> dict[str, 
             (d / "main.c").write_text('#include <stdio.h>\n#include "sz.h"\nint main(void) { printf("%lu %lu\\n", '
                                       "(unsigned long)sizeof(SZ_filter), (unsigned long)sizeof(SZ_params)); "
                                       "return 0; }\n")
-            subprocess.run([cc, "-std=c99", "-o", str(d / "main"), str(d / "main.c")], check=True)
+            subprocess.run([*cc, "-std=c99", "-o", str(d / "main"), str(d / "main.c")], check=True)
             st, pa = subprocess.run([str(d / "main")], capture_output=True, text=True, check=True).stdout.split()
             out[f"{label} ({precision})"] = {"code_bytes": code, "state_bytes": int(st), "params_bytes": int(pa)}
     return out

@@ -4,11 +4,12 @@ A report page runs the scripts of its own folder, so what lies there decides wha
 when they open a report tuner just wrote. A file of the right name is therefore never trusted for its name or
 its size: :func:`install` compares the SHA-256 of what is there with that of the installed package's file and
 replaces anything else. Where the file system allows, the file is a hard link (4.8 MB for plotly, once per
-folder would add up): to the installed package's file, or to a copy in one of the three folders above (a sweep
-or dashboard folder beside the runs is often on the runs' file system when the package is not), but only a
-copy whose content hash matches at the moment of linking, that is a regular file (no symbolic link) owned by
-the user or by root and writable by no one else (a file another user may write would change the linked page's
-script later). Otherwise the file is copied from the package.
+folder would add up) to a copy in one of the three folders above (a sweep or dashboard folder holding the
+runs), but only a copy whose content hash matches at the moment of linking, that is a regular file (no
+symbolic link) owned by the user or by root and writable by no one else (a file another user may write would
+change the linked page's script later). Otherwise the file is copied from the package, never linked to it: a
+write into a report folder's copy (``echo > plotly.min.js``) would otherwise change the installed package,
+and with it every later report.
 """
 
 from __future__ import annotations
@@ -59,8 +60,8 @@ def install(folder: str | Path, name: str, src: str | Path) -> Path:
     """Make ``folder/name`` hold exactly the content of the installed file ``src``; returns its path.
 
     A file already there with the same SHA-256 is kept; anything else (another content of any size, a link, a
-    FIFO) is replaced. The new file is a hard link (to a matching copy up to :data:`NEAR_LEVELS` folders above,
-    else to ``src``) or a copy (see the module docstring).
+    FIFO) is replaced. The new file is a hard link to a matching copy up to :data:`NEAR_LEVELS` folders above,
+    else a copy of ``src`` (see the module docstring).
     """
     folder, src = Path(folder), Path(src)
     want = _package_hash(src)
@@ -72,7 +73,7 @@ def install(folder: str | Path, name: str, src: str | Path) -> Path:
         os.unlink(tmp)
     near = [a / name for a in list(folder.resolve().parents)[:NEAR_LEVELS]]
     try:
-        for cand in [*near, src]:
+        for cand in near:
             if _linkable(cand, want):
                 try:
                     os.link(cand, tmp)

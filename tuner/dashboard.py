@@ -68,8 +68,8 @@ def _walk(root: Path) -> list[tuple[str, Path]]:
 def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
     from tuner.interactive import best_so_far
     from tuner.rundir import RunDir
+    from tuner.runinfo import unreadable
     from tuner.safe_io import regular
-    from tuner.sweep import unreadable
 
     rel = d.relative_to(root).as_posix()
     row: dict[str, Any] = {"id": rel, "kind": kind, "name": rel if kind == "job" else d.name}

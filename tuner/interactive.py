@@ -10,8 +10,8 @@ Plotly stays optional (``pip install 'attitude-tuner[report]'``): without it eve
 the static page of :mod:`tuner.render` (PNG figures, no script). With it a page gets
 
 - ``plotly.min.js`` once per folder and ``tuner_report.js`` (package data) beside it, checked by their SHA-256
-  against the installed package's (:mod:`tuner.assets`: hard-linked where the file system allows, else
-  copied): the only scripts the page's policy admits (``script-src 'self'``);
+  against the installed package's (:mod:`tuner.assets`: hard-linked to a matching copy in a folder above,
+  else copied): the only scripts the page's policy admits (``script-src 'self'``);
 - its data as one JSON block, and the plots drawn from it by ``tuner_report.js``: convergence,
   parameter importance (:mod:`tuner.importance`), fitness against each parameter, parallel coordinates
   of the best candidates, a contour of fitness over the two most important parameters, and the
@@ -69,7 +69,8 @@ def _plotly_js() -> Path:
 
 def install_assets(folder: str | Path) -> None:
     """Put ``plotly.min.js`` and ``tuner_report.js`` into ``folder``: kept when their SHA-256 is the installed
-    package's, else replaced (hard-linked where possible; :func:`tuner.assets.install`)."""
+    package's, else replaced (a hard link to a matching copy in a folder above, else a copy;
+    :func:`tuner.assets.install`)."""
     from tuner.assets import install
 
     install(folder, "plotly.min.js", _plotly_js())

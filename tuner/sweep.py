@@ -40,7 +40,7 @@ from tuner.records import RunError, load_json
 from tuner.rundir import RunDir, atomic_write
 from tuner.safe_io import check_not_link, read_bytes, read_text, refuse_links, regular, write_atomic
 
-__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file", "ranked_by",
+__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "is_sweep_file", "ranked_by",
            "RANKED_BY", "DEFAULTS_OF"]
 
 JOBS_FILE = "jobs.json"
@@ -578,41 +578,6 @@ def ranking_lines(df: Any) -> list[str]:
     return [f"ranking by the median {what}, with each method's defaults scored the same way:",
             *(f"  {int(r[('rank', '')])}. {name}: {key_col} {r[(key_col, 'median')]:.4g}"
               for name, r in summ.iterrows())]
-
-
-def list_runs(runs_dir: Path) -> str:
-    """A table of the run directories under ``runs_dir`` (recursively): status, best fitness, age; a run that
-    cannot be read is listed as ``unreadable``, with the reason on a line after the table."""
-    import pandas as pd
-
-    rows, why = [], []
-    now = _dt.datetime.now(_dt.UTC)
-    for meta_p in sorted(Path(runs_dir).rglob("meta.json")):
-        name = str(meta_p.parent.relative_to(runs_dir))
-        try:
-            rd = RunDir(meta_p.parent)
-            meta = rd.meta()
-            best = rd.best() if rd.has_best() else None
-            age = ""
-            if meta.created:
-                dt = now - _dt.datetime.strptime(meta.created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
-                age = str(dt).split(".")[0]
-        except (RunError, OSError, ValueError) as exc:  # one damaged run is listed as such, the others as usual
-            rows.append({"run": name, "status": "unreadable", "optimizer": "", "evals": None, "best_fitness": None,
-                         "age": ""})
-            why.append(f"unreadable: {name}: {unreadable(exc)}")
-            continue
-        rows.append({"run": name, "status": meta.status, "optimizer": meta.optimizer,
-                     "evals": meta.n_evals, "best_fitness": best.fitness if best else None, "age": age})
-    if not rows:
-        return f"no runs under {runs_dir}"
-    return "\n".join([pd.DataFrame(rows).to_string(index=False), *why])
-
-
-def unreadable(exc: BaseException) -> str:
-    """Why a run directory of a listing could not be read: the first line of the error, short."""
-    text = f"{exc.filename}: {exc.strerror}" if isinstance(exc, OSError) and exc.filename else str(exc)
-    return (text.splitlines() or [type(exc).__name__])[0][:160]
 
 
 def summary_text(df: Any, sweep_dir: Path) -> str:
