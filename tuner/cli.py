@@ -14,7 +14,7 @@ from typing import Any
 
 from tuner import signals, trust
 from tuner._version import __version__
-from tuner.commands import ENGINE, add_command, engine_command, load_plugin, plugin_names
+from tuner.commands import ENGINE, add_command, engine_command, load_plugin, plugin_names, plugin_source
 from tuner.commands.common import UsageError
 from tuner.config import ConfigError
 from tuner.records import RunError
@@ -46,8 +46,8 @@ EPILOG = """examples:
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of ``tuner``: every command's help line, and the arguments of ``command`` alone.
 
-    Only ``command``'s module is imported (:mod:`tuner.commands`); without one (``tuner --help``) the
-    commands other packages add are loaded for their help lines.
+    Only ``command``'s module is imported (:mod:`tuner.commands`); ``tuner --help`` names the commands other
+    packages add, and the package, without importing them (a package's import may load numba).
     """
     ap = argparse.ArgumentParser(
         prog="tuner", formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EPILOG,
@@ -60,11 +60,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     if command in ENGINE:
         return ap
     for name in plugin_names():  # read only for a command the engine does not have, and for --help
-        if command is None or name == command:
+        if name == command:
             plugin = load_plugin(name)
-            add_command(sub, name, plugin.help, plugin if name == command else None)
-        else:
-            add_command(sub, name, "")
+            add_command(sub, name, plugin.help, plugin)
+        else:  # not imported: a package's import may be heavy (the domain's loads numba), and --help stays light
+            add_command(sub, name, f"a command of {plugin_source(name)}: tuner {name} --help")
     return ap
 
 

@@ -299,13 +299,20 @@ class Run:
         opt = g.optimizer
         gen, G, n = opt.generation, opt.generations, len(g.records)
         rate = n / secs if secs > 0 else math.inf
-        eta = ""
+        later = stages - g.stage - 1  # stages still to come, each with the same budget
+        left_s = []  # the time each budget still needs at this generation's pace; the first one spent ends the run
         if G:
-            left = (G - gen) + (stages - g.stage - 1) * G
-            eta = f"  ETA {_dt.timedelta(seconds=round(left * secs))}"
+            left_s.append(((G - gen) + later * G) * secs)
+        cap = getattr(opt, "max_evals", None)
+        if cap and n:
+            left_s.append((max(cap - opt.n_evals, 0) + later * cap) * secs / n)
+        eta = f"  ETA {_dt.timedelta(seconds=round(min(left_s)))}" if left_s else ""
         st = f"stage {g.stage + 1}/{stages} " if stages > 1 else ""
+        head = f"gen {gen}/{G}" if G else f"gen {gen}"
+        if cap:
+            head += f"  evals {opt.n_evals}/{cap}"
         fail = f"  failed {g.n_failed}" if g.n_failed else ""
-        self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
+        self.progress(f"{st}{head}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
     def _finish(self) -> dict[str, Any]:
         """The end of a finished run: the final choice on a held-out fold (``validation.select``), the

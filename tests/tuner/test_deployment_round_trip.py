@@ -268,7 +268,7 @@ def test_loop_controller_deployment_round_trip(name, tmp_path):
     from objectives.control.objective import ClosedLoopObjective
 
     obj0 = ClosedLoopObjective.from_config({**LOOP_OBJECTIVE, "controller": name})
-    choice = next((p for p in obj0._decl if p.choices), None)
+    choice = next((p for p in obj0.decl if p.choices), None)
     fixed = {choice.name: next(c for c in choice.choices if c != choice.default)} if choice else {"u_max": 50.0}
     objective = {**LOOP_OBJECTIVE, "controller": name, "fixed": fixed}
     run_dir = _tiny_run(tmp_path, objective)
@@ -293,7 +293,7 @@ def test_controller_deployment_round_trip(name, tmp_path):
     obj = ClosedLoopObjective.from_config(objective)
 
     dep = _check_controller_exports(run_dir, tmp_path, obj, name, fixed)
-    assert dep.sample_rate_hz == pytest.approx(1.0 / obj._sensors.Ts_s)
+    assert dep.sample_rate_hz == pytest.approx(1.0 / obj.loop.plant.sensors.Ts_s)
     assert "profile" in dep.scoring and "cost" in dep.scoring  # the simulation only served scoring
 
 

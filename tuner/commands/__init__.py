@@ -121,6 +121,11 @@ def plugin_names() -> list[str]:
     return sorted(_entry_points())
 
 
+def plugin_source(name: str) -> str:
+    """The distribution that adds the command ``name`` (read from its metadata; nothing is imported)."""
+    return getattr(getattr(_entry_points()[name], "dist", None), "name", None) or "another package"
+
+
 def load_plugin(name: str) -> Command:
     """The command ``name`` of :data:`ENTRY_POINT_GROUP`; :class:`UsageError` naming the package when it
     does not load or is not a command."""
@@ -149,7 +154,8 @@ def runs_code(name: str, command: Any = None) -> bool:
 
 def add_command(sub: Any, name: str, help: str, command: Any = None) -> argparse.ArgumentParser:
     """The sub-parser of ``name`` in ``sub``; with ``command`` (a module or :class:`Command`) its arguments."""
-    p = sub.add_parser(name, help=help, description=getattr(command, "DESCRIPTION", None))
+    about = getattr(command, "DESCRIPTION", None) or getattr(command, "help", None)
+    p = sub.add_parser(name, help=help, description=about)
     if command is not None:
         command.add_arguments(p)
         p.set_defaults(_run=command.run, _runs_code=runs_code(name, command))

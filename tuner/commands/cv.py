@@ -8,9 +8,9 @@ import sys
 import time
 from pathlib import Path
 
+from tuner import cv as crossval  # its functions looked up when the command runs (tests replace them)
 from tuner.commands.common import fraction
 from tuner.config import load_config
-from tuner.cv import cross_validate, write_cv
 from tuner.registry import say_imports
 from tuner.rundir import RunDir
 from tuner.validation import cv_run_dir
@@ -38,9 +38,9 @@ def run(a: argparse.Namespace) -> int:
         return 0
     cfg = load_config(a.config)
     frac = cfg.validation.budget_fraction if a.budget_fraction is None else a.budget_fraction
-    out = cross_validate(cfg, k=a.k, full=not a.no_full, progress=progress, budget_fraction=frac)
+    out = crossval.cross_validate(cfg, k=a.k, full=not a.no_full, progress=progress, budget_fraction=frac)
     stamp = time.strftime("%Y%m%d-%H%M%S", time.gmtime())
-    d = write_cv(out, a.dir or Path(cfg.output) / "cv" / f"{cfg.name}-{stamp}", cfg.validation)
+    d = crossval.write_cv(out, a.dir or Path(cfg.output) / "cv" / f"{cfg.name}-{stamp}", cfg.validation)
     s = out.summary()
     print(f"CV mean {s['cv_mean']:.4g} (defaults {s['defaults_mean']:.4g})"
           + (f", tuning score {s['tuning_score']:.4g}, gap {s['gap']:+.3g}" if "gap" in s else "") + f"\n{d}")

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections import Counter
 from pathlib import Path
 
 from tuner.commands import sweep
 from tuner.commands.common import UsageError
 from tuner.config import load_config
+from tuner.failures import failure_groups
 from tuner.records import RunError
 from tuner.run import RunResult
 from tuner.run import run as run_job
@@ -63,14 +63,15 @@ def print_result(res: RunResult) -> int:
     return 0 if res.status == "finished" else 1
 
 
-def failure_summary(run_dir: Path) -> str:
-    """The most frequent error text of a run's history (why every evaluation failed)."""
+def failure_summary(run_dir: Path, top: int = 3) -> str:
+    """The most frequent reasons in a run's history (why every evaluation failed), grouped by
+    :func:`tuner.failures.failure_groups`: each with the number of evaluations that give it and an example."""
     try:
-        errors = Counter(row.get("error", "") for row in RunDir(run_dir).history_rows())
+        errors = [row.get("error", "") for row in RunDir(run_dir).history_rows()]
     except (OSError, RunError):
         return "see history.csv"
-    errors.pop("", None)
-    if not errors:
+    groups = failure_groups(errors)[:top]
+    if not groups:
         return "see history.csv"
-    (text, n), = errors.most_common(1)
-    return f"most common reason ({n}x): {text}"
+    return "most common reasons: " + "; ".join(f"{g.example} ({g.count} of {len(errors)} evaluations)"
+                                               for g in groups)

@@ -34,14 +34,18 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FMUPlant", "fmu_from_spec", "FMU_KEYS"]
+from objectives.control.plants.base import PlantKind, SteppedPlant
+from objectives.control.plants.kernels import _loop_nl
+
+__all__ = ["FMUPlant", "fmu_from_spec", "FMU_KEYS", "FMU"]
 
 FMU_KEYS = {"fmu", "inputs", "outputs", "parameters", "output", "inner_output", "delay_s"}
 
 
 @dataclass
-class FMUPlant:
-    """An instantiated co-simulation FMU (module docstring); not picklable (the objective rebuilds it)."""
+class FMUPlant(SteppedPlant):
+    """An instantiated co-simulation FMU (module docstring): the stepped variant of the ``Plant`` protocol,
+    advanced by ``fmi2DoStep``; not picklable (the objective rebuilds it)."""
 
     path: str
     inputs: list[str]
@@ -110,6 +114,14 @@ class FMUPlant:
         self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h * n_sub)
         return np.array(self._fmu.getReal(self._vr_out), dtype=float)
 
+    def stepper(self):
+        """The loop in Python (one library call per period) with :meth:`advance` as the step."""
+        return _loop_nl.py_func, self.advance
+
+    def named_parameters(self) -> dict[str, float]:
+        """The FMU parameters the spec sets."""
+        return dict(self.parameters)
+
     def tracked_row(self) -> np.ndarray:
         row = np.zeros(self.n_states)
         row[self.output] = 1.0
@@ -128,7 +140,7 @@ def _names(key: str, v: Any) -> list[str]:
 def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Path | None,
                   key: str = "objective.plant") -> FMUPlant:
     """Open, validate and instantiate the FMU of ``spec`` (its keys among :data:`FMU_KEYS`, checked by
-    :func:`~objectives.control.plants.build_plant`); ``ValueError`` naming the key otherwise."""
+    :func:`~objectives.control.plants.plant_kind`); ``ValueError`` naming the key otherwise."""
     from objectives.control.plants.fmu_archive import read_description
     from tuner.sizes import check_samples
     from tuner.trust import check_code
@@ -183,3 +195,15 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
         raise ValueError(f"{key}.fmu: {path.name} returned non-finite outputs {y1.tolist()} after one step")
     plant.reset()
     return plant
+
+
+def fmu_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb: the ``parameters.<name>`` the spec sets and
+    ``delay_s``."""
+    params = spec.get("parameters") or {}
+    return {**{f"parameters.{k}": float(v) for k, v in params.items()}, "delay_s": float(spec.get("delay_s", 0.0))}
+
+
+#: the registered kind (objectives.control.plants.PLANTS)
+FMU = PlantKind("fmu", frozenset(FMU_KEYS), fmu_from_spec, "siso",
+                "path.fmu (FMI 2.0 co-simulation, extra fmu); inputs, outputs, parameters", uncertain=fmu_uncertain)

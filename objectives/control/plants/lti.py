@@ -29,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.plants.base import DiscreteLTI, PlantKind
 from tuner.sizes import MAX_LOOP_STATES, MAX_MODEL_ORDER, check_count
 
-__all__ = ["LTIPlant", "lti_from_spec", "LTI_KEYS"]
+__all__ = ["LTIPlant", "lti_from_spec", "LTI_KEYS", "TF", "ZPK", "SS"]
 
 #: the model keys (exactly one is given)
 MODELS = ("tf", "zpk", "ss")
@@ -40,8 +41,9 @@ LTI_KEYS = {*MODELS, "dt", "delay_s", "method", "output", "inner_output", "x0"}
 
 
 @dataclass(frozen=True)
-class LTIPlant:
-    """A discrete LTI plant at the controller period.
+class LTIPlant(DiscreteLTI):
+    """A discrete LTI plant at the controller period (the :class:`~objectives.control.plants.base.DiscreteLTI`
+    variant of the ``Plant`` protocol).
 
     Attributes
     ----------
@@ -69,46 +71,6 @@ class LTIPlant:
     method: str
     output: int = 0
     inner_output: int = -1
-
-    @property
-    def n_states(self) -> int:
-        return self.Ad.shape[0]
-
-    @property
-    def n_inputs(self) -> int:
-        return self.Bd.shape[1]
-
-    @property
-    def n_outputs(self) -> int:
-        return self.Cd.shape[0]
-
-    def design_model(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(Ad, Bd)``: the model a state-feedback design uses (the delay is left out)."""
-        return self.Ad, self.Bd
-
-    def tracked_row(self) -> np.ndarray:
-        """The row of ``Cd`` of the controlled output (the state-feedback pre-filter's target)."""
-        return self.Cd[self.output]
-
-    def frequency_response(self, omega_rad_s: np.ndarray) -> np.ndarray:
-        """``P(e^{j w h})`` of every output to input 0 with the delay, shape (len(w), p) complex.
-
-        The feedthrough is delayed by one period as in the kernel (module docstring).
-        """
-        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float) * self.period_s)
-        n = self.n_states
-        out = np.empty((z.size, self.n_outputs), dtype=complex)
-        eye = np.eye(n)
-        for i, zi in enumerate(z):
-            g = self.Cd @ np.linalg.solve(zi * eye - self.Ad, self.Bd[:, 0]) if n else np.zeros(self.n_outputs)
-            out[i] = (g + self.Dd[:, 0] / zi) * zi ** (-self.delay_n)
-        return out
-
-    def state_frequency_response(self, omega_rad_s: np.ndarray) -> np.ndarray:
-        """``(zI - Ad)^-1 Bd[:, 0] z^-d`` at ``z = e^{j w h}``, shape (len(w), n) complex."""
-        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float) * self.period_s)
-        eye = np.eye(self.n_states)
-        return np.array([np.linalg.solve(zi * eye - self.Ad, self.Bd[:, 0]) * zi ** (-self.delay_n) for zi in z])
 
 
 def _matrix(key: str, value: Any, rows: int | None = None, cols: int | None = None) -> np.ndarray:
@@ -193,7 +155,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
 def lti_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Path | None = None,
                   key: str = "objective.plant") -> LTIPlant:
     """Build and discretise the plant of ``spec`` (its keys among :data:`LTI_KEYS`, checked by
-    :func:`~objectives.control.plants.build_plant`) at ``period_s``; ``ValueError`` naming the key otherwise.
+    :func:`~objectives.control.plants.plant_kind`) at ``period_s``; ``ValueError`` naming the key otherwise.
     ``base_dir`` is unused (a model given inline reads no file): the signature of every plant builder."""
     import control
 
@@ -248,3 +210,30 @@ def _index(spec: Mapping[str, Any], name: str, default: int, size: int, key: str
     if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < size:
         raise ValueError(f"{key}.{name}: must be an output index in 0..{size - 1}, got {v!r}")
     return v
+
+
+def lti_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb, with their nominal values: every coefficient
+    of the model (``tf.num[i]``, ``tf.den[i]``, ``zpk.z[i]``, ``zpk.p[i]``, ``zpk.k``, ``ss.A[i][j]``,
+    ``ss.B[i][j]``, ``ss.C[i][j]``, ``ss.D[i][j]``) and ``delay_s``."""
+    from objectives.control.plants.uncertainty import spec_leaves
+
+    model = next(m for m in MODELS if m in spec)
+    body = spec[model]
+    out: dict[str, float] = {}
+    for part in {"tf": ("num", "den"), "zpk": ("z", "p", "k"), "ss": ("A", "B", "C", "D")}[model]:
+        if part in body:
+            out.update(spec_leaves(f"{model}.{part}", body[part]))
+    out["delay_s"] = float(spec.get("delay_s", 0.0))
+    return out
+
+
+_LTI_DOC = ("{what}; options dt (discrete model's period), method (zoh | tustin), delay_s, x0, output, "
+            "inner_output")
+#: the registered kinds (objectives.control.plants.PLANTS): one builder for the three model forms
+TF = PlantKind("tf", frozenset(LTI_KEYS), lti_from_spec, "siso",
+               _LTI_DOC.format(what="{num, den}: transfer function, highest power first"), uncertain=lti_uncertain)
+ZPK = PlantKind("zpk", frozenset(LTI_KEYS), lti_from_spec, "siso",
+                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"), uncertain=lti_uncertain)
+SS = PlantKind("ss", frozenset(LTI_KEYS), lti_from_spec, "siso",
+               _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"), uncertain=lti_uncertain)

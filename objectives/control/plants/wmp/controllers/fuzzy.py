@@ -94,8 +94,9 @@ from typing import Any
 
 import numpy as np
 
-from objectives.control.controllers.base import Controller
-from objectives.control.controllers.fuzzy_steps import (
+from objectives.control.kinds import KIND_WMP_FLC, KIND_WMP_LUT_FUZZY, KIND_WMP_PROTECTIVE_FUZZY
+from objectives.control.plants.wmp.controllers.base import Controller
+from objectives.control.plants.wmp.controllers.fuzzy_steps import (
     _F1_C,
     _F1_CI,
     _F1_MF,
@@ -113,7 +114,6 @@ from objectives.control.controllers.fuzzy_steps import (
     RULES_PROT,
     RULES_PROT_I,
 )
-from objectives.control.controllers.kernels import KIND_FLC, KIND_LUT_FUZZY, KIND_PROTECTIVE_FUZZY
 from objectives.fuzzy import TRAP, SugenoFIS, surface
 from objectives.params import Interval, Param, ParamSet
 
@@ -256,7 +256,7 @@ class FLC(_FuzzyBase):
     """
 
     name = "flc"
-    kind = KIND_FLC
+    kind = KIND_WMP_FLC
     decl = ParamSet("controller 'flc'", (
         _p("p11", 0.35, (0.05, 1.0), "m/s", "FLC1 speed-error universe", "Fig. 2.6"),
         _p("p12", 0.0, None, "m/s", "FLC1 N/P gap", "Fig. 2.6"),
@@ -283,7 +283,7 @@ class ProtectiveFuzzy(_FuzzyBase):
     """
 
     name = "protective_fuzzy"
-    kind = KIND_PROTECTIVE_FUZZY
+    kind = KIND_WMP_PROTECTIVE_FUZZY
     decl = ParamSet("controller 'protective_fuzzy'", (
         _p("p11", 0.35, (0.05, 1.0), "m/s", "FLC1 speed-error universe"),
         _p("p12", 0.0, None, "m/s", "FLC1 N/P gap"),
@@ -369,7 +369,7 @@ class LUTFuzzy(ProtectiveFuzzy):
     """
 
     name = "lut"
-    kind = KIND_LUT_FUZZY
+    kind = KIND_WMP_LUT_FUZZY
     decl = ParamSet("controller 'lut'", ProtectiveFuzzy.decl.params + (
         Param("lut_size", LUT_SIZE, unit="1", doc="grid points per input", eq="eq. 2.32",
               allowed=Interval(2.0), integer=True),

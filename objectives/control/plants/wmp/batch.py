@@ -1,14 +1,15 @@
-"""Population evaluation of the closed-loop objective in one numba kernel (``backend: threads``).
+"""Population evaluation of the pendulum's loop in one numba kernel (``backend: threads``).
 
-:meth:`ClosedLoopObjective.evaluate_batch` comes here. The Python side builds each candidate's
-controller parameter array (a design that cannot be built fails as in the serial path); one
-``@njit(parallel=True)`` kernel then runs the closed-loop driver :func:`objectives.control.wmp._simulate`
-for every candidate, threads sharing the reference profile and the sensor noise, and scores the run
-where it was simulated: the error measures of eqs. 2.34-2.35, the means and F of eq. 2.39, the rise
-times, IB settling time and peaks of :meth:`ClosedLoopObjective._evaluation`, with the summation order of NumPy
-(:func:`objectives.control.metrics._measures_kernel`). Python only turns each candidate's row of
-:data:`_N_STATS` numbers into its :class:`~tuner.objective.Evaluation`, as ``_evaluation`` does, so each
-result equals what ``__call__`` returns, bit for bit (tests/control/test_closed_loop_batch.py).
+:meth:`.loop.WMPLoop.evaluate_batch` (the objective's ``evaluate_batch`` for plant: wmp) comes here. The
+Python side builds each candidate's controller parameter array (a design that cannot be built fails as in
+the serial path); one ``@njit(parallel=True)`` kernel then runs the closed-loop driver
+:func:`objectives.control.plants.wmp.model._simulate` for every candidate, threads sharing the reference
+profile and the sensor noise, and scores the run where it was simulated: the error measures of eqs.
+2.34-2.35, the means and F of eq. 2.39, the rise times, IB settling time and peaks of
+:meth:`.loop.WMPLoop.evaluation`, with the summation order of NumPy
+(:func:`objectives.control.plants.wmp.metrics._measures_kernel`). Python only turns each candidate's row of
+:data:`_N_STATS` numbers into its :class:`~tuner.objective.Evaluation`, as ``evaluation`` does, so each
+result equals what the objective's ``__call__`` returns, bit for bit (tests/control/test_closed_loop_batch.py).
 
 Candidates are claimed by the lanes one at a time (:mod:`objectives.batch_threads`): a robot that falls
 early costs little, and the other lane takes the next candidate instead of waiting. The simulation
@@ -28,7 +29,7 @@ import numpy as np
 from numba import njit, prange
 
 from objectives.batch_threads import _pairwise_sum, claim, counter, use_threads
-from objectives.control.metrics import (
+from objectives.control.plants.wmp.metrics import (
     SETTLE_BAND_DEG,
     _measures_kernel,
     _step_window,
@@ -37,7 +38,7 @@ from objectives.control.metrics import (
     first_step,
     log10_product,
 )
-from objectives.control.wmp import STATUS_NAMES, STATUS_OK, _simulate
+from objectives.control.plants.wmp.model import STATUS_NAMES, STATUS_OK, _simulate
 from objectives.jit import CACHE, uncached
 from tuner.objective import Evaluation
 
@@ -58,7 +59,7 @@ _N_STATS = 22
 @njit(cache=False)
 def _rise_index(y, col, win):
     """First sample ``k - k0`` in the window ``win = (k0, end, r0, r1)`` where ``(y[k, col] - r0) / (r1 - r0)``
-    reaches 0.9 (:func:`objectives.control.metrics.rise_time_s`); -1 if none or ``k0 < 0`` (no step)."""
+    reaches 0.9 (:func:`objectives.control.plants.wmp.metrics.rise_time_s`); -1 if none or ``k0 < 0`` (no step)."""
     k0 = int(win[0])
     if k0 < 0:
         return -1
@@ -71,7 +72,7 @@ def _rise_index(y, col, win):
 @njit(cache=False)
 def _settle_count(y, win, band):
     """Samples from the speed step until the IB angle (deg) stays within ``band`` of its value at the end
-    of the window ``win = (k0, end, r0, r1)`` (:func:`objectives.control.metrics.settling_time_s`); -1 if
+    of the window ``win = (k0, end, r0, r1)`` (:func:`objectives.control.plants.wmp.metrics.settling_time_s`); -1 if
     ``k0 < 0`` (no step)."""
     k0, end = int(win[0]), int(win[1])
     if k0 < 0:
@@ -97,7 +98,7 @@ def _abs_nanmax(y, col, n):
 @njit(cache=False)
 def _score_run(ref, y, ts, wins, expo, e, tmp, out):
     """The statistics row ``out`` (:data:`_N_STATS`) of a complete run: outputs ``y`` (N, 5), references
-    ``ref`` (N, 2), as ``ClosedLoopObjective._evaluation`` computes them; ``e``, ``tmp``: (N,) scratch."""
+    ``ref`` (N, 2), as ``WMPLoop.evaluation`` computes them; ``e``, ``tmp``: (N,) scratch."""
     n = ref.shape[0]
     terms = np.empty(4)
     for which in range(3):
@@ -166,7 +167,7 @@ def _closed_loop_batch(loop, kind, cps, state_size, sched, score, bufs, status, 
 
 def _windows(ref: np.ndarray) -> np.ndarray:
     """(2, 4) rise-time windows ``(k0, end, r0, r1)`` of the speed and yaw-rate references, found as
-    ``ClosedLoopObjective._rise_time`` and :func:`~objectives.control.metrics.rise_time_s` find them."""
+    ``WMPLoop._rise_time`` and :func:`~objectives.control.plants.wmp.metrics.rise_time_s` find them."""
     wins = np.full((2, 4), -1.0)
     for i in range(2):
         r = ref[:, i]
@@ -179,7 +180,7 @@ def _windows(ref: np.ndarray) -> np.ndarray:
 
 
 def _evaluation(obj: Any, st: int, done: int, s: np.ndarray, wins: np.ndarray) -> Evaluation:
-    """``obj._evaluation`` of a run from its status and statistics row ``s``."""
+    """``obj.evaluation`` of a run from its status and statistics row ``s``."""
     ts = obj._sensors.Ts_s
     peak = {
         "peak_theta3_deg": float(np.degrees(s[_PEAK_TH3])) if done else 0.0,
@@ -201,7 +202,7 @@ def _evaluation(obj: Any, st: int, done: int, s: np.ndarray, wins: np.ndarray) -
                     "ms_current": float(s[_MS_I]), "rise_time_nu_s": rise[0], "rise_time_xi_s": rise[1],
                     "settle_theta3_s": float(int(s[_SETTLE])) * ts if s[_SETTLE] >= 0 else math.nan})
     metrics.update(peak)
-    return obj._scored(float(s[_COST]), metrics)
+    return obj.scored(float(s[_COST]), metrics)
 
 
 def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads: int) -> list[Any]:
@@ -215,7 +216,7 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
         values = dict(obj.fixed)
         values.update(params or {})
         try:
-            cp = np.ascontiguousarray(obj._ctrl.param_array(values), dtype=float)
+            cp = np.ascontiguousarray(obj.ctrl.param_array(values), dtype=float)
         except ValueError as exc:  # as ClosedLoopObjective.__call__: a design that cannot be built
             results[i] = Evaluation.failed(f"controller design failed: {exc}")
             continue
@@ -237,7 +238,7 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
     status = np.zeros((P, 2), dtype=np.int64)
     stats = np.full((P, _N_STATS), np.nan)
     wins = _windows(ref)
-    loop = (np.zeros(8), obj._plant.coeffs(), obj._sensors.coeffs(obj._plant.u_max_V), ref,
+    loop = (np.zeros(8), obj._params.coeffs(), obj._sensors.coeffs(obj._params.u_max_V), ref,
             np.ascontiguousarray(obj._noise, dtype=float), int(obj.n_sub), math.radians(obj.fall_limit_deg))
     sched = (np.arange(P, dtype=np.int64), counter())  # no cost is known before the run: claiming balances
     score = (float(obj._sensors.Ts_s), wins, cost_exponents(obj.cost))

@@ -38,8 +38,9 @@ import math
 
 import numpy as np
 
-from objectives.control.controllers.base import Controller
-from objectives.control.controllers.kernels import KIND_PID, PID_STATE_SIZE
+from objectives.control.kinds import KIND_WMP_PID
+from objectives.control.plants.wmp.controllers.base import Controller
+from objectives.control.plants.wmp.controllers.kernels import PID_STATE_SIZE
 from objectives.params import POSITIVE, Param, ParamSet
 
 __all__ = ["PID"]
@@ -49,7 +50,7 @@ class PID(Controller):
     """PID1 (speed) + PID2 (IB angle) + fixed incremental yaw loop."""
 
     name = "pid"
-    kind = KIND_PID
+    kind = KIND_WMP_PID
     state_size = PID_STATE_SIZE
     decl = ParamSet("controller 'pid'", (
         Param("kp1", 12.0, (1.0, 24.0), unit="V s/m", doc="PID1 proportional gain", eq="eq. 2.38, Table 2.7"),

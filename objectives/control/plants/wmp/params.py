@@ -2,7 +2,7 @@
 
 Both are frozen dataclasses validated at construction, built from YAML mappings with
 :meth:`from_dict` (unknown keys are errors), and turned into the float64 coefficient arrays the
-kernels of :mod:`objectives.control.wmp` read (:meth:`WMPParams.coeffs`, :meth:`SensorParams.coeffs`).
+kernels of :mod:`objectives.control.plants.wmp.model` read (:meth:`WMPParams.coeffs`, :meth:`SensorParams.coeffs`).
 """
 
 from __future__ import annotations

@@ -29,9 +29,9 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from objectives.control.controllers.base import Controller
-from objectives.control.controllers.kernels import KIND_LQG, KIND_LQR
-from objectives.control.wmp import WMPParams, derivatives
+from objectives.control.kinds import KIND_WMP_LQG, KIND_WMP_LQR
+from objectives.control.plants.wmp.controllers.base import Controller
+from objectives.control.plants.wmp.model import WMPParams, derivatives
 from objectives.params import NONNEG, POSITIVE, Param, ParamSet
 
 __all__ = ["LQR", "LQG", "LQDesign", "linearize", "reduced_model", "lq_design"]
@@ -176,7 +176,7 @@ class LQR(Controller):
     """
 
     name = "lqr"
-    kind = KIND_LQR
+    kind = KIND_WMP_LQR
     state_size = 0
     decl = ParamSet("controller 'lqr'", _LQ_WEIGHTS)
 
@@ -214,5 +214,5 @@ class LQG(LQR):
     """LQR gains on measured signals with the KF estimate of theta3 (eq. 2.20, separation principle)."""
 
     name = "lqg"
-    kind = KIND_LQG
+    kind = KIND_WMP_LQG
     decl = LQR.decl.with_owner("controller 'lqg'")

@@ -1,11 +1,12 @@
 """What every WMP controller shares: named parameters, default search space, kernel parameter array.
 
 A controller is a numba step function dispatched by an integer ``kind`` inside the closed-loop
-kernel (see :mod:`objectives.control.controllers.kernels`) plus a thin subclass of
+kernel (see :mod:`objectives.control.plants.wmp.controllers.kernels`) plus a thin subclass of
 :class:`Controller` that declares
 
 - ``name``: the YAML name (``controller: pid``);
-- ``kind``: the ``KIND_*`` constant of its branch in ``kernels.controller_step``;
+- ``kind``: the ``KIND_WMP_*`` constant (:mod:`objectives.control.kinds`) of its branch in
+  ``kernels.controller_step``;
 - ``decl``: the one :class:`objectives.params.ParamSet` of its parameters (default -- thesis Table 2.7
   where it gives them --, search bounds, scale, unit, allowed range, doc, equation); ``params`` (the
   default search space as :class:`tuner.space.Real`) and ``defaults`` derive from it, and
@@ -22,7 +23,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from objectives.control.wmp import SensorParams, WMPParams
+from objectives.control.plants.wmp.model import SensorParams, WMPParams
 from objectives.params import Declared, ParamSet
 from tuner.space import Real, Space
 
@@ -40,6 +41,8 @@ class Controller(Declared):
 
     name: ClassVar[str] = ""
     kind: ClassVar[int] = -1
+    #: the loop the controller runs in (objectives.control.controllers): the pendulum's own
+    family: ClassVar[str] = "wmp"
     #: the one declaration of the parameters (``params`` and ``defaults`` derive from it)
     decl: ClassVar[ParamSet | None] = None
     params: ClassVar[tuple[Real, ...]] = ()
@@ -57,6 +60,12 @@ class Controller(Declared):
         self.sensors = sensors or SensorParams()
         #: the deployed controller's complete values (``build`` hook); None: ``param_array`` defaults
         self.values: dict[str, Any] | None = None
+
+    @classmethod
+    def declaration_for(cls, plant: Any = None) -> ParamSet:
+        """The declaration on ``plant`` (the same for every pendulum: the protocol of
+        :mod:`objectives.control.controllers`)."""
+        return cls.decl
 
     @classmethod
     def default_space(cls) -> Space:

@@ -1,10 +1,10 @@
 """Numba controller step functions, dispatched by an integer kind inside the closed-loop kernel.
 
-The closed-loop simulator (:func:`objectives.control.wmp._simulate_closed_loop`) calls
+The closed-loop simulator (:func:`objectives.control.plants.wmp.model._simulate`) calls
 :func:`controller_step` once per controller period ``Ts``. A controller is described by three
 numbers the kernel understands:
 
-- ``kind`` (int): which branch below runs (the ``KIND_*`` constants);
+- ``kind`` (int): which branch below runs (the ``KIND_WMP_*`` constants of :mod:`objectives.control.kinds`);
 - ``p`` (float64 array): its parameters, laid out by the Python class that builds it
   (``Controller.param_array``);
 - ``s`` (float64 array): its internal state (integrators, previous errors), zeroed at the start of
@@ -15,11 +15,11 @@ Adding a controller (for example the fuzzy controllers in ``controllers/fuzzy.py
 1. write an ``@njit`` step function ``_my_step(p, s, ref, meas, x, u_out)`` (in its own module, e.g.
    ``fuzzy_steps.py``; not cached on its own: the closed-loop driver's cache entry holds it, rules 2 and 3
    of :mod:`objectives.jit`);
-2. give it a new ``KIND_*`` constant here and one ``elif kind == KIND_...`` branch in
-   :func:`controller_step` that calls it;
-3. write the Python class (subclass of :class:`objectives.control.controllers.base.Controller`)
-   with ``kind`` set to the constant, and register its ``"module:Class"`` in
-   ``controllers/__init__.py``.
+2. give it a new ``KIND_WMP_*`` constant in :mod:`objectives.control.kinds` (the one kind space) and one
+   ``elif kind == KIND_WMP_...`` branch in :func:`controller_step` that calls it;
+3. write the Python class (subclass of :class:`objectives.control.plants.wmp.controllers.base.Controller`)
+   with ``kind`` set to the constant, and register its ``"module:Class"`` in the one controller registry,
+   :data:`objectives.control.controllers.CONTROLLERS`.
 
 Signals passed to every step function (all float64, SI units unless stated):
 
@@ -42,27 +42,18 @@ import math
 
 from numba import njit
 
-from objectives.control.controllers.fuzzy_steps import _flc_step, _lut_step, _protective_step
+from objectives.control.kinds import (
+    KIND_WMP_FLC,
+    KIND_WMP_LQG,
+    KIND_WMP_LQR,
+    KIND_WMP_LUT_FUZZY,
+    KIND_WMP_OPEN,
+    KIND_WMP_PID,
+    KIND_WMP_PROTECTIVE_FUZZY,
+)
+from objectives.control.plants.wmp.controllers.fuzzy_steps import _flc_step, _lut_step, _protective_step
 
-__all__ = [
-    "KIND_OPEN_LOOP",
-    "KIND_LQR",
-    "KIND_LQG",
-    "KIND_PID",
-    "KIND_FLC",
-    "KIND_PROTECTIVE_FUZZY",
-    "KIND_LUT_FUZZY",
-    "controller_step",
-]
-
-KIND_OPEN_LOOP = 0  #: constant voltages p = (u1, u2)
-KIND_LQR = 1  #: full-state feedback on the true controllable state (thesis 2.2.1)
-KIND_LQG = 2  #: the same gains on measured signals with the KF estimate of theta3
-KIND_PID = 3  #: PID1 (speed) + PID2 (theta3) + incremental yaw loop, Tustin (eq. 2.38)
-# KIND 10..19 are reserved for the fuzzy controllers (FLC1-3, protective FLC, LUT versions).
-KIND_FLC = 10  #: cascade FLC1-3 (thesis 2.2.2), controllers/fuzzy.py
-KIND_PROTECTIVE_FUZZY = 11  #: protective PI fuzzy FLC1 + FLC2 + FLC3 (thesis 2.3.1)
-KIND_LUT_FUZZY = 12  #: the protective scheme through look-up tables (eq. 2.32)
+__all__ = ["controller_step", "LQ_PARAM_SIZE", "PID_PARAM_SIZE", "PID_STATE_SIZE"]
 
 #: layout of the LQ parameter array: K (2x4 row-major), then Fr (2x2 row-major): u = -K z + Fr r
 LQ_PARAM_SIZE = 12
@@ -131,21 +122,21 @@ def controller_step(kind, p, s, ref, meas, x, r_wheel, d_wheels, u_out):
     ``r_wheel`` and ``d_wheels`` (m) convert the true state to (nu, xi) for full-state feedback.
     Unknown kinds write NaN voltages, which the simulator reports as a diverged run.
     """
-    if kind == KIND_PID:
+    if kind == KIND_WMP_PID:
         _pid_step(p, s, ref, meas, u_out)
-    elif kind == KIND_LQR:
+    elif kind == KIND_WMP_LQR:
         nu = 0.5 * r_wheel * (x[3] + x[4])
         xi = r_wheel * (x[4] - x[3]) / d_wheels
         _lq_step(p, x[2], nu, x[5], xi, ref, u_out)
-    elif kind == KIND_LQG:
+    elif kind == KIND_WMP_LQG:
         _lq_step(p, meas[1], meas[0], meas[2], meas[3], ref, u_out)
-    elif kind == KIND_PROTECTIVE_FUZZY:
+    elif kind == KIND_WMP_PROTECTIVE_FUZZY:
         _protective_step(p, s, ref, meas, u_out)
-    elif kind == KIND_LUT_FUZZY:
+    elif kind == KIND_WMP_LUT_FUZZY:
         _lut_step(p, s, ref, meas, u_out)
-    elif kind == KIND_FLC:
+    elif kind == KIND_WMP_FLC:
         _flc_step(p, s, ref, meas, u_out)
-    elif kind == KIND_OPEN_LOOP:
+    elif kind == KIND_WMP_OPEN:
         u_out[0] = p[0]
         u_out[1] = p[1]
     else:

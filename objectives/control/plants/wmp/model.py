@@ -49,8 +49,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from objectives.control.controllers.kernels import controller_step
-from objectives.control.wmp_params import (
+from objectives.control.plants.wmp.controllers.kernels import controller_step
+from objectives.control.plants.wmp.params import (
     _D,
     _FM,
     _FW,
@@ -389,7 +389,7 @@ def simulate_closed_loop(
 
     Parameters
     ----------
-    kind : controller kind (``controllers.kernels.KIND_*``).
+    kind : controller kind (:mod:`objectives.control.kinds`, ``KIND_WMP_*``).
     cparams : (p,) controller parameter array; state_size : length of its zeroed state array.
     ref : (N, 2) desired speed (m/s) and yaw rate (rad/s), one row per controller period.
     noise : (N, 4) standard normal draws; ``None`` means noise-free (zeros).
@@ -461,13 +461,13 @@ def simulate_open_loop(
     fall_limit_deg: float = 180.0,
 ) -> dict[str, Any]:
     """Constant voltages ``u`` (V) for ``duration_s`` with ideal sensors; same output as closed loop."""
-    from objectives.control.controllers.kernels import KIND_OPEN_LOOP
+    from objectives.control.kinds import KIND_WMP_OPEN
 
     n = int(round(duration_s / Ts_s))
     if n < 1:
         raise ValueError(f"duration_s={duration_s} is shorter than one period Ts={Ts_s}")
     return simulate_closed_loop(
-        KIND_OPEN_LOOP,
+        KIND_WMP_OPEN,
         np.asarray(u, float),
         0,
         np.zeros((n, 2)),
