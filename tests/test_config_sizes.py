@@ -71,3 +71,40 @@ def test_sizes_within_the_limits_still_run(tmp_path):
     out = run_tuner("run", _job(tmp_path, LOOP), "--set", "objective.period_s=0.004", "--set",
                     "objective.plant.delay_s=0.2", "-q", "--no-report")
     assert out.returncode == 0, out.stderr
+
+
+
+ROBUST = REPO / "configs" / "examples" / "dc_motor_robust.yaml"
+STEP = [{"t": 0.1, "value": 1.0}]
+
+
+@pytest.mark.parametrize("objective, expected", [
+    # three scenarios of 4 million samples each: 12 million together (each alone is within the limit)
+    ({"period_s": 0.001, "scenarios": [{"name": f"s{i}", "duration_s": 4000, "reference": STEP} for i in range(3)]},
+     "objective.scenarios[2].duration_s: the scenarios up to scenarios[2] together's length in samples is "
+     "12,000,000; at most 10,000,000"),
+    ({"uncertainty.tune.samples": 20000},
+     "objective.uncertainty.tune.samples: the tuning set's size in models (nominal, corners and samples) is "
+     "20,009; at most 10,000"),
+    ({"uncertainty.validate.samples": 1000000},
+     "objective.uncertainty.validate.samples: the held-out set's size in models is 1,000,000; at most 10,000"),
+    # 9,000 held-out models x 200,000 samples (two scenarios of 100 s at 1 ms)
+    ({"period_s": 0.001, "uncertainty.validate.samples": 9000,
+      "scenarios": [{"name": "a", "duration_s": 100, "reference": STEP}, {"name": "b", "duration_s": 100,
+                                                                          "reference": STEP}]},
+     "objective.uncertainty.validate.samples: one pass of the held-out set over the scenarios in sample steps "
+     "(9,000 models x 200,000 samples of all scenarios) is 1,800,000,000; at most 1,000,000,000"),
+])
+def test_scenario_lists_and_model_sets_too_large_are_one_error_line(tmp_path, objective, expected):
+    """A scenario list's samples together, the size of each model set and a model set's pass over the scenarios
+    are checked before any scenario or model is built (uncertainty.tune.samples: 10^6 drew and built every model)."""
+    doc = yaml.safe_load(ROBUST.read_text())
+    for key, value in objective.items():
+        where = doc["objective"]
+        *path, last = key.split(".")
+        for k in path:
+            where = where[k]
+        where[last] = value
+    t = time.monotonic()
+    one_error_line(run_tuner("run", _job(tmp_path, doc)), expected)
+    assert time.monotonic() - t < 30 and not (tmp_path / "runs").exists()

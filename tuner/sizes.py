@@ -15,13 +15,21 @@ one written limit, and refused as a ``ValueError`` naming the key (one ``error:`
   evaluation.
 - :data:`MAX_MODEL_ORDER` states of an LTI plant model (a transfer function's denominator degree, a
   zero-pole-gain's poles, a state space's A): 200.
+- :data:`MAX_SAMPLES` also bounds the samples of a job's scenarios together (``scenarios:``, a list: each
+  holds its signals and noise), and :data:`MAX_MODELS` the models of one model set (``uncertainty:``'s
+  ``tune.samples`` plus corners, ``validate.samples``): 10,000, each a built plant (and for an LTI model set its
+  frequency responses) in memory.
+- :data:`MAX_LOOP_SAMPLES` sample steps of one pass over a model set and the scenarios (models x samples of
+  all scenarios; one evaluation of a candidate on the tuning set, the held-out scoring once after the run):
+  10^9, about a minute of the compiled loop.
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["MAX_SAMPLES", "MAX_LOOP_STATES", "MAX_MODEL_ORDER", "check_samples", "samples", "check_count"]
+__all__ = ["MAX_SAMPLES", "MAX_LOOP_STATES", "MAX_MODEL_ORDER", "MAX_MODELS", "MAX_LOOP_SAMPLES", "check_samples",
+           "samples", "check_count"]
 
 #: the most samples of one simulated or synthetic signal
 MAX_SAMPLES = 10_000_000
@@ -29,6 +37,10 @@ MAX_SAMPLES = 10_000_000
 MAX_LOOP_STATES = 500
 #: the most states of an LTI plant model
 MAX_MODEL_ORDER = 200
+#: the most models in one model set (the tuning set, or the held-out set)
+MAX_MODELS = 10_000
+#: the most sample steps of one pass over a model set and every scenario (models x samples of all scenarios)
+MAX_LOOP_SAMPLES = 1_000_000_000
 
 
 def check_count(key: str, n: float, limit: int, what: str, hint: str = "") -> int:

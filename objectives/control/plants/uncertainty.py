@@ -42,6 +42,8 @@ from typing import Any
 
 import numpy as np
 
+from tuner.sizes import MAX_MODELS, check_count
+
 __all__ = ["Dist", "Uncertainty", "uncertainty_from_spec", "ModelDraw", "draw_models", "set_path", "spec_leaves",
            "MAX_CORNERS", "DELAY"]
 
@@ -239,6 +241,10 @@ def uncertainty_from_spec(spec: Any, kind: Any, plant_spec: Mapping[str, Any], p
                     _int(f"{key}.tune.seed", tune.get("seed", 1), 0),
                     _int(f"{key}.validate.samples", val.get("samples", 200), 1),
                     _int(f"{key}.validate.seed", val.get("seed", 2), 0))
+    # each model is a built plant (and its frequency responses) in memory: bounded before any is drawn
+    check_count(f"{key}.tune.samples", u.tuning_size(), MAX_MODELS, "the tuning set's size in models (nominal, "
+                "corners and samples)")
+    check_count(f"{key}.validate.samples", u.validate_samples, MAX_MODELS, "the held-out set's size in models")
     if u.corners is False and u.samples == 0:
         raise ValueError(f"{key}.tune: without corners and samples the tuning set is the nominal plant alone; give "
                          "samples or corners: true")
