@@ -65,7 +65,7 @@ from tuner.safe_io import UnsafeFile, named, open_append, open_lock, read_text, 
 #: what this module owns; the records it reads and writes (``Meta``, ``Best``, ``Checkpoint``, ``HistoryRow``,
 #: ``RunError`` and the encodings) are :mod:`tuner.records`'s, importable from here as well
 __all__ = ["RunDir", "History", "atomic_write", "read_chain", "check_chain", "chain_secret", "chain_note", "CHAIN",
-           "FAULT_ENV", "RunError"]
+           "FAULT_ENV", "RunError", "mark_stopped"]
 
 FAULT_ENV = "TUNER_FAULT_KILL_AT_WRITE"
 LEGACY_CHECKPOINT = "checkpoint.pkl"
@@ -407,3 +407,35 @@ class RunDir:
             yield
         finally:
             os.close(fd)
+
+
+def mark_stopped(run_dirs: list[str], wait_s: float = 5.0) -> None:
+    """Runs whose process was stopped from outside (a parallel sweep's workers, stopped with the pool): each
+    whose ``meta.json`` still says ``running`` once no process holds its lock (waiting up to ``wait_s``) is
+    marked ``interrupted``, as a run does when it is stopped itself; ``tuner sweep`` or ``tuner resume``
+    continues it."""
+    import datetime
+    import time
+
+    left, deadline = list(run_dirs), time.monotonic() + wait_s
+    while left:
+        busy = []
+        for d in left:
+            try:
+                rd = RunDir(d)
+                if not rd.is_run() or rd.meta().status != "running":
+                    continue
+                with rd.lock():  # a RunError while a worker still holds it
+                    meta = rd.meta()
+                    if meta.status == "running":
+                        now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+                        rd.write_meta(meta.replace(status="interrupted", interrupted=now))
+            except RunError as exc:
+                if "in use by pid" in str(exc):
+                    busy.append(d)
+            except (OSError, ValueError):
+                pass
+        if not busy or time.monotonic() > deadline:
+            return
+        left = busy
+        time.sleep(0.1)

@@ -36,8 +36,8 @@ import yaml
 
 from tuner import safe_yaml
 from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
-from tuner.records import RunError, load_json
-from tuner.rundir import RunDir, atomic_write
+from tuner.records import load_json
+from tuner.rundir import RunDir, atomic_write, mark_stopped
 from tuner.safe_io import check_not_link, read_bytes, read_text, refuse_links, regular, write_atomic
 
 __all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "is_sweep_file", "ranked_by",
@@ -254,7 +254,7 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
             results = Parallel(n_jobs=n_par, backend="loky")(
                 delayed(_run_job)(j, str(Path(d).absolute()), True, True, report) for j, d in todo)
         except KeyboardInterrupt:
-            _mark_stopped([d for _, d in todo])
+            mark_stopped([d for _, d in todo])  # the pool's workers were stopped with it
             return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:
         from tuner.report import throttled
@@ -273,37 +273,6 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
         path_md = None
     return {"dir": out, "report": path_md, "ok": all(r["status"] == "finished" for r in results),
             "results": results}
-
-
-def _mark_stopped(run_dirs: list[str], wait_s: float = 5.0) -> None:
-    """After a stop signal to a parallel sweep: a job whose ``meta.json`` still says ``running`` once no process
-    holds its lock (its worker was stopped with the pool) is marked ``interrupted``, as the run itself does when
-    it is stopped; ``tuner sweep`` (or ``tuner resume``) continues it."""
-    import time
-
-    from tuner.run import _now
-
-    left, deadline = list(run_dirs), time.monotonic() + wait_s
-    while left:
-        busy = []
-        for d in left:
-            try:
-                rd = RunDir(d)
-                if not rd.is_run() or rd.meta().status != "running":
-                    continue
-                with rd.lock():  # a RunError while a worker still holds it
-                    meta = rd.meta()
-                    if meta.status == "running":
-                        rd.write_meta(meta.replace(status="interrupted", interrupted=_now()))
-            except RunError as exc:
-                if "in use by pid" in str(exc):
-                    busy.append(d)
-            except (OSError, ValueError):
-                pass
-        if not busy or time.monotonic() > deadline:
-            return
-        left = busy
-        time.sleep(0.1)
 
 
 # --- results ------------------------------------------------------------------------------------
