@@ -108,3 +108,17 @@ def test_scenario_lists_and_model_sets_too_large_are_one_error_line(tmp_path, ob
     t = time.monotonic()
     one_error_line(run_tuner("run", _job(tmp_path, doc)), expected)
     assert time.monotonic() - t < 30 and not (tmp_path / "runs").exists()
+
+
+def test_a_delay_range_too_long_for_the_loop_is_one_error_line_before_tuning(tmp_path):
+    """The largest delay an uncertainty block can draw is built before tuning: with tune.corners false the tuning
+    samples missed the range's high end and the run tuned, then the held-out set hit a delay of over 500 loop
+    states after it."""
+    doc = yaml.safe_load(ROBUST.read_text())
+    unc = doc["objective"]["uncertainty"]
+    unc["parameters"] = {"delay_s": [0.0, 1.5]}
+    unc["tune"] = {"corners": False, "samples": 1, "seed": 3}
+    out = run_tuner("run", _job(tmp_path, doc))
+    one_error_line(out, "objective.uncertainty.parameters.delay_s: the largest delay it can draw (1.5 s) cannot be "
+                        "built: objective.plant.delay_s: the linear closed loop's size")
+    assert not (tmp_path / "runs").exists()

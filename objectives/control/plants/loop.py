@@ -58,7 +58,7 @@ from objectives.control.plants.requirements import (
     violation,
 )
 from objectives.control.plants.scenario import cases_from_config, realism_from_spec
-from objectives.control.plants.uncertainty import draw_models, uncertainty_from_spec
+from objectives.control.plants.uncertainty import check_largest_delay, draw_models, uncertainty_from_spec
 from tuner.objective import PENALTY, Evaluation
 from tuner.sizes import MAX_LOOP_SAMPLES, check_count
 
@@ -155,6 +155,8 @@ class SISOLoop:
         self._weights = np.array([c.weight for c in self.cases])
         self._unc = uncertainty_from_spec(uncertainty, kind, self.spec, self.period)
         _check_work(self._unc, sum(c.signals.t.size for c in self.cases))
+        if self._unc is not None:
+            check_largest_delay(self._unc, kind, self.spec, self.period, self.base_dir)
         if self._unc is None:
             self.models = ModelSet("tuning", [self.plant], ["nominal"], [{}])
         else:
