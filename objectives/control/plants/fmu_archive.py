@@ -169,7 +169,11 @@ def _remove(folder: str, owner: int) -> None:
     """Remove an extraction folder, only in the process that made it (a forked child inherits the registry)."""
     if os.getpid() == owner:
         _live.discard(folder)
-        shutil.rmtree(folder, ignore_errors=True)
+        try:
+            shutil.rmtree(folder, ignore_errors=True)
+        except KeyboardInterrupt:  # a stop signal mid-removal (a pool's SIGTERM after a Ctrl-C): finish, then stop
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
 
 
 @atexit.register
@@ -177,7 +181,10 @@ def _remove_all() -> None:
     """At exit: this process's folders, and those of processes that ended without cleaning up (workers a pool
     killed on Ctrl-C end before the process that started them)."""
     for folder in list(_live):
-        _remove(folder, os.getpid())
+        try:
+            _remove(folder, os.getpid())
+        except KeyboardInterrupt:  # the process is ending anyway: the other folders go too, with no traceback
+            pass
     _sweep_stale()
 
 
@@ -222,6 +229,11 @@ def attach_cleanup(owner: Any, folder: Path, release: Any = None) -> None:
                 release()
             except Exception:  # noqa: BLE001 - a native library's cleanup must not stop the removal
                 pass
-        _remove(folder, pid)
+        try:
+            _remove(folder, pid)
+        except KeyboardInterrupt:
+            # raised inside a finalizer, Python would print it and drop it ("Exception ignored"): the removal is
+            # finished and the process is already stopping on the signal before it
+            pass
 
     weakref.finalize(owner, done)
