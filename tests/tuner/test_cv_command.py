@@ -111,10 +111,7 @@ def test_cv_command_uses_the_configs_budget_fraction_unless_given(tmp_path, monk
         seen.update(kw)
         return real(cfg, **kw)
 
-    import tuner.commands.cv
-
     monkeypatch.setattr(tuner.cv, "cross_validate", spy)
-    monkeypatch.setattr(tuner.commands.cv, "cross_validate", spy)  # bound at its import, maybe by an earlier test
     assert main(["cv", str(path), "--k", "2", "--no-full", "--dir", str(tmp_path / "cv"), "-q", *flag]) == 0
     assert seen["budget_fraction"] == expected
 
