@@ -273,11 +273,14 @@ class Run:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
         extra = self._finish() if self.best is not None else {}
-        self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
+        # a run whose every evaluation failed has no result: it ends "failed", not "finished"
+        status = "finished" if self.best is not None or not n_evals else "failed"
+        reason = optimizer.stop_reason if status == "finished" else f"every one of {n_evals} evaluations failed"
+        self._write_meta(status=status, finished=_now(), stop_reason=reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None and self.report:
             self._report()  # after meta.json: the report shows the final status
-        return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
+        return self._result(status, n_evals, state["gens"], reason, extra)
 
     def _best_doc(self, g: Generation) -> Best | None:
         b = g.best
@@ -450,6 +453,9 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
             meta = rd.meta()  # a run that got that far had a meta.json: its loss is an error, not a restart
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
+        if meta is not None and meta.status == "failed":
+            raise RunError(f"{rd.path}: already ended, every evaluation failed ({meta.stop_reason}); fix the objective "
+                           "and start the job again")
         ck = rd.checkpoint()
         cfg = run_config(rd, rd.check_config(meta) if meta is not None else None)
         objective, space = _build(cfg)
