@@ -195,7 +195,7 @@ def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None 
 def objective_formats(run_dir: str | Path) -> dict[str, str]:
     """``{format: help}`` of the run's objective's own formats (hook ``export_formats``; empty when it has none or
     no longer builds)."""
-    objective = _build(Path(run_dir))
+    objective, _ = _build(Path(run_dir))
     fn = hook(objective, "export_formats") if objective is not None else None
     return dict(fn()) if fn is not None else {}
 
