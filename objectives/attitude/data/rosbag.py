@@ -204,6 +204,8 @@ def _read_truth(reader: Any, path: Path, conns: Any, stamps: str, child: Any) ->
             if child is None:
                 raise RecordingError(f"{path}: truth_child_frame: needed with a tf2_msgs/TFMessage truth topic "
                                      "(which transform is the truth?)" + _children(reader, conns))
+    if not t and child is None:
+        raise RecordingError(f"{path}: truth: the topic has no message")
     if not t:
         raise RecordingError(f"{path}: truth_child_frame: no transform with child frame {child!r}; the topic has "
                              f"{sorted(seen)}")
