@@ -20,7 +20,9 @@ from pathlib import Path
 __all__ = ["LinkRefused", "refuse_links", "named", "open_nofollow", "read_bytes", "read_text", "check_not_link"]
 
 #: folders of a run or sweep directory whose entries are checked too
-SUBDIRS = ("figures", "jobs")
+SUBDIRS = ("figures", "jobs", "repeats")
+#: those of them that hold run directories (a sweep's jobs, a repeated run's repeats), checked in turn
+NESTED = ("jobs", "repeats")
 
 
 class LinkRefused(OSError):
@@ -42,8 +44,9 @@ def check_not_link(path: Path | str) -> None:
 
 
 def refuse_links(directory: Path | str, depth: int = 2) -> None:
-    """Refuse a directory holding a symbolic link among its entries, the entries of its ``figures/`` and
-    ``jobs/`` folders and (for a sweep) the entries of each job directory."""
+    """Refuse a directory holding a symbolic link among its entries, the entries of its ``figures/``, ``jobs/``
+    and ``repeats/`` folders and the entries of each run directory in the last two (a sweep's jobs, a repeated
+    run's repeats)."""
     directory = Path(directory)
     try:
         entries = list(os.scandir(directory))
@@ -56,7 +59,7 @@ def refuse_links(directory: Path | str, depth: int = 2) -> None:
             for sub in os.scandir(e.path):
                 if sub.is_symlink():
                     raise LinkRefused(sub.path)
-                if e.name == "jobs" and sub.is_dir(follow_symlinks=False):
+                if e.name in NESTED and sub.is_dir(follow_symlinks=False):
                     refuse_links(sub.path, depth - 1)
 
 
