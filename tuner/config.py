@@ -152,7 +152,9 @@ class ValidationConfig:
 
 @dataclass(frozen=True)
 class RunConfig:
-    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory."""
+    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory. ``origin`` is the
+    run (or sweep) directory the config was read back from (:func:`tuner.setup.run_config`), None for a config
+    file: no code is loaded from inside it (:func:`tuner.trust.code_outside`)."""
 
     name: str
     seed: int
@@ -166,6 +168,7 @@ class RunConfig:
     raw: Mapping[str, Any]
     description: str = ""
     validation: ValidationConfig = field(default_factory=ValidationConfig)
+    origin: Path | None = None
     repeats: int = 1
 
     def space(self, objective: Any = None) -> Space:
@@ -461,4 +464,4 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     if repeats > 1:  # one run is a job without the key: its config (and hash) is the plain run's
         resolved["repeats"] = repeats
     return RunConfig(name, seed, objective, parameters, optimizer, parallel, output, source,
-                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")), validation, repeats)
+                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")), validation, repeats=repeats)

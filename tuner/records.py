@@ -29,7 +29,7 @@ from tuner.loop import BestPoint
 
 __all__ = ["RunError", "Meta", "Timing", "Best", "Checkpoint", "HistoryRow", "Spread", "RepeatEntry", "Repeats",
            "STATUSES", "FIXED_COLUMNS", "RESULT_COLUMNS", "ERROR_LIMIT", "plain", "dump_yaml", "fmt_cell", "parse_cell",
-           "cell", "read_back", "clip_error", "config_hash", "first_difference"]
+           "cell", "read_back", "clip_error", "config_hash", "first_difference", "load_json"]
 
 #: ``meta.json``'s status values
 STATUSES = ("created", "running", "finished", "interrupted", "failed")
@@ -85,10 +85,40 @@ def parse_cell(s: str) -> Any:
             pass
     if s[:1] in "[{":
         try:
-            return json.loads(s)
+            return load_json(s)
         except ValueError:
             pass
     return s
+
+
+def load_json(text: str | bytes) -> Any:
+    """``json.loads`` of text read from a run or sweep directory: malformed or too deeply nested text (the
+    parser's recursion ends in ``RecursionError``) is a ``ValueError`` (``json.JSONDecodeError`` is one)."""
+    try:
+        doc = json.loads(text)
+    except RecursionError:
+        doc = None
+    else:
+        if _depth(doc) <= MAX_JSON_DEPTH:
+            return doc
+    raise ValueError(f"nested deeper than {MAX_JSON_DEPTH} levels; refused (tuner never writes such a document)")
+
+
+#: the deepest JSON document read from a run or sweep directory (the YAML limit, :data:`tuner.safe_yaml.MAX_DEPTH`)
+MAX_JSON_DEPTH = 64
+
+
+def _depth(doc: Any) -> int:
+    """Nesting depth of a parsed JSON document (iterative: a deep one must not overflow the stack here)."""
+    deepest, todo = 0, [(doc, 1)]
+    while todo:
+        v, d = todo.pop()
+        if isinstance(v, (dict, list)):
+            deepest = max(deepest, d)
+            if d > MAX_JSON_DEPTH:
+                return d
+            todo.extend((x, d + 1) for x in (v.values() if isinstance(v, dict) else v))
+    return deepest
 
 
 def config_hash(doc: Any) -> str:
@@ -481,8 +511,10 @@ class Repeats:
         chosen = doc.get("chosen")
         if chosen is not None and (not isinstance(chosen, int) or not 0 <= chosen < len(entries)):
             raise RunError(f"{where}: chosen: expected a repeat index in [0, {len(entries)}), got {chosen!r}")
-        return cls(tuple(seeds), entries, bool(doc.get("complete")), Spread.from_doc(doc.get("fitness"), where, "fitness"),
-                   {str(k): s for k, v in params.items() if (s := Spread.from_doc(v, where, f"params.{k}")) is not None},
+        fitness = Spread.from_doc(doc.get("fitness"), where, "fitness")
+        spreads = {str(k): Spread.from_doc(v, where, f"params.{k}") for k, v in params.items()}
+        return cls(tuple(seeds), entries, bool(doc.get("complete")), fitness,
+                   {k: s for k, s in spreads.items() if s is not None},
                    str(doc.get("held_out_key") or ""), Spread.from_doc(doc.get("held_out"), where, "held_out"), chosen,
                    str(doc.get("chosen_by") or ""), str(doc.get("rule") or ""),
                    _num_or_none(doc.get("defaults_fitness"), where, "defaults_fitness"),

@@ -278,11 +278,14 @@ class Run:
                 self.progress(f"interrupted; resume with: tuner resume {self.resume_as}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
         extra = self._finish() if self.best is not None else {}
-        self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
+        # a run whose every evaluation failed has no result: it ends "failed", not "finished"
+        status = "finished" if self.best is not None or not n_evals else "failed"
+        reason = optimizer.stop_reason if status == "finished" else f"every one of {n_evals} evaluations failed"
+        self._write_meta(status=status, finished=_now(), stop_reason=reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None and self.report:
             self._report()  # after meta.json: the report shows the final status
-        return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
+        return self._result(status, n_evals, state["gens"], reason, extra)
 
     def _best_doc(self, g: Generation) -> Best | None:
         b = g.best
@@ -301,13 +304,20 @@ class Run:
         opt = g.optimizer
         gen, G, n = opt.generation, opt.generations, len(g.records)
         rate = n / secs if secs > 0 else math.inf
-        eta = ""
+        later = stages - g.stage - 1  # stages still to come, each with the same budget
+        left_s = []  # the time each budget still needs at this generation's pace; the first one spent ends the run
         if G:
-            left = (G - gen) + (stages - g.stage - 1) * G
-            eta = f"  ETA {_dt.timedelta(seconds=round(left * secs))}"
+            left_s.append(((G - gen) + later * G) * secs)
+        cap = getattr(opt, "max_evals", None)
+        if cap and n:
+            left_s.append((max(cap - opt.n_evals, 0) + later * cap) * secs / n)
+        eta = f"  ETA {_dt.timedelta(seconds=round(min(left_s)))}" if left_s else ""
         st = f"stage {g.stage + 1}/{stages} " if stages > 1 else ""
+        head = f"gen {gen}/{G}" if G else f"gen {gen}"
+        if cap:
+            head += f"  evals {opt.n_evals}/{cap}"
         fail = f"  failed {g.n_failed}" if g.n_failed else ""
-        self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
+        self.progress(f"{st}{head}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
     def _finish(self) -> dict[str, Any]:
         """The end of a finished run: the final choice on a held-out fold (``validation.select``), the
@@ -370,7 +380,7 @@ def _printer(quiet: bool) -> Callable[[str], None] | None:
 
 
 def resolved_config(cfg: RunConfig, space: Space) -> dict[str, Any]:
-    """What ``config.yaml`` of a run of ``cfg`` on ``space`` holds: the resolved config, its space, where it came from."""
+    """What ``config.yaml`` of a run of ``cfg`` on ``space`` holds: the resolved config, its space, its origin."""
     resolved = dict(cfg.raw)
     resolved["parameters"] = space.to_dict()
     resolved["source"] = str(cfg.source)
@@ -467,6 +477,9 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
             meta = rd.meta()  # a run that got that far had a meta.json: its loss is an error, not a restart
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
+        if meta is not None and meta.status == "failed":
+            raise RunError(f"{rd.path}: already ended, every evaluation failed ({meta.stop_reason}); fix the objective "
+                           "and start the job again")
         ck = rd.checkpoint()
         cfg = run_config(rd, rd.check_config(meta) if meta is not None else None)
         if cfg.repeats > 1:

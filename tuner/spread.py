@@ -31,7 +31,7 @@ from typing import Any
 from tuner.records import RepeatEntry, Repeats, Spread
 
 __all__ = ["SEED_RULE", "SPREAD_WARN", "WARN_RULE", "CHOICE_RULES", "repeat_seeds", "held_out_score", "spread_of",
-           "choose", "spread_warning", "summarize", "spread_lines", "fmt"]
+           "choose", "spread_warning", "summarize", "spread_lines", "spread_md", "fmt"]
 
 #: how a repeated run's seeds follow from the job's seed (repeat i of a job with seed s is the run of seed s + i)
 SEED_RULE = "seed + i for repeat i = 0 .. N - 1 (repeat i is the run `tuner run JOB --seed <seed + i>`)"
@@ -204,3 +204,38 @@ def spread_lines(rep: Repeats) -> list[str]:
     if rep.warning:
         out.append(f"warning: {rep.warning} (rule: {rep.warn_rule})")
     return out
+
+
+def spread_md(rep: Repeats) -> list[str]:
+    """The report's section on a repeated run: one row per seed, the spread of the fitness and of each searched
+    parameter, the chosen repeat and its rule, and the warning."""
+    from tuner.render import md_escape
+
+    held = rep.held_out_key
+    md = ["## Repeats", "", f"{rep.n} runs of this job, seeds {SEED_RULE}.", ""]
+    md += ["| seed | status | best fitness |" + (f" {held} |" if held else "") + " run |",
+           "|---|---|---|" + ("---|" if held else "") + "---|"]
+    for e in rep.entries:
+        mark = " **(deployed)**" if rep.chosen == e.index else ""
+        md.append(f"| {e.seed} | {e.status} | {fmt(e.fitness)} |" + (f" {fmt(e.held_out)} |" if held else "")
+                  + f" [{e.run}]({e.run}/){mark} |")
+    md += ["", "| quantity | median | lowest | highest | share of search range |", "|---|---|---|---|---|"]
+    if rep.fitness is not None:
+        f = rep.fitness
+        md.append(f"| best fitness | {fmt(f.median)} | {fmt(f.low)} | {fmt(f.high)} | |")
+    if rep.held_out is not None:
+        h = rep.held_out
+        md.append(f"| {held} | {fmt(h.median)} | {fmt(h.low)} | {fmt(h.high)} | |")
+    for k, s in rep.params.items():
+        share = f"{s.range_share:.0%}" if s.range_share is not None else ""
+        md.append(f"| {md_escape(k)} | {fmt(s.median)} | {fmt(s.low)} | {fmt(s.high)} | {share} |")
+    md.append("")
+    if rep.chosen_entry is not None:
+        md += [f"Deployed: seed {rep.chosen_entry.seed}, {md_escape(rep.rule)}.", ""]
+    else:
+        md += ["Deployed: none yet (a repeat is chosen when every repeat has finished).", ""]
+    if rep.defaults_fitness is not None:
+        md += [f"Defaults' fitness {fmt(rep.defaults_fitness)}; gain of tuning {fmt(rep.gain)}.", ""]
+    if rep.warning:
+        md += [f"**Warning:** {md_escape(rep.warning)} (rule: {md_escape(rep.warn_rule)}).", ""]
+    return md
