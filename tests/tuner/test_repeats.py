@@ -220,3 +220,13 @@ def test_dashboard_lists_a_repeated_run_once_with_its_spread(tmp_path):
     assert [r["name"] for r in rows] == ["rep"]  # its repeats are not listed as runs of their own
     rep = RunDir(tmp_path / "runs" / "rep").repeats()
     assert "3 seeds" in rows[0]["status"] and rows[0]["best"] == rep.chosen_entry.fitness
+
+
+def test_sweep_ranking_shows_the_spread_over_seeds():
+    from tuner.sweep import ranking_lines, summarize
+
+    df = pd.DataFrame([{"method": "a", "seed": s, "status": "finished", "best_fitness": f}
+                       for s, f in ((1, 3.0), (2, 1.0), (3, 2.0))])
+    summ = summarize(df)
+    assert summ.loc["a", ("best_fitness", "min")] == 1.0 and summ.loc["a", ("best_fitness", "max")] == 3.0
+    assert "(seeds 1 .. 3, 3 runs)" in "\n".join(ranking_lines(df))
