@@ -9,7 +9,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from objectives.attitude.filters import FILTERS
 from objectives.attitude.filters.imu_tools_madgwick import ImuToolsMadgwick
 from objectives.attitude.filters.valenti import Valenti
 from objectives.attitude.ros_params import ros_values, ros_yaml
@@ -81,15 +80,8 @@ def _tune(tmp_path: Path, flt: str, fixed: dict) -> Path:
     return tmp_path / "run"
 
 
-@pytest.fixture
-def registered(monkeypatch):
-    monkeypatch.setitem(FILTERS, "imu_tools_madgwick",
-                        "objectives.attitude.filters.imu_tools_madgwick:ImuToolsMadgwick")
-    monkeypatch.setitem(FILTERS, "valenti", "objectives.attitude.filters.valenti:Valenti")
-
-
 @pytest.mark.slow
-def test_export_of_a_run_writes_the_nodes_parameter_file(tmp_path, registered):
+def test_export_of_a_run_writes_the_nodes_parameter_file(tmp_path):
     run = _tune(tmp_path, "imu_tools_madgwick", {"world_frame": "ned", "zeta": 0.01})
     best = yaml.safe_load((run / "best.yaml").read_text())
     r2 = run_tuner("export", str(run), "--format", "ros2-params")
@@ -106,7 +98,7 @@ def test_export_of_a_run_writes_the_nodes_parameter_file(tmp_path, registered):
 
 
 @pytest.mark.slow
-def test_export_names_a_value_the_node_cannot_run(tmp_path, registered):
+def test_export_names_a_value_the_node_cannot_run(tmp_path):
     # a start from the truth only served scoring: the deployed filter starts from its first sample, as the node
     truth = _tune(tmp_path / "t", "valenti", {"init": "truth", "use_mag": True}) if (tmp_path / "t").mkdir() is None \
         else None
