@@ -116,10 +116,11 @@ def plot_responses(loop: Any, runs: dict[str, dict[str, Any]], path: pathlib.Pat
     ax[-1].set_ylabel("input" if p.n_inputs > 1 else f"input {p.input_names[0]}")
     ax[-1].set_xlabel("time (s)")
     ax[-1].grid(True, alpha=0.3)
-    fig.legend(*ax[0].get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=8, frameon=False)
+    # above the curves, never on them
+    ax[0].legend(loc="lower left", bbox_to_anchor=(0.0, 1.02), ncol=3, fontsize=8, frameon=False)
     if p.n_inputs > 1:
-        ax[-1].legend(fontsize=7, ncol=2)
-    ax[0].set_title(f"{loop.controller} on {pathlib.Path(p.path).name} (nominal model)")
+        ax[-1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
+    fig.suptitle(f"{loop.controller} on {pathlib.Path(p.path).name} (nominal model)", fontsize=10)
     save_figure(fig, path)
     return path
 
