@@ -100,6 +100,8 @@ class MujocoLoop:
         self.plants = [self.model_plant(c) for c in self.cases]
         self._noise = self._meas.noise(self._sc.t.size)
         self._datas: list[Any] = [None] * len(self.cases)
+        #: the held-out models' plants, built on first use by the report (:func:`.report.held_out_scores`)
+        self._held_plants: list[Any] | None = None
 
     def _check_set_points(self) -> None:
         """State feedback reaches a set point only of a position or velocity in the state, and only where the

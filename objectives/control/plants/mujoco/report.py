@@ -71,7 +71,7 @@ def held_out_scores(loop: Any, params: dict[str, Any], n_threads: int = 0) -> He
     if unc is None or unc.held_out == 0:
         return None
     cases = unc.held_out_set()
-    if getattr(loop, "_held_plants", None) is None:
+    if loop._held_plants is None:
         loop._held_plants = [loop.model_plant(c) for c in cases]
     try:
         cp = loop.coeffs(params)

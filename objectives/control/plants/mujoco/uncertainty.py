@@ -83,10 +83,6 @@ class ModelCase:
     delay_n: int
     noise_scale: float
 
-    def describe(self) -> str:
-        shown = [f"{k}={v:.4g}" for k, v in self.values.items()]
-        return ", ".join([*shown, f"delay {self.delay_n} periods", f"noise x{self.noise_scale:.3g}"])
-
 
 @dataclass(frozen=True)
 class Uncertainty:
@@ -151,8 +147,9 @@ def _dimension(key: str, pattern: str, dist: Any, known: list[str]) -> Dimension
     names = tuple(n for n in known if fnmatch.fnmatchcase(n, pattern))
     if not names:
         sample = [n for n in known if n.split(".")[0] == pattern.split(".")[0]][:10] or known[:10]
-        raise ValueError(f"{key}.{pattern}: matches no parameter of the plant; e.g. {sample} "
-                         f"(all: tuner describe uncertainty, or the plant's named_parameters())")
+        raise ValueError(f"{key}.{pattern}: matches no parameter of the plant; e.g. {sample} (names are "
+                         "<element>.<name>.<field> of named bodies, joints, actuators and geoms, and sensor.delay_s, "
+                         "sensor.noise_std)")
     if not isinstance(dist, Mapping) or len(dist) != 1:
         raise ValueError(f"{key}.{pattern}: give one of scale: [lo, hi], range: [lo, hi], normal: {{mean, std}}, "
                          f"normal_scale: std; got {dist!r}")
