@@ -7,7 +7,7 @@ back from the run directory, so a run made from code and one made by ``tuner run
 config and seed have the same files and the same ``history.csv`` (but for its ``seconds`` column).
 ``load`` gives the same :class:`Result` for a run that is already on disk.
 
-Bad input raises :class:`tuner.config.ConfigError` (or :class:`tuner.rundir.RunError` for a run
+Bad input raises :class:`tuner.config.ConfigError` (or :class:`tuner.records.RunError` for a run
 directory) whose text is the command line's ``error:`` line without the ``error:``, before anything
 is written.
 """
@@ -21,7 +21,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tuner.config import ConfigError, RunConfig, apply_overrides, config_from_dict, load_config
-from tuner.rundir import RunDir, RunError
+from tuner.records import RunError
+from tuner.rundir import RunDir
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd

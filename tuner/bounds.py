@@ -16,10 +16,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from tuner.rundir import RunDir, RunError
+from tuner.records import RunError
+from tuner.rundir import RunDir
 from tuner.space import Real, Space, SpaceError
 
-__all__ = ["ReportWarning", "bound_warnings", "failure_warnings", "run_warnings", "BOUND_TOL"]
+__all__ = ["ReportWarning", "bound_warnings", "failure_warnings", "run_warnings", "run_space", "BOUND_TOL"]
 
 #: default distance to a bound (fraction of the searched range) that triggers a warning
 BOUND_TOL = 0.02
@@ -112,7 +113,8 @@ def failure_warnings(n_failed: int, n_evals: int, errors: list[str] | None = Non
     return [ReportWarning("failed", msg, value=float(n_failed), distance=frac)]
 
 
-def _run_space(run_dir: Path) -> Space | None:
+def run_space(run_dir: Path) -> Space | None:
+    """The search space of a run directory's config, or None when it has none or it does not build."""
     rd = RunDir(run_dir)
     if not rd.file("config.yaml").exists():
         return None
@@ -127,7 +129,7 @@ def run_warnings(run_dir: str | Path, tol: float = BOUND_TOL) -> list[ReportWarn
     ``history.csv``); files that do not exist yet (a run that just started) give no warning."""
     rd = RunDir(run_dir)
     out: list[ReportWarning] = []
-    space = _run_space(rd.path)
+    space = run_space(rd.path)
     if space is not None and rd.has_best():
         out += bound_warnings(dict(rd.best().params), space, tol)
     rows = rd.history_rows()

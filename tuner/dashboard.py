@@ -57,7 +57,7 @@ def _walk(root: Path) -> list[tuple[str, Path]]:
 
 
 def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
-    from tuner.interactive import best_so_far
+    from tuner.plots.sweep_convergence import best_so_far
     from tuner.rundir import RunDir
 
     rel = d.relative_to(root).as_posix()
@@ -164,7 +164,7 @@ def write_dashboard(root: str | Path, refresh_s: float = LIVE_REFRESH_S) -> Path
         md += ["Click a column header to sort, type in the box to filter, tick runs to compare them.", "",
                "{{plot:dashboard}}", ""]
         best = [r["best"] for r in rows if r.get("best") is not None and r["best"] > 0]
-        data = {"runs": rows, "log_fitness": bool(best and max(best) / min(best) > 20)}
+        data = {"dashboard": {"runs": rows, "log": bool(best and max(best) / min(best) > 20)}}
         interactive.install_assets(root)
         scripts = interactive.SCRIPTS
     else:

@@ -25,7 +25,12 @@ from typing import Any
 from tuner.export_formats import FORMATS, c_prefix, to_c, to_json, to_python, to_yaml
 from tuner.objective import hook
 
-__all__ = ["export", "FORMATS", "provenance", "export_c_filter", "verify_c"]
+__all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c"]
+
+#: the format name of the tuned system itself as C99 source (the objective's ``export_c`` hook), and the names it
+#: is also accepted under
+C_SOURCE = "c-source"
+C_SOURCE_ALIASES = ("c-filter",)
 
 
 def _build(run_dir: Path) -> Any:
@@ -104,9 +109,10 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
 def _deployment(run_dir: Path) -> Any:
     """The run's :class:`tuner.deployment.Deployment`, or None when ``best.yaml`` records none and the
     objective no longer builds (an older run: the parameters of ``best.yaml`` are exported then). A
-    recorded but malformed deployment is a :class:`tuner.rundir.RunError` naming the file."""
+    recorded but malformed deployment is a :class:`tuner.records.RunError` naming the file."""
     from tuner.deployment import load_deployment
-    from tuner.rundir import RunDir, RunError
+    from tuner.records import RunError
+    from tuner.rundir import RunDir
 
     if RunDir(run_dir).best().deployment:
         return load_deployment(run_dir)
@@ -141,8 +147,8 @@ def _sample_rate(obj: Any) -> dict[str, Any]:
     return {"sample_rate_hz": hz, "sample_rate_note": note}
 
 
-def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, dict[str, Any]]:
-    """The run's objective (on ``data_file``'s data when given) and the complete deployed values."""
+def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, Any]:
+    """The run's objective (on ``data_file``'s data when given) and its :class:`tuner.deployment.Deployment`."""
     from tuner.config import ConfigError
     from tuner.deployment import load_deployment
     from tuner.rescore import objective_on_data
@@ -152,20 +158,20 @@ def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> t
         raise ConfigError(run_dir / "config.yaml", "objective", "does not build any more (data moved?)")
     if data_file:
         objective, _ = objective_on_data(objective, data_file)
-    return objective, dict(load_deployment(run_dir).values)
+    return objective, load_deployment(run_dir)
 
 
-def export_c_filter(run_dir: str | Path, precision: str = "double", prefix: str | None = None) -> dict[str, str]:
-    """``{filename: text}``: the C source of the run's deployed filter (the objective's ``export_c_filter``
-    hook), its header led by the run's provenance (run, fitness, optimiser, data, commit)."""
+def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None = None) -> dict[str, str]:
+    """``{filename: text}``: the C source of the run's deployed system (the objective's ``export_c`` hook: a
+    filter, a controller), its header led by the run's provenance (run, fitness, optimiser, data, commit)."""
     from tuner.config import ConfigError
     from tuner.rundir import RunDir
 
     run_dir = Path(run_dir)
-    objective, values = _deployed_objective(run_dir)
-    fn = hook(objective, "export_c_filter")
+    objective, dep = _deployed_objective(run_dir)
+    fn = hook(objective, "export_c")
     if fn is None:
-        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C filter export")
+        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C export (hook export_c)")
     doc = provenance(run_dir, objective)
     if prefix is None:
         prefix = c_prefix(RunDir(run_dir).meta().name or run_dir.name)
@@ -173,22 +179,24 @@ def export_c_filter(run_dir: str | Path, precision: str = "double", prefix: str 
              f"optimizer: {doc['optimizer']}, seed {doc['seed']}, {doc['n_evals']} evaluations",
              f"data: {doc['data']}", f"git commit: {doc['git_commit']}", f"exported: {doc['exported']}"]
     try:
-        return dict(fn(values, precision, c_prefix(prefix), "\n".join(lines)))
+        return dict(fn(dict(dep.values), precision, c_prefix(prefix), "\n".join(lines)))
     except ValueError as exc:
         raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
 
 
 def verify_c(run_dir: str | Path, data_file: str | Path | None = None, precision: str = "double",
              opt: tuple[str, ...] = ("-O2",)) -> dict[str, Any]:
-    """The run's exported C compiled and scored next to the model (the objective's ``verify_c_filter``)."""
+    """The run's exported C compiled and scored next to the model: the objective's ``verify_c`` hook's result
+    and ``name``, the deployed system's name."""
     from tuner.config import ConfigError
 
     run_dir = Path(run_dir)
-    objective, values = _deployed_objective(run_dir, data_file)
-    fn = hook(objective, "verify_c_filter")
+    objective, dep = _deployed_objective(run_dir, data_file)
+    fn = hook(objective, "verify_c")
     if fn is None:
-        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C filter to verify")
+        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C export to verify "
+                          "(hook verify_c)")
     try:
-        return dict(fn(values, precision, tuple(opt)))
+        return {"name": dep.name, **dict(fn(dict(dep.values), precision, tuple(opt)))}
     except ValueError as exc:
         raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None

@@ -170,15 +170,15 @@ class TunableObjective(Objective, Protocol):
         """The ready deployed object for ``params`` (e.g. the filter instance with its complete
         configuration, whose ``run(gyr, acc, mag, rate_hz=...)`` and ``stream()`` work on live data)."""
 
-    def export_c_filter(self, params: Mapping[str, Any], precision: str, prefix: str,
-                        comment: str) -> Mapping[str, str]:
-        """``{filename: text}``: C source of the deployed system with ``params`` baked in (``tuner export
-        --format c-filter``); ``comment`` is the run's provenance for the header."""
+    def export_c(self, params: Mapping[str, Any], precision: str, prefix: str, comment: str) -> Mapping[str, str]:
+        """``{filename: text}``: C source of the deployed system (a filter, a controller) with ``params`` baked
+        in (``tuner export --format c-source``); ``comment`` is the run's provenance for the header."""
 
-    def verify_c_filter(self, params: Mapping[str, Any], precision: str, opt: tuple[str, ...]) -> Mapping[str, Any]:
+    def verify_c(self, params: Mapping[str, Any], precision: str, opt: tuple[str, ...]) -> Mapping[str, Any]:
         """The exported C compiled with the local compiler (flags ``opt``) and scored next to the model
-        (``tuner verify-c``): ``{"python": Score, "c": Score, "max_angle_rad": {recording: float}, ...}``;
-        ``FileNotFoundError`` without a compiler."""
+        (``tuner verify-c``): ``{"python": Score, "c": Score, "precision": str, "flags": [str], "seconds":
+        {"python": s, "c": s}}``, optionally ``"max_angle_rad": {recording: float}`` (the largest angle between
+        the two outputs); ``FileNotFoundError`` without a compiler."""
 
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
@@ -188,7 +188,7 @@ class TunableObjective(Objective, Protocol):
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "parameter_names", "check_params", "preflight", "score", "has_test_data",
          "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize",
-         "deployment", "build", "export_c_filter", "verify_c_filter")
+         "deployment", "build", "export_c", "verify_c")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

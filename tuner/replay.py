@@ -13,7 +13,8 @@ from typing import Any
 
 from tuner.evaluate import EvalRecord
 from tuner.objective import Evaluation
-from tuner.rundir import CHAIN, RunDir, RunError, check_chain, fmt_cell, parse_cell, read_chain
+from tuner.records import HistoryRow, RunError, cell
+from tuner.rundir import CHAIN, RunDir, check_chain, read_chain
 
 __all__ = ["Replay", "verify_history"]
 
@@ -36,10 +37,6 @@ def verify_history(rd: RunDir) -> str:
     return ""
 
 
-def _cell(v: Any) -> str:
-    return "" if v is None else str(fmt_cell(v))
-
-
 class Replay:
     """Hands back the recorded results of the first rows of ``history.csv``, then evaluates live.
 
@@ -47,9 +44,8 @@ class Replay:
     the re-created optimiser asks means the history was edited (or the code changed), and is refused.
     """
 
-    def __init__(self, rows: list[dict[str, str]], names: list[str], metric_names: list[str], live: Callable,
-                 where: Path):
-        self.rows, self.names, self.metric_names, self.live, self.where = rows, names, metric_names, live, where
+    def __init__(self, rows: list[dict[str, str]], names: list[str], live: Callable, where: Path):
+        self.rows, self.names, self.live, self.where = rows, names, live, where
         self.pos = 0
 
     @property
@@ -66,17 +62,11 @@ class Replay:
         out = []
         for (params, _), row in zip(items, chunk):
             for k in self.names:
-                if _cell(params[k]) != row.get(k):
+                if cell(params[k]) != row.get(k):
                     raise RunError(f"{self.where}: row eval={row.get('eval')}: {k} is {row.get(k)!r} but the "
-                                   f"optimiser re-created from the seed asks {_cell(params[k])!r}; the history "
+                                   f"optimiser re-created from the seed asks {cell(params[k])!r}; the history "
                                    "was edited or the code changed, so it cannot be resumed")
-            if row.get("status") not in ("ok", "failed"):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: status {row.get('status')!r}")
-            try:
-                fit, secs = float(row["fitness"]), float(row["seconds"])
-            except (TypeError, ValueError):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: fitness/seconds not numbers") from None
-            metrics = {k: parse_cell(row[k]) for k in self.metric_names if row.get(k) not in (None, "")}
-            out.append(EvalRecord(Evaluation(fit, metrics, row["status"], row.get("error") or ""), secs))
+            h = HistoryRow.parse(row, self.names, self.where)
+            out.append(EvalRecord(Evaluation(h.fitness, h.metrics, h.status, h.error), h.seconds))
         self.pos += len(items)
         return out

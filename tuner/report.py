@@ -19,30 +19,26 @@ import datetime as _dt
 import json
 import math
 import re
+import time
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from tuner import interactive
+from tuner.bounds import run_space, run_warnings
+from tuner.dashboard import find_dashboard, write_dashboard
 from tuner.deployment import DEFAULTS_MEANING
-from tuner.figures import (
-    convergence_table,
-    load_history,
-    plot_convergence,
-    plot_fitness_vs_params,
-    plot_parallel_coordinates,
-    sweep_figures,
-)
-from tuner.render import fmt_num, md_escape, md_path, write_text_atomic
+from tuner.plots import RUN_PLOTS, Drawn, draw, figures_md, objective_md, plot_files
+from tuner.plots.context import RunContext, load_history
+from tuner.render import fmt_num, md_escape, write_text_atomic
 from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
 from tuner.runinfo import run_summary
 
-__all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary", "md_table", "pivot_metrics",
-           "sweep_figures", "write_html", "convergence_table", "write_live_report", "throttled", "sweep_warnings_md",
-           "LIVE_REFRESH_S"]
+__all__ = ["write_run_report", "load_history", "run_summary", "md_table", "pivot_metrics", "write_html",
+           "write_live_report", "throttled", "sweep_warnings_md", "LIVE_REFRESH_S"]
 
 #: seconds between reloads of a running run's report page
 LIVE_REFRESH_S = 10.0
@@ -51,7 +47,6 @@ LIVE_MIN_INTERVAL_S = 5.0
 #: the interval is also at least this many times the time the previous live report took (overhead <= 1/x)
 LIVE_COST_FACTOR = 10.0
 _live_last: dict[str, tuple[float, float]] = {}  # run directory -> (time of the last live report, its cost)
-_OWN_FIGURES = ("convergence.png", "fitness_vs_params.png", "parallel_coordinates.png")
 
 
 def write_html(path: Path, markdown: str, base_dir: Path, title: str | None = None,
@@ -237,12 +232,6 @@ def _params_rows(params: dict[str, Any], space: Any) -> list[list[Any]]:
     return rows
 
 
-def _run_space(run_dir: Path):
-    from tuner.bounds import _run_space
-
-    return _run_space(run_dir)
-
-
 def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bool = False,
                      refresh_s: float = LIVE_REFRESH_S) -> Path:
     """Write ``report.md``, ``report.html`` and the report figures of a run directory.
@@ -257,12 +246,10 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
         A report of a running run: the HTML page reloads itself every ``refresh_s`` seconds while the
         status is ``running``. Objective figures are not redrawn (they come after the run).
     """
-    from tuner.bounds import run_warnings
-
     run_dir = Path(run_dir)
     s = run_summary(run_dir, meta)
     cfg = RunDir(run_dir).config() if (run_dir / "config.yaml").exists() else {}
-    space = _run_space(run_dir)
+    space = run_space(run_dir)
     running = live and s["status"] == "running"
     if not live:
         _live_last.pop(str(run_dir.resolve()), None)
@@ -292,7 +279,9 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
                                                               "position in bounds", "unit"], 6), ""]
     md += _results_md(s)
     at_figures = len(md)
-    md += _figures_md(run_dir, s, space, live)
+    drawn, own = _figures(run_dir, s, space, live)
+    md += ["## Figures", ""] + (figures_md(drawn, run_dir) + objective_md(own) if drawn
+                                else ["(no evaluation yet)", ""])
     after_figures = len(md)
     files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
              ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
@@ -303,7 +292,7 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     text = "\n".join(md)
     path = run_dir / "report.md"
     write_text_atomic(path, text)
-    fig_md, data = _interactive(run_dir, s, space, live)
+    fig_md, data = _interactive(run_dir, drawn, own, live)
     html_md = text if data is None else "\n".join(md[:at_figures] + fig_md + md[after_figures:])
     write_html(run_dir / "report.html", html_md, run_dir, title=title, refresh_s=refresh_s if running else None,
                scripts=interactive.SCRIPTS if data is not None else (), data=data)
@@ -317,23 +306,16 @@ def _refresh_dashboard(run_dir: Path) -> None:
     Live reports are throttled (:func:`write_live_report`) and their cost includes this rewrite, so a
     dashboard over many runs makes the live view of each run less frequent, not the run slower.
     """
-    from tuner.dashboard import find_dashboard, write_dashboard
-
     root = find_dashboard(run_dir)
     if root is not None:
         write_dashboard(root, LIVE_REFRESH_S)
 
 
-def _interactive(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[str], dict[str, Any] | None]:
+def _interactive(run_dir: Path, drawn: list[Drawn], own: list[Path], live: bool) -> tuple[list[str], dict | None]:
     """The interactive figures section and page data (:mod:`tuner.interactive`), or ``([], None)``."""
-    if not interactive.available() or not (run_dir / "history.csv").exists():
+    if not interactive.available() or not drawn:
         return [], None
-    hist = load_history(run_dir)
-    if not len(hist):
-        return [], None
-    pngs = [] if live and s["status"] == "running" else \
-        [p for p in sorted((run_dir / "figures").glob("*.png")) if p.name not in _OWN_FIGURES]
-    fig_md, data = interactive.run_figures(run_dir, hist, space, s["params"], pngs, live)
+    fig_md, data = interactive.run_figures(run_dir, drawn, own, live)
     interactive.install_assets(run_dir)
     return fig_md, data
 
@@ -363,8 +345,6 @@ def throttled(key: str, write: Any, min_interval_s: float | None = None) -> Any:
 
     Returns what ``write()`` returned, or ``None`` when it was not due.
     """
-    import time
-
     now = time.monotonic()
     interval = LIVE_MIN_INTERVAL_S if min_interval_s is None else min_interval_s
     last, cost = _live_last.setdefault(key, (now, 0.0))
@@ -378,8 +358,6 @@ def throttled(key: str, write: Any, min_interval_s: float | None = None) -> Any:
 
 def sweep_warnings_md(jobs_dir: Path, job_ids: list[str]) -> list[str]:
     """The ``## Warnings`` section of a sweep report: bound and failure warnings of every job."""
-    from tuner.bounds import run_warnings
-
     rows = [[job, w.kind, w.message] for job in job_ids if (Path(jobs_dir) / job / "meta.json").exists()
             for w in run_warnings(Path(jobs_dir) / job)]
     if not rows:
@@ -428,25 +406,16 @@ def _results_md(s: dict[str, Any]) -> list[str]:
     return md
 
 
-def _figures_md(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> list[str]:
-    figs = run_dir / "figures"
-    md = ["## Figures", ""]
+def _figures(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[Drawn], list[Path]]:
+    """The report's plots (:data:`tuner.plots.RUN_PLOTS`, each PNG written once) and the objective's own PNGs
+    in ``figures/`` (not while the run is going: they come after it); nothing before the first evaluation."""
     if not (run_dir / "history.csv").exists():
-        return md + ["(no evaluation yet)", ""]
+        return [], []
     hist = load_history(run_dir)
     if len(hist) == 0:
-        return md + ["(no evaluation yet)", ""]
-    own = [("Convergence", plot_convergence(run_dir, figs / "convergence.png"))]
-    if space is not None and space.dim:
-        own.append(("Fitness against each parameter",
-                    plot_fitness_vs_params(hist, space, s["params"], figs / "fitness_vs_params.png")))
-        own.append(("Parallel coordinates of the best candidates",
-                     plot_parallel_coordinates(hist, space, figs / "parallel_coordinates.png")))
-    for title, p in own:
-        md += [f"### {title}", "", f"![{title}]({md_path('figures/' + p.name)})", ""]
-    if not live or s["status"] != "running":
-        for png in sorted(figs.glob("*.png")):
-            if png.name not in _OWN_FIGURES:
-                name = png.stem.replace("_", " ")
-                md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
-    return md
+        return [], []
+    figs = run_dir / "figures"
+    drawn = draw(RUN_PLOTS, RunContext(run_dir, hist, space, dict(s["params"])), figs)
+    mine = plot_files(RUN_PLOTS)
+    own = [] if live and s["status"] == "running" else [p for p in sorted(figs.glob("*.png")) if p.name not in mine]
+    return drawn, own

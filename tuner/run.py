@@ -30,24 +30,14 @@ from typing import Any
 import numpy as np
 
 from tuner import signals as stop_signals
+from tuner._version import __version__
 from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
+from tuner.records import Best, Checkpoint, HistoryRow, Meta, RunError, Timing, config_hash, plain, read_back
 from tuner.replay import Replay as _Replay
-from tuner.rundir import (
-    Best,
-    Checkpoint,
-    Meta,
-    RunDir,
-    RunError,
-    Timing,
-    atomic_write,
-    config_hash,
-    fmt_cell,
-    parse_cell,
-    plain,
-)
+from tuner.rundir import RunDir, atomic_write
 from tuner.selection import select_best
 from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
 from tuner.setup import build as _build  # the old name, used by benchmarks
@@ -135,31 +125,12 @@ def _versions() -> dict[str, str]:
             out[mod] = version(dist)
         except PackageNotFoundError:  # pragma: no cover
             out[mod] = ""
-    from tuner import __version__
-
     out["tuner"] = __version__
     return out
 
 
 def _now() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
-def _cell(v: Any) -> str:
-    return "" if v is None else str(fmt_cell(v))
-
-
-def _clip(text: str, limit: int = 4000) -> str:
-    """An error text as stored in ``history.csv``: at most ``limit`` characters, its length noted when cut
-    (a 128 kB message would exceed the CSV reader's field limit and make the history unreadable)."""
-    if len(text) <= limit:
-        return text
-    return f"{text[:limit]} [... {len(text):,} characters, cut to {limit:,}]"
-
-
-def _metrics(m: dict[str, Any]) -> dict[str, Any]:
-    """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
-    return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
 
 
 def _preload_report() -> None:
@@ -217,8 +188,7 @@ class Run:
         stages = self.cfg.optimizer.refine.stages
         history = self.rd.history(self.base_space.names, self.meta.config_hash)
         live = LiveMap(self.cfg, self.n_jobs)
-        replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
-                         history.path)
+        replay = _Replay(list(replay_rows or []), self.base_space.names, live, history.path)
         t = self.meta.timing
         self._write_meta(status="running", started=self.meta.started or _now(), backend_detail=live.describe(),
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
@@ -313,16 +283,12 @@ class Run:
         b = g.best
         if b is None:
             return None
-        return Best(plain(b.params), b.fitness, _metrics(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
+        return Best(plain(b.params), b.fitness, read_back(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
 
-    def _row(self, g: Generation, i: int) -> dict[str, Any]:
+    def _row(self, g: Generation, i: int) -> HistoryRow:
         r, ev = g.records[i], g.records[i].evaluation
-        row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
-        row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
-        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=_clip(ev.error.replace("\n", " ")),
-                   seconds=f"{r.seconds:.6f}")
-        row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
-        return row
+        return HistoryRow(g.first_eval + i, g.stage, g.generation, i, g.params[i], ev.fitness, ev.status, ev.error,
+                          r.seconds, ev.metrics)
 
     def _progress(self, g: Generation, stages: int, secs: float) -> None:
         if not self.progress:

@@ -1,4 +1,7 @@
-"""The one owner of a run directory: its files, their formats, atomic writes and the lock.
+"""The one owner of a run directory: its paths, the lock, atomic writes and the history append.
+
+What the files hold (typed ``Meta``, ``Best``, ``Checkpoint``, ``HistoryRow``) and how a value is written
+(``fmt_cell``, ``plain``, ``config_hash``) are :mod:`tuner.records`; :class:`RunDir` reads and writes them.
 
 Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
 
@@ -31,36 +34,38 @@ from __future__ import annotations
 import csv
 import dataclasses
 import errno
-import hashlib
 import io
 import json
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 
 from tuner import digest, safe_yaml
-from tuner.loop import BestPoint
+from tuner.records import (
+    FIXED_COLUMNS,
+    RESULT_COLUMNS,
+    Best,
+    Checkpoint,
+    HistoryRow,
+    Meta,
+    RunError,
+    config_hash,
+    dump_yaml,
+    first_difference,
+    plain,
+)
 from tuner.safe_io import check_not_link, named, open_nofollow, read_text, refuse_links
 
-__all__ = ["RunError", "RunDir", "Meta", "Timing", "Best", "Checkpoint", "History", "atomic_write",
-           "config_hash", "first_difference", "fmt_cell", "parse_cell", "FAULT_ENV"]
+#: what this module owns; the records it reads and writes (``Meta``, ``Best``, ``Checkpoint``, ``HistoryRow``,
+#: ``RunError`` and the encodings) are :mod:`tuner.records`'s, importable from here as well
+__all__ = ["RunDir", "History", "atomic_write", "read_chain", "check_chain", "CHAIN", "FAULT_ENV", "RunError"]
 
 FAULT_ENV = "TUNER_FAULT_KILL_AT_WRITE"
-FIXED_COLUMNS = ["eval", "stage", "generation", "index"]
-RESULT_COLUMNS = ["fitness", "status", "error", "seconds"]
-STATUSES = ("created", "running", "finished", "interrupted", "failed")
 LEGACY_CHECKPOINT = "checkpoint.pkl"
-
-
-class RunError(RuntimeError):
-    """A run directory that cannot be used as asked (missing, finished, corrupt, in use)."""
-
 
 # --- writing -----------------------------------------------------------------------------------
 _n_writes = 0
@@ -126,217 +131,6 @@ def _append(path: Path, text: str) -> None:
     _fault("after")
 
 
-def plain(v: Any) -> Any:
-    """Numpy scalars/arrays, tuples and paths turned into YAML/JSON-native values."""
-    if isinstance(v, dict):
-        return {str(k): plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [plain(x) for x in v]
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, Path):
-        return str(v)
-    return v
-
-
-def dump_yaml(d: Any) -> str:
-    return yaml.safe_dump(plain(d), sort_keys=False, default_flow_style=False, width=100)
-
-
-def fmt_cell(v: Any) -> Any:
-    """How a value is written into ``history.csv`` (floats as ``repr``, so they read back exactly)."""
-    if isinstance(v, (bool, np.bool_)):
-        return str(bool(v))
-    if isinstance(v, (float, np.floating)):
-        return repr(float(v))
-    if isinstance(v, (list, tuple, dict)):
-        return json.dumps(plain(v))
-    return v
-
-
-def parse_cell(s: str) -> Any:
-    """Inverse of :func:`fmt_cell` for metric cells: int, float, JSON list/dict, else the string."""
-    for conv in (int, float):
-        try:
-            return conv(s)
-        except ValueError:
-            pass
-    if s[:1] in "[{":
-        try:
-            return json.loads(s)
-        except ValueError:
-            pass
-    return s
-
-
-def config_hash(doc: Any) -> str:
-    """sha256 of the canonical JSON of a resolved config."""
-    return hashlib.sha256(json.dumps(plain(doc), sort_keys=True, default=str).encode()).hexdigest()
-
-
-def first_difference(a: Any, b: Any, prefix: str = "") -> str:
-    """The first dotted key where two config documents differ ('' when they are equal)."""
-    if isinstance(a, dict) and isinstance(b, dict):
-        for k in sorted(set(a) | set(b), key=str):
-            if k not in a or k not in b:
-                return f"{prefix}{k}"
-            d = first_difference(a[k], b[k], f"{prefix}{k}.")
-            if d:
-                return d
-        return ""
-    return "" if a == b else prefix.rstrip(".") or "(top level)"
-
-
-# --- typed records -----------------------------------------------------------------------------
-def _req(doc: dict[str, Any], key: str, types: type | tuple[type, ...], where: Path) -> Any:
-    if key not in doc:
-        raise RunError(f"{where}: {key}: missing")
-    v = doc[key]
-    allowed = types if isinstance(types, tuple) else (types,)
-    if not isinstance(v, allowed) or (isinstance(v, bool) and bool not in allowed):  # True is not a count
-        raise RunError(f"{where}: {key}: expected {getattr(types, '__name__', types)}, got {v!r}")
-    return v
-
-
-@dataclass(frozen=True)
-class Timing:
-    """Wall time of all sessions, summed objective time, number of sessions (run + resumes)."""
-
-    wall_s: float = 0.0
-    objective_s: float = 0.0
-    sessions: int = 0
-
-
-@dataclass(frozen=True)
-class Meta:
-    """``meta.json``: what ran, where, how far it got. Unknown keys are kept in ``extra``."""
-
-    status: str
-    name: str
-    seed: int
-    created: str
-    config_source: str = ""
-    config_hash: str = ""
-    versions: dict[str, str] = field(default_factory=dict)
-    git_commit: str = ""
-    host: str = ""
-    cpu_count: int | None = None
-    backend: str = "serial"
-    n_jobs: int = 1
-    n_jobs_requested: int | None = None
-    backend_detail: str = ""
-    optimizer: str = ""
-    n_evals: int = 0
-    n_failed: int = 0
-    generations: int = 0
-    stop_reason: str = ""
-    timing: Timing = field(default_factory=Timing)
-    started: str = ""
-    finished: str = ""
-    interrupted: str = ""
-    notes: tuple[str, ...] = ()
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    def replace(self, **kw: Any) -> Meta:
-        return dataclasses.replace(self, **kw)
-
-    def to_dict(self) -> dict[str, Any]:
-        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "extra"}
-        d["timing"] = dataclasses.asdict(self.timing)
-        d["notes"] = list(self.notes)
-        return {**self.extra, **plain(d)}
-
-    @classmethod
-    def from_dict(cls, doc: Any, where: Path) -> Meta:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
-        status = _req(doc, "status", str, where)
-        if status not in STATUSES:
-            raise RunError(f"{where}: status: expected one of {list(STATUSES)}, got {status!r}")
-        _req(doc, "name", str, where)
-        _req(doc, "seed", int, where)
-        for key in ("n_evals", "n_failed", "generations"):
-            if key in doc:
-                _req(doc, key, int, where)
-        t = doc.get("timing") or {}
-        if not isinstance(t, dict):
-            raise RunError(f"{where}: timing: expected an object, got {t!r}")
-        try:
-            timing = Timing(float(t.get("wall_s", 0.0)), float(t.get("objective_s", 0.0)), int(t.get("sessions", 0)))
-        except (TypeError, ValueError) as exc:
-            raise RunError(f"{where}: timing: {exc}") from None
-        names = {f.name for f in dataclasses.fields(cls)}
-        kw = {k: v for k, v in doc.items() if k in names and k not in ("timing", "extra", "notes")}
-        kw.setdefault("created", "")
-        return cls(**kw, timing=timing, notes=tuple(doc.get("notes") or ()),
-                   extra={k: v for k, v in doc.items() if k not in names})
-
-
-@dataclass(frozen=True)
-class Best(BestPoint):
-    """``best.yaml``: the best successful evaluation of the history (a :class:`tuner.loop.BestPoint`),
-    the run it belongs to, the objective's held-out scores after the run (``evaluation``) and the
-    complete configuration of the tuned system (``deployment``: a :class:`tuner.deployment.Deployment`
-    as plain data; ``params`` stays the run's point as the history records it)."""
-
-    run: str = ""
-    evaluation: dict[str, Any] = field(default_factory=dict)
-    deployment: dict[str, Any] = field(default_factory=dict)
-
-    def to_doc(self) -> dict[str, Any]:
-        doc = {"params": self.params, "fitness": self.fitness, "metrics": self.metrics,
-               "found": {"stage": self.stage, "generation": self.generation, "eval": self.eval}, "run": self.run}
-        if self.evaluation:
-            doc["evaluation"] = self.evaluation
-        if self.deployment:
-            doc["deployment"] = self.deployment
-        return plain(doc)
-
-    @classmethod
-    def from_doc(cls, doc: Any, where: Path) -> Best:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a mapping, got {type(doc).__name__}")
-        params = _req(doc, "params", dict, where)
-        fitness = _req(doc, "fitness", (int, float), where)
-        found = doc.get("found") or {}
-        if not isinstance(found, dict):
-            raise RunError(f"{where}: found: expected a mapping, got {found!r}")
-        deployment = doc.get("deployment") or {}
-        if not isinstance(deployment, dict):
-            raise RunError(f"{where}: deployment: expected a mapping, got {deployment!r}")
-        return cls(dict(params), float(fitness), dict(doc.get("metrics") or {}), int(found.get("stage", 0)),
-                   int(found.get("generation", -1)), int(found.get("eval", -1)), str(doc.get("run", "")),
-                   dict(doc.get("evaluation") or {}), dict(deployment))
-
-
-@dataclass(frozen=True)
-class Checkpoint:
-    """``checkpoint.json``: the first ``n_evals`` rows of ``history.csv`` are complete generations.
-
-    Resuming recreates the optimiser from the run seed and replays ``tell`` with the recorded fitness
-    of those rows: the optimiser state (pycma's included) is rebuilt exactly, no object is stored, and
-    a history edited by hand is detected (the replayed optimiser asks other points than recorded).
-    """
-
-    n_evals: int
-    stage: int
-    generations: int
-    version: int = 2
-
-    @classmethod
-    def from_doc(cls, doc: Any, where: Path) -> Checkpoint:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
-        if doc.get("version") != 2:
-            raise RunError(f"{where}: version: expected 2, got {doc.get('version')!r}")
-        vals = [_req(doc, k, int, where) for k in ("n_evals", "stage", "generations")]
-        if min(vals) < 0:
-            raise RunError(f"{where}: negative counts {vals}")
-        return cls(*vals)
-
-
 # --- history -----------------------------------------------------------------------------------
 class History:
     """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear. Beside it,
@@ -398,7 +192,10 @@ class History:
             self._rewrite(rows[:n_rows])
         return rows[:n_rows]
 
-    def append(self, rows: list[dict[str, Any]]) -> None:
+    def append(self, records: list[HistoryRow]) -> None:
+        """Append ``records`` (and their digests to ``history.chain``); a metric not in the header yet adds a
+        column (the file is rewritten with it)."""
+        rows = [r.cells() for r in records]
         new = sorted({k for r in rows for k in r} - set(self.columns))
         if new:
             old = self.read_rows()

@@ -435,13 +435,17 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
 
     ``live``: the sweep is still going; the HTML page reloads itself until every job has finished.
     """
+    from tuner import interactive
+    from tuner.plots import SWEEP_PLOTS, draw, figures_md
+    from tuner.plots.context import SweepContext
     from tuner.render import md_escape
-    from tuner.report import LIVE_REFRESH_S, sweep_figures, sweep_warnings_md, write_html
+    from tuner.report import LIVE_REFRESH_S, sweep_warnings_md, write_html
 
     sweep_dir = Path(sweep_dir)
     sw = load_sweep_from_dir(sweep_dir)
     df, summ, flat = write_sweep_tables(sweep_dir)
-    figs = sweep_figures(sweep_dir, df)
+    check_not_link(sweep_dir / "figures")
+    drawn = draw(SWEEP_PLOTS, SweepContext(sweep_dir, df), sweep_dir / "figures")
     jobs_dir = sweep_dir / "jobs"
     versions = {}
     hashes = []
@@ -484,9 +488,9 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     elif any(c.startswith("train.") for c in df.columns):  # e.g. closed loop: F, peaks, rise times
         md += ["## Scores of the best parameters (objective's evaluation)", "",
                _md(df[["job"] + [c for c in df.columns if c.startswith("train.")]]), ""]
-    md += ["## Figures", ""]
-    for title, p in figs:
-        md += [f"### {title}", "", f"![{title}]({p.relative_to(sweep_dir).as_posix()})", ""]
+    at_figures = len(md)
+    md += ["## Figures", ""] + figures_md(drawn, sweep_dir)
+    after_figures = len(md)
     per_run = [(j["id"], jobs_dir / j["id"] / "report.md") for j in sw["jobs"]]
     md += ["## Runs", ""] + [f"- [{i}](jobs/{i}/report.md)" for i, p in per_run if p.exists()] + [""]
     md += ["## Reproduce", "", "```", command or f"tuner sweep {sw['source']}", "```", "",
@@ -495,16 +499,15 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
           [f"| {i} | `{h}` | {s} |" for i, h, s in hashes] + [""]
     text = "\n".join(md)
     atomic_write(sweep_dir / "report.md", text)
-    if running:
-        text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
-    from tuner import interactive
-
     scripts, data = (), None
-    if interactive.available():  # sortable tables and a zoomable convergence plot (tuner.interactive)
-        fig_md, data = interactive.sweep_figures(sweep_dir, [j["id"] for j in sw["jobs"]])
-        text = text.replace("## Figures\n", "\n".join(fig_md) + "\n## Figures\n", 1)
+    if interactive.available():  # sortable tables and the plots with a slot zoomable (tuner.interactive)
+        data = interactive.page_data(drawn)
+        text = "\n".join(md[:at_figures] + ["## Figures", ""] + figures_md(drawn, sweep_dir, interactive=True)
+                         + md[after_figures:])
         interactive.install_assets(sweep_dir)
         scripts = interactive.SCRIPTS
+    if running:
+        text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
     write_html(sweep_dir / "report.html", text, sweep_dir, title=f"Sweep {sw['name']}",
                refresh_s=LIVE_REFRESH_S if running else None, scripts=scripts, data=data)
     return sweep_dir / "report.md"

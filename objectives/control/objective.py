@@ -27,6 +27,7 @@ import numpy as np
 
 from objectives.control.controllers import get_controller
 from objectives.control.plants import loop_class, plant_kind
+from tuner.deployment import Deployment
 from tuner.objective import Evaluation
 from tuner.space import Real, Space
 
@@ -135,7 +136,7 @@ class ClosedLoopObjective:
         """Every declared value of ``params`` with ``fixed`` and the defaults, validated."""
         return self.decl.validate({**self.fixed, **params})
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned controller, scoring-only settings apart (:mod:`objectives.control.deployment`)."""
         from objectives.control.deployment import controller_deployment
 

@@ -46,10 +46,10 @@ def test_assets_written_once_and_replaced_when_changed(tmp_path):
 
 
 def test_parallel_coordinate_bands_cover_every_rank_once():
-    from tuner.interactive import _bands
+    from tuner.plots.parcoords import bands
 
     for k in (1, 3, 12, 30, 200):
-        b = _bands(k)
+        b = bands(k)
         assert len(b["band"]) == k and b["band"][0] == 4 and b["band"] == sorted(b["band"], reverse=True)
         labels = [lab for lab in b["band_labels"] if lab]
         assert labels[-1].startswith("rank 1") and labels[0].endswith(str(k))

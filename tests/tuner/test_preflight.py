@@ -163,7 +163,7 @@ def test_closed_loop_misspelled_parameter(tmp_path):
 def test_dask_worker_check_reports_a_callable_missing_there(tmp_path):
     pytest.importorskip("distributed")
     from tuner.preflight import _worker_preflight
-    from tuner.registry import PythonObjective
+    from tuner.python_objective import PythonObjective
 
     assert _worker_preflight(PythonObjective("json:dumps")) == ""
     msg = _worker_preflight(PythonObjective("no_such_mod_q:f"))

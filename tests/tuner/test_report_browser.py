@@ -159,10 +159,13 @@ def test_interactive_run_page_holds_its_data_and_assets(evil_run):
     assert all((evil_run / s).is_file() for s in SCRIPTS)
     slots = re.findall(r'data-plot="([a-z]+)"', page)
     assert slots == ["convergence", "importance", "slices", "parcoords", "contour"]
-    assert [p["name"] for p in data["params"]] == ["x", "y"] and data["params"][0]["unit"] == "rad/s"
+    assert list(data) == slots  # one slot of data per plot: the data its PNG is drawn from
+    params = data["slices"]["params"]
+    assert [p["name"] for p in params] == ["x", "y"] and params[0]["unit"] == "rad/s"
     hist = __import__("pandas").read_csv(evil_run / "history.csv")
     ok = hist[hist["status"] == "ok"]
-    assert len(data["points"]["fitness"]) == len(ok) and min(data["points"]["fitness"]) == ok["fitness"].min()
+    points = data["slices"]["points"]
+    assert len(points["fitness"]) == len(ok) and min(points["fitness"]) == ok["fitness"].min()
     # x is the parameter that matters (its log10 distance to 2.9 dominates the fitness)
     assert data["importance"]["names"][0] == "x" and sum(data["importance"]["share"]) == pytest.approx(1.0)
     assert "functional ANOVA" in page and "matters most" in page
@@ -320,9 +323,10 @@ def test_filter_report_shows_the_worst_recording_first(filter_run):
     traces = read_traces(filter_run)
     assert [it["name"] for it in traces["items"]] == worst  # every recording, worst first
     assert {p["title"] for p in traces["items"][0]["panels"]} >= {"heading error", "inclination error"}
-    assert (filter_run / "figures" / f"errors_{worst[0]}.png").exists()
+    figure = f"errors_{worst[0].replace('@', '_')}.png"  # a 60 s window's name (trial@0s-60s) as a file name
+    assert (filter_run / "figures" / figure).exists()
     md = (filter_run / "report.md").read_text()
-    assert f"(figures/errors_{worst[0]}.png)" in md and "summary table" not in md  # the terminal table is not repeated
+    assert f"(figures/{figure})" in md and "summary table" not in md  # the terminal table is not repeated
     assert "| train fitness |" not in md and "| best fitness |" in md  # the best fitness is the train fitness
     assert "| beta | " in md and "rad/s |" in md  # units in the best-parameters table
 

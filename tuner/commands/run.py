@@ -1,0 +1,74 @@
+"""``tuner run CONFIG``: tune a job from a YAML config (a sweep file runs as a sweep)."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from collections import Counter
+from pathlib import Path
+
+from tuner.commands import sweep
+from tuner.commands.common import UsageError
+from tuner.config import load_config
+from tuner.run import RunResult
+from tuner.run import run as run_job
+from tuner.sweep import is_sweep_file
+
+DESCRIPTION = "Run a tuning job and store it in its own run directory."
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("config", help="job YAML file")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a config value, e.g. optimizer.population=40 (repeatable)")
+    p.add_argument("--seed", type=int, help="override the seed")
+    p.add_argument("--n-jobs", type=int, help="override parallel.n_jobs")
+    p.add_argument("--run-dir", help="use this run directory instead of runs/<time>-<name>-<hex>")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
+    p.add_argument("--no-report", action="store_true",
+                   help="no report, live or final (report.md/.html, figures; `tuner report RUN` writes it later)")
+
+
+def run(a: argparse.Namespace) -> int:
+    if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
+        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir:
+            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir apply to job files")
+        return sweep.run(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet, no_report=a.no_report))
+    cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
+    return print_result(run_job(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report))
+
+
+def print_result(res: RunResult) -> int:
+    """The end of ``run`` and ``resume``: status, best fitness and parameters, where the run is; the exit
+    status (1 when the run did not finish or every evaluation failed)."""
+    print(f"status: {res.status} ({res.stop_reason})")
+    print(f"best fitness: {res.best_fitness:.6g} after {res.n_evals} evaluations")
+    for k, v in res.best_params.items():
+        print(f"  {k}: {v:.6g}" if isinstance(v, float) else f"  {k}: {v}")
+    summary = res.extra.get("summary_table")
+    if summary:
+        print()
+        print(summary)
+    print(f"run directory: {res.run_dir}")
+    if (res.run_dir / "report.md").exists():
+        print(f"report: {res.run_dir / 'report.md'}")
+    if res.status == "finished" and res.n_evals and not res.best_params:
+        print(f"error: {res.run_dir}: every one of {res.n_evals} evaluations failed; "
+              f"{failure_summary(res.run_dir)}", file=sys.stderr)
+        return 1
+    return 0 if res.status == "finished" else 1
+
+
+def failure_summary(run_dir: Path) -> str:
+    """The most frequent error text of a run's history (why every evaluation failed)."""
+    try:
+        with open(run_dir / "history.csv", newline="") as fh:
+            errors = Counter(row.get("error", "") for row in csv.DictReader(fh))
+    except OSError:
+        return "see history.csv"
+    errors.pop("", None)
+    if not errors:
+        return "see history.csv"
+    (text, n), = errors.most_common(1)
+    return f"most common reason ({n}x): {text}"
