@@ -13,9 +13,11 @@ working directory; a tuning that tries an unstable candidate would do both. Whil
 handler back afterwards (counted, so nested and concurrent loops restore it once); the loop reads the
 warning counters of its ``mjData`` instead (:func:`warnings_of`), and an evaluation that MuJoCo warned about
 fails with MuJoCo's text. The handler is the process's: a simulation the caller runs on another thread at
-the same time is not printed either (its ``mjData`` still counts its warnings). Errors (``mju_error``) are not warnings: MuJoCo's default handler ends the
-process, so the plant's builder runs one period through the Python bindings first (where an error is an
-exception, hence a config error), and only a model that ran there reaches the compiled loop.
+the same time is not printed either (its ``mjData`` still counts its warnings).
+
+Errors (``mju_error``) are not warnings: MuJoCo's default handler ends the process, so the plant's builder
+runs one period through the Python bindings first (where an error is an exception, hence a config error),
+and only a model that ran there reaches the compiled loop.
 """
 
 from __future__ import annotations
