@@ -10,12 +10,12 @@ their most frequent reasons. The run report, the sweep report and ``tuner show``
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from tuner.failures import failure_groups
 from tuner.records import RunError
 from tuner.rundir import RunDir
 from tuner.space import Real, Space, SpaceError
@@ -102,14 +102,15 @@ def bound_warnings(params: Mapping[str, Any], space: Space, tol: float = BOUND_T
 
 def failure_warnings(n_failed: int, n_evals: int, errors: list[str] | None = None,
                      top: int = 3) -> list[ReportWarning]:
-    """One warning when ``n_failed > 0``, naming the ``top`` most frequent error texts."""
+    """One warning when ``n_failed > 0``, naming the ``top`` most frequent reasons (grouped by
+    :func:`tuner.failures.failure_groups`: the same reason with other numbers counts once per evaluation)."""
     if n_failed <= 0:
         return []
     frac = n_failed / n_evals if n_evals else math.nan
     msg = f"{n_failed} of {n_evals} evaluations failed ({frac:.1%})"
-    common = Counter(e for e in (errors or []) if e).most_common(top)
+    common = failure_groups(errors or [])[:top]
     if common:
-        msg += "; most frequent: " + "; ".join(f"{e[:120]} (x{n})" for e, n in common)
+        msg += "; most frequent reasons: " + "; ".join(f"{g.example[:120]} (x{g.count})" for g in common)
     return [ReportWarning("failed", msg, value=float(n_failed), distance=frac)]
 
 

@@ -9,15 +9,17 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from contextlib import nullcontext
 from typing import Any
 
-from tuner import signals
+from tuner import signals, trust
 from tuner._version import __version__
-from tuner.commands import ENGINE, add_command, engine_command, load_plugin, plugin_names
+from tuner.commands import ENGINE, add_command, engine_command, load_plugin, plugin_names, plugin_source
 from tuner.commands.common import UsageError
 from tuner.config import ConfigError
 from tuner.records import RunError
 from tuner.registry import RegistryError
+from tuner.safe_io import UnsafeFile
 from tuner.space import SpaceError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -44,8 +46,8 @@ EPILOG = """examples:
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of ``tuner``: every command's help line, and the arguments of ``command`` alone.
 
-    Only ``command``'s module is imported (:mod:`tuner.commands`); without one (``tuner --help``) the
-    commands other packages add are loaded for their help lines.
+    Only ``command``'s module is imported (:mod:`tuner.commands`); ``tuner --help`` names the commands other
+    packages add, and the package, without importing them (a package's import may load numba).
     """
     ap = argparse.ArgumentParser(
         prog="tuner", formatter_class=argparse.RawDescriptionHelpFormatter, epilog=EPILOG,
@@ -58,11 +60,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     if command in ENGINE:
         return ap
     for name in plugin_names():  # read only for a command the engine does not have, and for --help
-        if command is None or name == command:
+        if name == command:
             plugin = load_plugin(name)
-            add_command(sub, name, plugin.help, plugin if name == command else None)
-        else:
-            add_command(sub, name, "")
+            add_command(sub, name, plugin.help, plugin)
+        else:  # not imported: a package's import may be heavy (the domain's loads numba), and --help stays light
+            add_command(sub, name, f"a command of {plugin_source(name)}: tuner {name} --help")
     return ap
 
 
@@ -87,11 +89,16 @@ def main(argv: list[str] | None = None) -> int:
     old_handlers = signals.install()  # SIGTERM and SIGHUP stop every command as Ctrl-C does
     try:
         try:
-            code = a._run(a)
+            # a command that does not run code never loads the code a config names (tuner.trust)
+            with nullcontext() if a._runs_code else trust.data_only(f"tuner {a.command}"):
+                code = a._run(a)
             sys.stdout.flush()
             return code
         except (ConfigError, RunError, SpaceError, UsageError, RegistryError) as exc:
             print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except UnsafeFile as exc:  # a link, a FIFO, a hard link, an oversized file in a run directory
+            print(f"error: {exc.filename}: {exc.strerror}", file=sys.stderr)
             return 2
         except OSError as exc:  # read-only directory, full disk...: one line naming the path
             if isinstance(exc, BrokenPipeError):

@@ -1,6 +1,8 @@
 """Run reports: ``report.md`` and a self-contained ``report.html`` (figures embedded).
 
-Content: a summary card (status, best fitness, budget and evaluations, failures, wall time, train /
+Content: the objective's lead when it gives one (``headline_md`` among its ``finalize`` results: what a
+reader needs first, e.g. a controller's gains and its requirements' pass/fail table), a summary card
+(status, best fitness, budget and evaluations, failures, wall time, train /
 test / CV scores and the generalisation gap), warnings (parameters at a search bound, failed
 evaluations, see :mod:`tuner.bounds`; a large gap between CV and tuning score, see
 :mod:`tuner.validation`), the cross-validation summary and the final selection when the run has them,
@@ -29,6 +31,7 @@ from tuner import interactive
 from tuner.bounds import run_space, run_warnings
 from tuner.dashboard import find_dashboard, write_dashboard
 from tuner.deployment import DEFAULTS_MEANING
+from tuner.objective import PENALTY
 from tuner.plots import RUN_PLOTS, Drawn, draw, figures_md, objective_md, plot_files
 from tuner.plots.context import RunContext, load_history
 from tuner.render import fmt_num, md_escape, write_text_atomic
@@ -36,6 +39,7 @@ from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
 from tuner.runinfo import run_summary
+from tuner.spread import spread_md
 
 __all__ = ["write_run_report", "load_history", "run_summary", "md_table", "pivot_metrics", "write_html",
            "write_live_report", "throttled", "sweep_warnings_md", "LIVE_REFRESH_S"]
@@ -136,7 +140,11 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
                                                   else "-"]]
     for key in _CARD_KEYS:
         if isinstance(ev.get(key), (int, float)) and not (key in _SAME_AS_BEST and _same(ev[key], s["best_fitness"])):
-            rows.append([key.replace("_", " "), ev[key]])
+            v = ev[key] if not key.endswith(("fitness", "score")) else \
+                _score_text(ev[key], ev.get("initial_error") if key == "initial_fitness" else None)
+            rows.append([key.replace("_", " "), v])
+        elif key == "initial_fitness" and ev.get("initial_error"):  # the defaults failed: why, never a penalty
+            rows.append(["initial fitness", _score_text(math.inf, ev["initial_error"])])
     rows += [["evaluations / budget", f"{n} / {_budget(cfg)}"],
              ["failed evaluations", f"{nf} ({nf / n:.1%})" if n else str(nf)],
              ["wall time", _wall(s["wall_s"])],
@@ -152,13 +160,22 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
     return rows
 
 
+def _score_text(v: float, error: Any = None) -> Any:
+    """A score as the card shows it: a failed evaluation's penalty (or inf) is "failed" with its reason."""
+    if math.isfinite(v) and v < PENALTY:
+        return v
+    why = f": {str(error)[:160]}" if error else ""
+    return f"failed{why}"
+
+
 #: results the summary card shows (the "Other results" table leaves them out: no number printed twice)
 _CARD_KEYS = ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "initial_fitness",
-              "improvement_pct")
+              "improvement_pct", "initial_error")
 #: results left out of the card when they equal the best fitness (the tuning data's score is the best fitness)
 _SAME_AS_BEST = ("train_fitness", "best_fitness")
-#: multi-line results that repeat a table of the report (the terminal summary of the per-recording scores)
-_REPEATS = ("summary_table", "tables_md")
+#: multi-line results that repeat a table of the report (the terminal summary of the per-recording scores, the
+#: objective's lead shown first)
+_REPEATS = ("summary_table", "tables_md", "headline_md")
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -262,8 +279,14 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     desc = cfg.get("description")
     if desc:
         md += [md_escape(desc), ""]
+    lead = s["evaluation"].get("headline_md")
+    if isinstance(lead, str) and lead.strip():  # the objective's lead (raw HTML stays off in the page)
+        md += [lead.rstrip(), ""]
     md += ["## Summary", "", _rows_table(_card(s, cfg), ["item", "value"], 6), ""]
     md += [f"Note: {md_escape(n)}." for n in s["notes"]] + ([""] if s["notes"] else [])
+    rep = RunDir(run_dir).repeats()
+    if rep is not None:
+        md += spread_md(rep)
 
     warnings = run_warnings(run_dir)
     val = _validation(run_dir)
@@ -287,7 +310,9 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
              ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
              ("scores.csv", "scores per recording"), ("cv.md", "cross-validation tables"),
              ("validation.json", "cross-validation summary and final selection")]
-    md += ["## Files", ""] + [f"- [{n}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
+    known = {n for n, _ in files} | {"report.md"}
+    files += [(p.name, "the objective's tables") for p in sorted(run_dir.glob("*.md")) if p.name not in known]
+    md += ["## Files", ""] + [f"- [{md_escape(n)}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
     md += ["", f"Written {now}.", ""]
     text = "\n".join(md)
     path = run_dir / "report.md"
@@ -381,12 +406,14 @@ def _results_md(s: dict[str, Any]) -> list[str]:
                    "", _frame_md(split_df), ""]
         else:
             piv = pivot_metrics(s["metrics"])
+            words = ev.get("metric_words") if isinstance(ev.get("metric_words"), dict) else {}
             if len(piv) == 1:  # one recording (or none): metric per row reads better than one wide row
                 md += ["Metrics of the best candidate.", "",
-                       _rows_table([[k, v] for k, v in piv.iloc[0].items()], ["metric", "value"], 4), ""]
+                       _rows_table([[words.get(k, k), k, v] if words else [k, v] for k, v in piv.iloc[0].items()],
+                                   ["metric", "key", "value"] if words else ["metric", "value"], 4), ""]
             elif len(piv):
                 md += ["Metrics of the best candidate on each recording.", "",
-                       _frame_md(piv.reset_index()), ""]
+                       _frame_md(piv.rename(columns=lambda c: words.get(c, c)).reset_index()), ""]
     shown = {str(k).rsplit("/", 1)[-1].rsplit(".", 1)[-1]: v for k, v in s["metrics"].items()}
     scalars = [[k, v] for k, v in ev.items() if not isinstance(v, (dict, list)) and k not in _REPEATS
                and not (isinstance(v, str) and "\n" in v) and k not in _CARD_KEYS
@@ -397,7 +424,8 @@ def _results_md(s: dict[str, Any]) -> list[str]:
     if scalars or nested:
         md += ["## Other results", ""]
         if scalars:
-            md += [_rows_table(scalars, ["result", "value"], 6), ""]
+            words = ev.get("metric_words") if isinstance(ev.get("metric_words"), dict) else {}
+            md += [_rows_table([[words.get(k, k), v] for k, v in scalars], ["result", "value"], 6), ""]
         for k, v in nested.items():
             rows = [[name] + [x if not isinstance(x, (dict, list)) else json.dumps(x) for x in d.values()]
                     for name, d in v.items()]
@@ -409,9 +437,10 @@ def _results_md(s: dict[str, Any]) -> list[str]:
 def _figures(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[Drawn], list[Path]]:
     """The report's plots (:data:`tuner.plots.RUN_PLOTS`, each PNG written once) and the objective's own PNGs
     in ``figures/`` (not while the run is going: they come after it); nothing before the first evaluation."""
-    if not (run_dir / "history.csv").exists():
+    src = RunDir(run_dir).chosen_repeat() or run_dir  # a repeated run draws its deployed repeat's history
+    if not (src / "history.csv").exists():
         return [], []
-    hist = load_history(run_dir)
+    hist = load_history(src)
     if len(hist) == 0:
         return [], []
     figs = run_dir / "figures"

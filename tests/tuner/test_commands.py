@@ -108,7 +108,9 @@ def test_a_command_registered_through_the_entry_point_group_runs(tmp_path, monke
     _install(tmp_path, monkeypatch, {"toy": "toycmd"})
     out = run_tuner("toy", "world", "--times", "2")
     assert (out.returncode, out.stdout) == (3, "hello world hello world\n"), out.stderr
-    assert "toy" in run_tuner("--help").stdout and "print a greeting" in run_tuner("--help").stdout
+    listed = run_tuner("--help").stdout  # named with its package, not imported (its import may be heavy)
+    assert "toy" in listed and "a command of toy-commands: tuner toy --help" in listed
+    assert "print a greeting" in run_tuner("toy", "--help").stdout
     assert "--times" in run_tuner("toy", "--help").stdout
     one_error_line(run_tuner("toy", "nobody"), "toy: nobody: expected a name")
     assert run_tuner("toy").returncode == 2  # argparse: the argument is missing
@@ -128,7 +130,7 @@ def test_an_added_command_never_replaces_an_engine_command(tmp_path, monkeypatch
 def test_an_added_command_that_does_not_load_is_one_error_line(tmp_path, monkeypatch, value, expected):
     _install(tmp_path, monkeypatch, {"toy": value})
     one_error_line(run_tuner("toy", "world"), *expected)
-    one_error_line(run_tuner("--help"), *expected)  # --help loads every added command for its help line
+    assert run_tuner("--help").returncode == 0  # --help names added commands without loading them
     assert run_tuner("show", "--help").returncode == 0  # an engine command never reads the group
 
 
