@@ -197,7 +197,7 @@ def robust_dip(smoke: bool, n_jobs: int, out: Path) -> dict[str, Any]:
     unc = yaml.safe_load((EXAMPLES / "mujoco_dip_lqr.yaml").read_text())["objective"]["uncertainty"]
     robust = _tune("mujoco_dip_lqr", {}, pop, gens, n_jobs)
     nominal = _tune("mujoco_dip_lqr", {"uncertainty": None}, pop, gens, n_jobs)
-    judge = _objective("mujoco_dip_lqr", uncertainty={**unc, "held_out": held_n})
+    judge = _objective("mujoco_dip_lqr", uncertainty={**unc, "validate": {"samples": held_n, "seed": 1}})
     variants = {"defaults": {}, "nominal": nominal["params"], "robust": robust["params"]}
     held = {}
     for label, params in variants.items():
@@ -208,8 +208,8 @@ def robust_dip(smoke: bool, n_jobs: int, out: Path) -> dict[str, Any]:
                        "costs": [float(c) for c in h.costs]}
     figs = _figures(judge, variants, held, out)
     # beyond the tuning range: +-40 % masses and twice the start angle (how much margin each design keeps)
-    stress_unc = {**unc, "held_out": held_n, "seed": 7,
-                  "parameters": {k: {"scale": [0.6, 1.4]} for k in unc["parameters"]}}
+    stress_unc = {**unc, "validate": {"samples": held_n, "seed": 7},
+                  "parameters": {k: {"rel": 0.4} for k in unc["parameters"]}}
     sc = yaml.safe_load((EXAMPLES / "mujoco_dip_lqr.yaml").read_text())["objective"]["scenario"]
     stress = _objective("mujoco_dip_lqr", uncertainty=stress_unc, scenario={**sc, "initial": {"hinge1": 0.2}})
     from objectives.control.plants.mujoco.report import held_out_scores

@@ -56,8 +56,8 @@ BAD = {
     "unknown parameter": ({"plant": {"mujoco": CART, "parameters": {"body.pole.weight": 1.0}}},
                           "objective.plant.parameters.body.pole.weight: not a named parameter of this model"),
     "uncertain unknown": ({"plant": {"mujoco": CART}, "controller": "lqr_fd",
-                           "uncertainty": {"parameters": {"body.wheel.mass": {"scale": [0.9, 1.1]}}}},
-                          "objective.uncertainty.parameters.body.wheel.mass: matches no parameter of the plant"),
+                           "uncertainty": {"parameters": {"body.wheel.mass": {"rel": 0.1}}}},
+                          "objective.uncertainty.parameters.body.wheel.mass: not a parameter of this plant"),
     "pid without loops": ({"plant": {"mujoco": CART, "outputs": [{"body": "pole", "angle": "pitch"}],
                                      "loops": []}},
                           "objective.plant.loops: expected a list of [output, actuator] pairs"),
@@ -66,7 +66,8 @@ BAD = {
                                "objective.scenario.reference.pole: not an output of the plant; outputs: "
                                "['slider', 'hinge']"),
     "margin requirement": ({"plant": {"mujoco": CART}, "requirements": {"max_ms": 1.4}},
-                           "objective.requirements.max_ms: margins and Ms need an LTI plant"),
+                           "objective.requirements.max_ms: not measured on a MuJoCo plant (no load input, no "
+                           "linear loop)"),
     "pendulum controller": ({"plant": {"mujoco": CART}, "controller": "pid2dof"},
                             "objective.controller: unknown controller 'pid2dof' for this plant"),
     "unknown plant key": ({"plant": {"mujoco": CART, "x0": [0, 0]}},
@@ -96,7 +97,7 @@ def test_example_tunes_reports_and_exports(tmp_path, capsys, name):
     unc = src["objective"].get("uncertainty")
     if unc:  # the double pendulum: 3 s of its 10 s, 4 of its 17 tuning models, 4 held-out models
         src["objective"]["scenario"]["duration_s"] = 3.0
-        unc.update(samples=1, held_out=4, corners=False)
+        unc.update(tune={"corners": False, "samples": 1, "seed": 0}, validate={"samples": 4, "seed": 1})
         unc["parameters"] = dict(list(unc["parameters"].items())[:2])
     shutil.copytree(EXAMPLES / "mujoco", tmp_path / "mujoco")
     path = tmp_path / f"{name}.yaml"
@@ -131,8 +132,8 @@ def test_same_seed_same_history_serial_threads_and_loky(tmp_path, monkeypatch):
     src = yaml.safe_load((EXAMPLES / "mujoco_cartpole_lqr.yaml").read_text())
     src["optimizer"].update(population=6, generations=2)
     src["objective"]["scenario"]["duration_s"] = 4.0
-    src["objective"]["uncertainty"] = {"parameters": {"body.pole.mass": {"scale": [0.8, 1.2]}}, "samples": 1,
-                                       "held_out": 0}
+    src["objective"]["uncertainty"] = {"parameters": {"body.pole.mass": {"rel": 0.2}},
+                                       "tune": {"corners": False, "samples": 1}, "validate": {"samples": 1}}
     hist = []
     for i, par in enumerate(({"backend": "serial"}, {"backend": "threads", "n_jobs": 2},
                              {"backend": "loky", "n_jobs": 2})):

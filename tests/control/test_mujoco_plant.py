@@ -16,7 +16,7 @@ from objectives.control.plants.mujoco.capi import capi, quiet_warnings  # noqa: 
 from objectives.control.plants.mujoco.controllers import LinearizedLQR, lqr_gain  # noqa: E402
 from objectives.control.plants.mujoco.linearize import period_model  # noqa: E402
 from objectives.control.plants.mujoco.model import mujoco_from_spec  # noqa: E402
-from objectives.control.plants.mujoco.uncertainty import aggregate  # noqa: E402
+from objectives.control.plants.mujoco.uncertainty import aggregation_from_spec, over_models  # noqa: E402
 from tests.reference.loop_reference import pid_reference  # noqa: E402
 from tests.reference.mujoco_reference import euler_zyx, mujoco_loop_reference, state_reader  # noqa: E402
 
@@ -262,9 +262,8 @@ def test_actuator_gain_scales_the_force_law():
     assert acc[1] == pytest.approx(2.5 * acc[0], rel=1e-12)
 
 
-UNC = {"parameters": {"body.cart.mass": {"scale": [0.8, 1.2]}, "body.pole.mass": {"range": [0.08, 0.12]},
-                      "sensor.delay_s": {"range": [0.0, 0.004]}},
-       "samples": 3, "held_out": 5, "seed": 2}
+UNC = {"parameters": {"body.cart.mass": {"rel": 0.2}, "body.pole.mass": [0.08, 0.12], "sensor.delay_s": [0.0, 0.004]},
+       "tune": {"samples": 3, "seed": 2}, "validate": {"samples": 5, "seed": 3}}
 
 
 def test_tuning_and_held_out_sets():
@@ -284,28 +283,30 @@ def test_tuning_and_held_out_sets():
 
 
 def test_a_models_delay_is_the_sensor_delay():
-    """The case with a 2-period delay runs as the nominal job with sensor.delay_s = 2 periods."""
-    unc = {"parameters": {"sensor.delay_s": {"range": [0.004, 0.004]}}, "samples": 0, "corners": False}
+    """The corner with a 2-period delay runs as the nominal job with sensor.delay_s = 2 periods."""
+    unc = {"parameters": {"sensor.delay_s": [0.0, 0.004]}, "tune": {"corners": True, "samples": 0}}
     sc = {"duration_s": 1.0, "initial": {"hinge": 0.05}}
-    a = objective(CARTPOLE, "lqr_fd", period_s=0.002, scenario=sc, uncertainty={**unc, "samples": 1})
+    a = objective(CARTPOLE, "lqr_fd", period_s=0.002, scenario=sc, uncertainty=unc)
     b = objective(CARTPOLE, "lqr_fd", period_s=0.002, scenario=sc, sensor={"delay_s": 0.004})
     ra, rb = a.simulate({})["runs"], b.simulate({})["runs"][0]
-    assert a.loop.cases[1].delay_n == 2 and np.array_equal(ra[1]["u"], rb["u"])
+    assert [c.delay_n for c in a.loop.cases] == [0, 0, 2] and np.array_equal(ra[2]["u"], rb["u"])
     assert not np.array_equal(ra[0]["u"], rb["u"])
 
 
-def test_aggregates():
+def test_aggregates_over_models_are_the_shared_forms():
     c = np.array([1.0, 4.0, 2.0, 3.0, 10.0])
-    assert aggregate(c, "mean") == 4.0 and aggregate(c, "worst") == 10.0
-    assert aggregate(c, "cvar", 0.4) == 7.0 and aggregate(c, "cvar", 0.01) == 10.0
+    agg = {f: aggregation_from_spec({"models": f}) for f in ("mean", "worst")}
+    assert over_models(c, agg["mean"]) == 4.0 and over_models(c, agg["worst"]) == 10.0 and over_models(c, None) == 4.0
+    assert over_models(c, aggregation_from_spec({"models": {"cvar": 0.4}})) == pytest.approx(7.0)
+    assert over_models(c, aggregation_from_spec({"models": {"cvar": 0.01}})) == 10.0
 
 
 def test_an_evaluation_fails_on_any_model_and_names_it():
-    unc = {"parameters": {"actuator.push.gain": {"scale": [0.05, 1.0]}}, "samples": 0}
+    unc = {"parameters": {"actuator.push.gain": [0.05, 1.0]}, "tune": {"samples": 0}}
     obj = objective(CARTPOLE, "lqr_fd", period_s=0.002, uncertainty=unc,
                     scenario={"duration_s": 2.0, "initial": {"hinge": 0.3}, "limits": {"hinge": 0.6}})
     ev = obj({})
-    assert ev.status == "failed" and ev.error.startswith("corner 1: hinge beyond its limit at t=")
+    assert ev.status == "failed" and ev.error.startswith("corner -: hinge beyond its limit at t=")
     assert ev.error.endswith("(failed on 1 of 3 models)")
 
 

@@ -13,7 +13,8 @@ for ``plant: {mujoco: ...}``. YAML (``objective:``)::
     sensor: {noise_std: 0.0, delay_s: 0.0, seed: 0}
     cost: {iae: 1.0, effort: 0.001}
     requirements: {max_overshoot_pct: 20, max_settling_time_s: 3}
-    uncertainty: {parameters: {body.pole.mass: {scale: [0.8, 1.2]}}, samples: 8, held_out: 100}
+    uncertainty: {parameters: {body.pole.mass: {rel: 0.2}}, tune: {samples: 8}, validate: {samples: 100}}
+    aggregate: {models: mean}      # the cost over the tuning models: mean | worst | {cvar: alpha}
 
 The plant's keys are :mod:`.model`'s, the scenario's, sensor's and cost's :mod:`.scenario`'s, the
 uncertainty's :mod:`.uncertainty`'s; requirements are the generic loop's step and actuator requirements
@@ -22,10 +23,10 @@ margins: the plant is not linear), met by the worst output on every tuning model
 
 An evaluation runs the candidate on every model of the tuning set (the nominal model alone without
 ``uncertainty``): each run is one compiled loop (:mod:`.kernel`); the cost is the models' aggregate
-(mean, worst or CVaR); a run that diverged, left its limits or that MuJoCo warned about, or a violated
-requirement on any model, fails the evaluation with the model and the reason. ``backend: threads`` runs
-a generation's (candidate, model) runs on threads (:mod:`.batch`), equal to the serial evaluations. The
-run report (:mod:`.report`) adds the held-out models' pass rates.
+(``aggregate: {models: ...}``: mean, worst or CVaR, the generic loop's forms); a run that diverged, left its
+limits or that MuJoCo warned about, or a violated requirement on any model, fails the evaluation with the model
+and the reason. ``backend: threads`` runs a generation's (candidate, model) runs on threads (:mod:`.batch`),
+equal to the serial evaluations. The run report (:mod:`.report`) adds the held-out models' pass rates.
 """
 
 from __future__ import annotations
@@ -47,13 +48,19 @@ from objectives.control.plants.mujoco.scenario import (
     scenario_for,
     step_table,
 )
-from objectives.control.plants.mujoco.uncertainty import ModelCase, aggregate, uncertainty_from_spec
-from objectives.control.plants.scenario import REQUIREMENTS, check_requirements, requirements_from_spec
+from objectives.control.plants.mujoco.steps import first_step, requirements_for, violated
+from objectives.control.plants.mujoco.uncertainty import (
+    ModelCase,
+    aggregation_from_spec,
+    over_models,
+    uncertainty_from_spec,
+)
+from objectives.control.plants.requirements import REQUIREMENTS
 from tuner.objective import Evaluation
 
 __all__ = ["MujocoLoop"]
 
-_SETTINGS = ("period_s", "scenario", "sensor", "cost", "requirements", "uncertainty")
+_SETTINGS = ("period_s", "scenario", "sensor", "cost", "requirements", "uncertainty", "aggregate")
 _MAPPINGS = ("scenario", "sensor", "cost", "requirements", "uncertainty")
 
 
@@ -67,7 +74,7 @@ class MujocoLoop:
 
     def __init__(self, kind: PlantKind, spec: Any, cls: Any, fixed: dict[str, Any], base_dir: Any = None,
                  period_s: Any = 0.01, scenario: Any = None, sensor: Any = None, cost: Any = None,
-                 requirements: Any = None, uncertainty: Any = None) -> None:
+                 requirements: Any = None, uncertainty: Any = None, aggregate: Any = None) -> None:
         p = period_s
         if isinstance(p, bool) or not isinstance(p, (int, float)) or not (math.isfinite(p) and p > 0):
             raise ValueError(f"objective.period_s: the controller period must be a number > 0 s, got {p!r}")
@@ -75,6 +82,8 @@ class MujocoLoop:
         self.scenario, self.sensor, self.cost = dict(scenario or {}), dict(sensor or {}), dict(cost or {})
         self.requirements = dict(requirements or {})
         self.uncertainty = dict(uncertainty) if uncertainty is not None else None
+        self.aggregate = aggregate
+        self._agg = aggregation_from_spec(aggregate)
         self.plant = kind.build(self.spec, self.period, pathlib.Path(base_dir) if base_dir else None,
                                 "objective.plant")
         self.ctrl = cls
@@ -88,10 +97,10 @@ class MujocoLoop:
         names = plant.state_names if cls.state_feedback else plant.output_names
         self._meas = measurement_for(self.sensor, list(names), self.period)
         self._terms, self._weights = cost_for(self.cost, plant.output_names)
-        wins = [self._sc.output_scenario(i).first_step() for i in self._sc.tracked]
+        wins = [first_step(self._sc.output_scenario(i).r) for i in self._sc.tracked]
         wins = [w for w in wins if w is not None]
         window = min(((k1 - k0) * self.period for k0, k1 in wins), default=math.inf)
-        self._req = requirements_from_spec(self.requirements, bool(wins), False, window)
+        self._req = requirements_for(self.requirements, bool(wins), window)
         if cls.state_feedback:
             self._check_set_points()
         self._unc = uncertainty_from_spec(self.uncertainty, plant, self._meas.delay_n(self.period), self.period)
@@ -144,6 +153,8 @@ class MujocoLoop:
         out = {"period_s": section.get("period_s", 0.01),
                **{k: dict(section.get(k) or {}) for k in ("scenario", "sensor", "cost", "requirements")}}
         out["uncertainty"] = dict(section["uncertainty"]) if section.get("uncertainty") is not None else None
+        if section.get("aggregate") is not None:
+            out["aggregate"] = section["aggregate"]
         return out
 
     @staticmethod
@@ -155,7 +166,8 @@ class MujocoLoop:
 
     def settings(self) -> dict[str, Any]:
         return {"period_s": self.period, "scenario": self.scenario, "sensor": self.sensor, "cost": self.cost,
-                "requirements": self.requirements, "uncertainty": self.uncertainty}
+                "requirements": self.requirements, "uncertainty": self.uncertainty,
+                **({"aggregate": self.aggregate} if self.aggregate is not None else {})}
 
     # --- the objective's hooks -------------------------------------------------------------------
     @property
@@ -169,7 +181,8 @@ class MujocoLoop:
     def scoring(self) -> dict[str, Any]:
         """The plant, scenario, sensor, cost, requirements and uncertainty: they only serve scoring."""
         return {"plant": self.spec, "scenario": self.scenario, "sensor": self.sensor, "cost": self.cost,
-                "requirements": self.requirements, "uncertainty": self.uncertainty}
+                "requirements": self.requirements, "uncertainty": self.uncertainty,
+                **({"aggregate": self.aggregate} if self.aggregate is not None else {})}
 
     def notes(self) -> list[str]:
         p = self.plant
@@ -224,6 +237,10 @@ class MujocoLoop:
         runs = [self.run_case(cp, j, self._data(j)) for j in range(len(self.cases))]
         return {"t": self._sc.t, "r": self._sc.r, "runs": runs}
 
+    def evaluate(self, params: Mapping[str, Any] | None = None) -> Evaluation:
+        """The evaluation of ``params`` on the tuning set (``ValueError`` when the design cannot be built)."""
+        return self.evaluation(self.simulate(params), params)
+
     def evaluate_batch(self, params_list: list[Mapping[str, Any]], n_threads: int) -> list[Any]:
         """A generation's runs on ``n_threads`` threads (:mod:`.batch`), equal to the serial evaluations."""
         from objectives.control.plants.mujoco.batch import evaluate_batch
@@ -251,7 +268,7 @@ class MujocoLoop:
         m.update(terms)
         m.update(step_table(self._sc, y, h, plant.output_names))
         m["peak_u"] = float(np.max(np.abs(u))) if u.size else 0.0
-        bad = check_requirements(self._req, m)
+        bad = violated(self._req, m)
         if bad:
             return f, m, f"requirement violated: {bad}"
         if not math.isfinite(f):
@@ -274,18 +291,17 @@ class MujocoLoop:
         if many:
             metrics.update({"cost_mean": float(np.mean(costs)), "cost_worst": float(np.max(costs)),
                             "n_models": float(len(costs))})
-            for k in REQUIREMENTS.values():  # the requirement metrics' worst over the models
-                vals = [s[1].get(k[0], math.nan) for s in scored]
+            for r in REQUIREMENTS.values():  # the requirement metrics' worst over the models
+                vals = [s[1].get(r.metric, math.nan) for s in scored]
                 if all(math.isfinite(v) for v in vals):
-                    metrics[k[0]] = max(vals) if k[1] == "max" else min(vals)
-        how, alpha = (self._unc.how, self._unc.cvar_alpha) if self._unc else ("mean", 0.2)
-        return Evaluation(aggregate(costs, how, alpha), metrics)
+                    metrics[r.metric] = max(vals) if r.sense == "max" else min(vals)
+        return Evaluation(over_models(costs, self._agg), metrics)
 
     def requirement_rows(self, ev: Evaluation) -> list[dict[str, Any]]:
         """``[{requirement, what, limit, value, met}]`` of the evaluation ``ev``."""
         rows = []
         for key, lim in self._req.items():
-            metric, sense, what = REQUIREMENTS[key]
+            metric, sense, what = REQUIREMENTS[key].metric, REQUIREMENTS[key].sense, REQUIREMENTS[key].words
             v = ev.metrics.get(metric, math.nan)
             met = bool(v <= lim) if sense == "max" else bool(v >= lim)
             rows.append({"requirement": key, "what": what, "limit": lim, "value": v, "met": met})

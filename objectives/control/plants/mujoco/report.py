@@ -28,8 +28,8 @@ import numpy as np
 
 from objectives.control.figure import new_figure, save_figure
 from objectives.control.plants.mujoco.batch import run_all
-from objectives.control.plants.report import requirements_markdown
-from objectives.control.plants.scenario import REQUIREMENTS, check_requirements
+from objectives.control.plants.mujoco.steps import violated
+from objectives.control.plants.requirements import REQUIREMENTS, limit_text
 from tuner.objective import Evaluation
 
 __all__ = ["write_report", "held_out_scores", "HeldOut"]
@@ -63,6 +63,18 @@ class HeldOut:
     def causes(self) -> list[tuple[str, int]]:
         """Failures grouped by cause (numbers and times left out of the grouping)."""
         return Counter(re.sub(r"[-+]?\d[\d.e+-]*", "#", w) for w in self.why if w).most_common()
+
+
+def requirements_markdown(loop: Any, ev0: Evaluation, ev1: Evaluation) -> str:
+    """The requirements table of the defaults' evaluation ``ev0`` and the tuned one ``ev1`` (worst output and
+    tuning model), limits and words from the generic loop's requirement table."""
+    rows0 = {r["requirement"]: r for r in loop.requirement_rows(ev0)}
+    lines = ["| requirement | limit | tuned | met | defaults | met |", "|---|---|---|---|---|---|"]
+    for r in loop.requirement_rows(ev1):
+        r0 = rows0[r["requirement"]]
+        lines.append(f"| {r['what']} | {limit_text(r['requirement'], r['limit'])} | {r['value']:.4g} | "
+                     f"{'yes' if r['met'] else 'NO'} | {r0['value']:.4g} | {'yes' if r0['met'] else 'NO'} |")
+    return "\n".join(lines) + "\n"
 
 
 def held_out_scores(loop: Any, params: dict[str, Any], n_threads: int = 0) -> HeldOut | None:
@@ -148,9 +160,10 @@ def plot_held_out(tuned: HeldOut, defaults: HeldOut | None, path: pathlib.Path) 
 
 def _held_out_markdown(loop: Any, tuned: HeldOut, defaults: HeldOut) -> str:
     unc = loop._unc
-    dims = ", ".join(f"{d.key}: {d.how} [{d.a:g}, {d.b:g}]" for d in unc.dims)
+    dims = unc.dimensions()
     lines = ["", "## Held-out models", "",
-             f"{len(tuned.why)} models drawn apart from the tuning set ({unc.summary()}); uncertain: {dims}. "
+             f"{len(tuned.why)} models drawn apart from the tuning set ({unc.summary()}; tuning cost over the "
+             f"models: {loop._agg.text().split('models: ')[1]}); uncertain: {dims}. "
              "A model passes when its run neither fails (diverges, leaves its limits) nor breaks a requirement.", "",
              "| | tuned | defaults |", "|---|---|---|"]
     st, sd = tuned.stats(), defaults.stats()
@@ -159,8 +172,8 @@ def _held_out_markdown(loop: Any, tuned: HeldOut, defaults: HeldOut) -> str:
               f"| cost, 95th percentile | {st['cost_p95']:.4g} | {sd['cost_p95']:.4g} |",
               f"| cost, worst passing model | {st['cost_worst']:.4g} | {sd['cost_worst']:.4g} |"]
     for key, lim in loop._req.items():
-        metric, sense, what = REQUIREMENTS[key]
-        rate = [np.mean([bool(m) and not check_requirements({key: lim}, m) for m in h.metrics])
+        sense, what = REQUIREMENTS[key].sense, REQUIREMENTS[key].words
+        rate = [np.mean([bool(m) and not violated({key: lim}, m) for m in h.metrics])
                 for h in (tuned, defaults)]
         rel = "<=" if sense == "max" else ">="
         lines.append(f"| {what} {rel} {lim:g}: pass rate | {rate[0]:.1%} | {rate[1]:.1%} |")

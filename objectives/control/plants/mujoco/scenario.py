@@ -33,12 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from objectives.control.plants.scenario import TERMS, Scenario, _num, scenario_from_spec, step_metrics
+from objectives.control.plants.cost import TERMS
+from objectives.control.plants.mujoco.steps import STEP_METRICS, first_step, step_metrics
+from objectives.control.plants.scenario import Scenario, _num, scenario_from_spec
 
 __all__ = ["MjScenario", "scenario_for", "Measurement", "measurement_for", "cost_for", "loop_cost", "step_table",
            "STEP_METRICS"]
 
-STEP_METRICS = ("overshoot_pct", "rise_time_s", "settling_time_s", "ss_error")
 
 
 @dataclass(frozen=True)
@@ -213,9 +214,9 @@ def step_table(sc: MjScenario, y: np.ndarray, h: float, names: list[str]) -> dic
     seen: dict[str, list[float]] = {k: [] for k in STEP_METRICS}
     for i in sc.tracked:
         osc = sc.output_scenario(i)
-        if osc.first_step() is None:
+        if first_step(osc.r) is None:
             continue
-        for k, v in step_metrics(osc, y[:, i] - sc.r_op[i], h).items():
+        for k, v in step_metrics(osc.r, y[:, i] - sc.r_op[i], h).items():
             out[f"{k}_{names[i]}"] = v
             seen[k].append(v)
     for k, vals in seen.items():  # NaN (not measurable) wins: a requirement on it is not met
