@@ -19,7 +19,8 @@
    the nominal model alone (nominal); both and the untuned default LQR (Q = I) are then run on 200 held-out
    models drawn apart (masses uniform in +-20 %, validate seed 1; the tuning samples from tune seed 0), 10 s
    from the lower link 0.1 rad off upright; a model passes when neither link leaves 0.5 rad of the one below.
-   Target: robust pass rate >= 95 %. The tuning models are not among the held-out ones, so the held-out rate is not optimistic.
+   Target: robust pass rate >= 95 %. The tuning models are not among the held-out ones, so the held-out rate is
+   not optimistic.
 """
 
 from __future__ import annotations
