@@ -35,6 +35,7 @@ from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
+from tuner.objective import hook
 from tuner.records import Best, Checkpoint, HistoryRow, Meta, RunError, Timing, config_hash, plain, read_back
 from tuner.replay import Replay as _Replay
 from tuner.rundir import RunDir, atomic_write
@@ -390,6 +391,17 @@ def _new_meta(cfg: RunConfig, chash: str, n_jobs: int, notes: list[str]) -> Meta
 _UNSTARTED = {"config.yaml", ".config.json", ".lock"}
 
 
+def _store_fingerprint(objective: Any, rd: RunDir) -> list[str]:
+    """Write the objective's ``fingerprint`` of its tuning data into the run directory; its summary lines."""
+    fn = hook(objective, "fingerprint")
+    if fn is None:
+        return []
+    doc = dict(fn() or {})
+    if doc:
+        rd.write_fingerprint(doc)
+    return [str(x) for x in doc.get("summary", [])]
+
+
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         progress: Callable[[str], None] | None = None,
         on_generation: Callable[[Generation], None] | None = None, report: bool = True) -> RunResult:
@@ -420,11 +432,14 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         meta = _new_meta(cfg, rd.write_config(_resolved(cfg, space)), n_jobs, notes)
         rd.write_meta(meta)
         r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation, report)
+        fingerprint = _store_fingerprint(objective, rd)
         if printer:
             printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
                     f"{cfg.parallel.backend} x {n_jobs})")
             for note in notes:
                 printer(f"note: {note}")
+            for line in fingerprint:
+                printer(line)
         return r.execute()
 
 

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from tuner.commands.common import UsageError
 from tuner.export import verify_c
@@ -21,6 +22,8 @@ def run(a: argparse.Namespace) -> int:
         out = verify_c(a.run_dir, a.data, a.precision, ("-O2", "-ffast-math") if a.fast_math else ("-O2",))
     except FileNotFoundError as exc:
         raise UsageError(str(exc)) from None
+    for w in out.get("warnings", []):
+        print(f"warning: {w}", file=sys.stderr)
     py, c = out["python"], out["c"]
     print(f"{out['name']} in C ({out['precision']}, {' '.join(out['flags'])}) vs the model: "
           f"fitness {py.fitness:.6g} / {c.fitness:.6g} (difference {c.fitness - py.fitness:.3g}); "
