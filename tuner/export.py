@@ -24,6 +24,7 @@ from typing import Any
 
 from tuner.export_formats import FORMATS, c_prefix, to_c, to_json, to_python, to_yaml
 from tuner.objective import hook
+from tuner.verdict import defaults_verdict
 
 __all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c"]
 
@@ -68,6 +69,7 @@ def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
         "git_commit": meta.get("git_commit", ""),
         "exported": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "params": best["params"],
+        **({"warning": verdict} if (verdict := defaults_verdict(best.get("evaluation"))) else {}),
     }
 
 

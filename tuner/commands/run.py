@@ -14,6 +14,7 @@ from tuner.failures import failure_groups
 from tuner.run import RunResult
 from tuner.run import run as run_job
 from tuner.sweep import is_sweep_file
+from tuner.verdict import defaults_verdict
 
 DESCRIPTION = "Run a tuning job and store it in its own run directory."
 
@@ -39,6 +40,17 @@ def run(a: argparse.Namespace) -> int:
     return print_result(run_job(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report))
 
 
+def _stored_verdict(run_dir: Path) -> str | None:
+    """The verdict of the run's ``best.yaml`` evaluation (validation writes its scores there)."""
+    from tuner.rundir import RunDir
+
+    rd = RunDir(run_dir)
+    try:
+        return defaults_verdict(rd.best().evaluation) if rd.has_best() else None
+    except Exception:  # noqa: BLE001 - an unreadable best.yaml is reported where it is read, not here
+        return None
+
+
 def print_result(res: RunResult) -> int:
     """The end of ``run`` and ``resume``: status, best fitness and parameters, where the run is; the exit
     status (1 when the run did not finish or every evaluation failed)."""
@@ -50,6 +62,9 @@ def print_result(res: RunResult) -> int:
     if summary:
         print()
         print(summary)
+    verdict = _stored_verdict(res.run_dir)
+    if verdict:
+        print(f"warning: {verdict}")
     print(f"run directory: {res.run_dir}")
     if (res.run_dir / "report.md").exists():
         print(f"report: {res.run_dir / 'report.md'}")
