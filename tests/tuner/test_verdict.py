@@ -31,8 +31,8 @@ def test_verdict_compares_only_scores_on_unseen_data():
 def worse_run(tmp_path_factory):
     """A tiny run whose best.yaml records CV scores worse than its defaults' (as validation writes them)."""
     from tuner.config import config_from_dict
-    from tuner.rundir import RunDir
     from tuner.run import run
+    from tuner.rundir import RunDir
 
     tmp = tmp_path_factory.mktemp("verdict")
     raw = {"name": "v", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
@@ -69,3 +69,26 @@ def test_end_of_run_says_it(worse_run, capsys):
     best = RunDir(worse_run).best()
     print_result(RunResult(worse_run, "finished", best, 8, 2, "done", {}))
     assert "warning: tuned is worse than the defaults" in capsys.readouterr().out
+
+
+def test_chosen_on_makes_the_report_say_the_cv_is_optimistic(tmp_path):
+    from tuner.config import ConfigError, config_from_dict
+    from tuner.report import write_run_report
+    from tuner.run import run
+
+    raw = {"name": "o", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
+           "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"},
+           "validation": {"chosen_on": "the 16 shared BROAD trials"}}
+    cfg = config_from_dict(raw, base_dir=tmp_path)
+    assert cfg.validation.chosen_on == "the 16 shared BROAD trials" and not cfg.validation.active
+    with pytest.raises(ConfigError, match=r"validation\.chosen_on: expected a text"):
+        config_from_dict({**raw, "validation": {"chosen_on": 3}}, base_dir=tmp_path)
+    out = run(cfg, run_dir=tmp_path / "o", quiet=True, report=False).run_dir
+    write_run_report(out)
+    md = (out / "report.md").read_text()
+    assert "**optimistic CV**: the config's fixed options and search ranges were chosen on the 16 shared BROAD " \
+           "trials" in md
+    plain = run(config_from_dict({k: v for k, v in raw.items() if k != "validation"}, base_dir=tmp_path),
+                run_dir=tmp_path / "p", quiet=True, report=False).run_dir
+    write_run_report(plain)
+    assert "optimistic CV" not in (plain / "report.md").read_text()
