@@ -92,11 +92,21 @@ def fingerprint(recordings: Iterable[Any]) -> dict[str, Any]:
     for key in THRESHOLDS:
         vals = [v[key] for v in per.values() if v[key] is not None and math.isfinite(v[key])]
         stats[key] = float(np.median(vals)) if vals else None
-    align = {r.name: dict(r.meta["alignment"]) for r in recs
+    align = {r.name: _alignment(r.meta["alignment"]) for r in recs
              if isinstance(getattr(r, "meta", None), Mapping) and r.meta.get("alignment")}
     doc = {"stats": stats, "thresholds": {k: {"kind": t[0], "limit": t[1], "why": t[2]} for k, t in THRESHOLDS.items()},
            "recordings": per, **({"alignment": align} if align else {})}
     return {**doc, "summary": start_lines(doc)}
+
+
+#: the alignment estimates a run prints at its start (all are stored)
+ALIGN_SHOWN = {"lag_s": " s", "body_angle_deg": " deg", "heading_offset_deg": " deg", "frame_tilt_deg": " deg",
+               "gyro_scale": ""}
+
+
+def _alignment(a: Any) -> dict[str, Any]:
+    """An ``align:`` block's estimates (:class:`objectives.attitude.data.alignment.Alignment`) as plain data."""
+    return dict(a.as_dict()) if hasattr(a, "as_dict") else dict(a)
 
 
 def _beyond(key: str, old: float, new: float) -> bool:
@@ -144,7 +154,9 @@ def start_lines(fp: Mapping[str, Any]) -> list[str]:
     parts = [f"{k} {_fmt(v)}{UNITS[k]}" for k, v in s.items() if v is not None]
     lines = ["sensor fingerprint: " + ", ".join(parts)]
     for name, a in (fp.get("alignment") or {}).items():
-        lines.append(f"alignment {name}: " + ", ".join(f"{k} {v}" for k, v in a.items()))
+        shown = [f"{k} {_fmt(float(a[k]))}{u}" for k, u in ALIGN_SHOWN.items()
+                 if isinstance(a.get(k), (int, float)) and math.isfinite(float(a[k]))]
+        lines.append(f"alignment {name}: " + ", ".join(shown))
     return lines
 
 

@@ -130,3 +130,17 @@ def test_verify_c_on_other_data_warns(tuned):
     run_dir, tmp, _ = tuned
     out = verify_c(run_dir, tmp / "data100.yaml")
     assert any("rate_hz 100 Hz vs 200 Hz" in w for w in out.get("warnings", []))
+
+
+def test_alignment_estimates_are_stored_and_printed():
+    import dataclasses
+
+    from objectives.attitude.data.alignment import Alignment
+
+    rec = _rest()
+    est = Alignment(lag_s=0.0137, body_angle_deg=180.0, heading_offset_deg=37.0, gyro_scale=0.97)
+    rec = dataclasses.replace(rec, meta={**dict(rec.meta or {}), "alignment": est})
+    doc = fp.fingerprint([rec])
+    assert doc["alignment"][rec.name]["lag_s"] == 0.0137
+    assert doc["summary"][1] == (f"alignment {rec.name}: lag_s 0.0137 s, body_angle_deg 180 deg, heading_offset_deg "
+                                 "37 deg, frame_tilt_deg 0 deg, gyro_scale 0.97")
