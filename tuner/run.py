@@ -396,7 +396,10 @@ def _store_fingerprint(objective: Any, rd: RunDir) -> list[str]:
     fn = hook(objective, "fingerprint")
     if fn is None:
         return []
-    doc = dict(fn() or {})
+    try:
+        doc = dict(fn() or {})
+    except Exception as exc:  # noqa: BLE001 - a statistic must not stop the run it describes
+        return [f"note: no data fingerprint ({type(exc).__name__}: {exc})"]
     if doc:
         rd.write_fingerprint(doc)
     return [str(x) for x in doc.get("summary", [])]
