@@ -9,15 +9,17 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from contextlib import nullcontext
 from typing import Any
 
-from tuner import signals
+from tuner import signals, trust
 from tuner._version import __version__
 from tuner.commands import ENGINE, add_command, engine_command, load_plugin, plugin_names, plugin_source
 from tuner.commands.common import UsageError
 from tuner.config import ConfigError
 from tuner.records import RunError
 from tuner.registry import RegistryError
+from tuner.safe_io import UnsafeFile
 from tuner.space import SpaceError
 
 __all__ = ["main", "build_parser", "UsageError"]
@@ -87,11 +89,16 @@ def main(argv: list[str] | None = None) -> int:
     old_handlers = signals.install()  # SIGTERM and SIGHUP stop every command as Ctrl-C does
     try:
         try:
-            code = a._run(a)
+            # a command that does not run code never loads the code a config names (tuner.trust)
+            with nullcontext() if a._runs_code else trust.data_only(f"tuner {a.command}"):
+                code = a._run(a)
             sys.stdout.flush()
             return code
         except (ConfigError, RunError, SpaceError, UsageError, RegistryError) as exc:
             print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except UnsafeFile as exc:  # a link, a FIFO, a hard link, an oversized file in a run directory
+            print(f"error: {exc.filename}: {exc.strerror}", file=sys.stderr)
             return 2
         except OSError as exc:  # read-only directory, full disk...: one line naming the path
             if isinstance(exc, BrokenPipeError):

@@ -61,6 +61,10 @@ class Deployment:
         The rate per-sample values assume (None when unknown or irrelevant).
     notes : tuple[str, ...]
         What a user of the deployed system must know (e.g. how it starts on live data).
+    tables : Mapping[str, Any]
+        The objective's ``export_tables`` of ``values`` as the run computed them (look-up tables, gains,
+        difference equations: ``{name: {"table": nested lists, "doc", "unit", "x_range"/"y_range"}}``), so an
+        export writes them without rebuilding the objective (which may need code it never loads).
     """
 
     kind: str
@@ -73,6 +77,7 @@ class Deployment:
     scoring: Mapping[str, Any] = field(default_factory=dict)
     sample_rate_hz: float | None = None
     notes: tuple[str, ...] = ()
+    tables: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, str) or not self.kind:
@@ -108,6 +113,8 @@ class Deployment:
         doc["sample_rate_hz"] = self.sample_rate_hz
         if self.notes:
             doc["notes"] = list(self.notes)
+        if self.tables:
+            doc["tables"] = dict(self.tables)
         return plain(doc)
 
     @classmethod
@@ -119,7 +126,7 @@ class Deployment:
             if key not in doc:
                 raise ValueError(f"{where}.{key}: missing")
         maps = {}
-        for key in ("values", "units", "docs", "sources", "choices", "scoring"):
+        for key in ("values", "units", "docs", "sources", "choices", "scoring", "tables"):
             v = doc.get(key) or {}
             if not isinstance(v, Mapping):
                 raise ValueError(f"{where}.{key}: expected a mapping, got {v!r}")
@@ -216,7 +223,7 @@ def deployment_for(objective: Any, params: Mapping[str, Any], searched: Collecti
         elif searched is not None and sources.get(k) == "searched":
             sources[k] = "fixed"  # handed in by the run but not searched: a value of the space's fixed part
     return Deployment(dep.kind, dep.name, dep.values, dep.units, dep.docs, sources, dep.choices, dep.scoring,
-                      dep.sample_rate_hz, dep.notes)
+                      dep.sample_rate_hz, dep.notes, dep.tables)
 
 
 def load_deployment(run_dir: str | Path) -> Deployment:
@@ -264,6 +271,13 @@ def attach_deployment(best: Any, objective: Any, space: Any) -> Any:
 
     try:
         dep = deployment_for(objective, {**space.fixed, **best.params}, space.free_names, list(space.fixed))
+        tables_fn = hook(objective, "export_tables")
+        if tables_fn is not None:
+            try:
+                tables = tables_fn(dict(dep.values))
+            except (ValueError, TypeError, ArithmeticError):  # a design without tables: the values still deploy
+                tables = None
+            dep = dataclasses.replace(dep, tables=plain(dict(tables or {})))
         doc = dep.to_doc()
     except (ValueError, TypeError) as exc:
         doc = {"error": f"{type(exc).__name__}: {exc}"}

@@ -10,7 +10,6 @@ figures use :func:`new_figure` (or :func:`pyplot`, a stand-in with ``subplots``,
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -20,7 +19,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, NullLocator
 
-from tuner.safe_io import check_not_link, open_nofollow
+from tuner.safe_io import check_not_link, write_atomic
 
 __all__ = ["WIDTH_IN", "DPI", "TITLE_PT", "LEGEND_PT", "new_figure", "grid_figure", "save", "plain_log_labels",
            "log_y_if_wide", "method_color", "pyplot"]
@@ -58,12 +57,7 @@ def save(fig: Figure, path: Path) -> Path:
     path = Path(path)
     check_not_link(path.parent)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    if os.path.lexists(tmp):
-        os.unlink(tmp)
-    with os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
-        fig.savefig(fh, dpi=DPI, format=path.suffix.lstrip(".") or "png")
-    os.replace(tmp, path)
+    write_atomic(path, lambda fh: fig.savefig(fh, dpi=DPI, format=path.suffix.lstrip(".") or "png"), fsync=False)
     return path
 
 

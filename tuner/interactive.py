@@ -9,9 +9,9 @@ Altair need a server or a CDN for the same; hand-written SVG would need our own 
 Plotly stays optional (``pip install 'attitude-tuner[report]'``): without it every ``report.html`` is
 the static page of :mod:`tuner.render` (PNG figures, no script). With it a page gets
 
-- ``plotly.min.js`` once per folder (hard-linked from the installed package where the file system
-  allows, else copied) and ``tuner_report.js`` (package data) beside it: the only scripts the page's
-  policy admits (``script-src 'self'``);
+- ``plotly.min.js`` once per folder and ``tuner_report.js`` (package data) beside it, checked by their SHA-256
+  against the installed package's (:mod:`tuner.assets`: hard-linked to a matching copy in a folder above,
+  else copied): the only scripts the page's policy admits (``script-src 'self'``);
 - its data as one JSON block, ``{NAME: slot}``, and the plots drawn from it by ``tuner_report.js``
   (``PLOTS[NAME](div, slot)``): the report's plots of :mod:`tuner.plots` (the same data their PNGs are
   drawn from: convergence, parameter importance, fitness against each parameter, parallel coordinates of
@@ -33,9 +33,6 @@ The first item is the one shown first (the filter objective puts the worst recor
 
 from __future__ import annotations
 
-import json
-import os
-import shutil
 from importlib import resources
 from importlib.util import find_spec
 from pathlib import Path
@@ -63,40 +60,24 @@ def _plotly_js() -> Path:
 
 
 def install_assets(folder: str | Path) -> None:
-    """Put ``plotly.min.js`` and ``tuner_report.js`` into ``folder`` (once; replaced when they differ)."""
-    folder = Path(folder)
-    src = _plotly_js()
-    size = src.stat().st_size
-    dst = folder / "plotly.min.js"
-    if not (dst.exists() and dst.stat().st_size == size):
-        tmp = folder / f".plotly.min.js.tmp{os.getpid()}"
-        tmp.unlink(missing_ok=True)
-        # 4.8 MB: a hard link costs nothing where the file system allows it; the copy beside a sweep or a
-        # dashboard above this folder is tried first (same file system as the runs, when the package is not)
-        near = [a / "plotly.min.js" for a in list(folder.resolve().parents)[:3]]
-        for cand in [c for c in near if c.is_file() and c.stat().st_size == size] + [src]:
-            try:
-                os.link(cand, tmp)
-                break
-            except OSError:
-                continue
-        else:
-            shutil.copyfile(src, tmp)
-        os.replace(tmp, dst)
-    js = resources.files("tuner").joinpath("static/tuner_report.js").read_bytes()
-    out = folder / "tuner_report.js"
-    if not (out.exists() and out.read_bytes() == js):
-        tmp = folder / f".tuner_report.js.tmp{os.getpid()}"
-        tmp.write_bytes(js)
-        os.replace(tmp, out)
+    """Put ``plotly.min.js`` and ``tuner_report.js`` into ``folder``: kept when their SHA-256 is the installed
+    package's, else replaced (a hard link to a matching copy in a folder above, else a copy;
+    :func:`tuner.assets.install`)."""
+    from tuner.assets import install
+
+    install(folder, "plotly.min.js", _plotly_js())
+    with resources.as_file(resources.files("tuner").joinpath("static/tuner_report.js")) as js:
+        install(folder, "tuner_report.js", js)
 
 
 def read_traces(run_dir: Path) -> dict[str, Any] | None:
     """``traces.json`` of a run directory, or None (missing, unreadable or without items)."""
-    p = Path(run_dir) / "traces.json"
+    from tuner.records import load_json
+    from tuner.safe_io import read_text
+
     try:
-        doc = json.loads(p.read_text())
-    except (OSError, ValueError):
+        doc = load_json(read_text(Path(run_dir) / "traces.json"))
+    except (OSError, ValueError):  # absent, unreadable, a link or a FIFO (tuner.safe_io): no time series
         return None
     if not isinstance(doc, dict) or not isinstance(doc.get("items"), list) or not doc["items"]:
         return None

@@ -27,10 +27,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from tuner.space import Space
 
 __all__ = ["Evaluation", "EvalRecord", "SeededCall", "Score", "Objective", "TunableObjective", "HOOKS", "hook",
-           "as_evaluation", "PENALTY"]
+           "as_evaluation", "PENALTY", "ToolError"]
 
 #: fitness given to failed evaluations (exception, NaN, inf); finite so every optimiser copes.
 PENALTY = 1.0e12
+
+
+class ToolError(RuntimeError):
+    """A program a hook runs (the C compiler of ``verify_c``) is missing or failed: its message is one line
+    saying which program and why (``tuner verify-c`` prints it as its ``error:`` line, exit 2)."""
 
 
 @dataclass(frozen=True)
@@ -178,7 +183,8 @@ class TunableObjective(Objective, Protocol):
         """The exported C compiled with the local compiler (flags ``opt``) and scored next to the model
         (``tuner verify-c``): ``{"python": Score, "c": Score, "precision": str, "flags": [str], "seconds":
         {"python": s, "c": s}}``, optionally ``"max_angle_rad": {recording: float}`` (the largest angle between
-        the two outputs); ``FileNotFoundError`` without a compiler."""
+        the two outputs), and ``"compiler"``: the command line of the compiler that ran. :class:`ToolError`
+        when the compiler is missing or fails."""
 
     def fingerprint(self) -> Mapping[str, Any]:
         """Statistics of the tuning data (e.g. a sensor's rate and noise), stored in the run directory at the

@@ -1,7 +1,8 @@
 """The engine's own objective kind, ``kind: python``: a user callable ``module:function``.
 
 Registered in :data:`tuner.registry.REGISTRY` as ``"tuner.python_objective:PythonObjective"`` like any
-package's kind. A config naming it is code: it imports and runs the callable.
+package's kind. A config naming it is code: it imports and runs the callable, through
+:func:`tuner.trust.import_code` (never in a read-only command, never from inside a handed-over run directory).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from tuner.deployment import Deployment, build_deployment
-from tuner.registry import resolve_callable
+from tuner.trust import import_code
 
 __all__ = ["PythonObjective"]
 
@@ -47,7 +48,7 @@ class PythonObjective:
     def preflight(self) -> list[str]:
         """Import the callable (in the process that calls this: the driver, or a Dask worker)."""
         try:
-            fn = resolve_callable(self.callable, self.base_dir)
+            fn = import_code(self.callable, self.base_dir, "objective.callable")
         except (ImportError, AttributeError) as exc:
             raise ValueError(f"objective.callable: cannot import {self.callable!r} ({exc})") from None
         if not callable(fn):
@@ -55,7 +56,7 @@ class PythonObjective:
         return []
 
     def __call__(self, params: dict[str, Any]) -> Any:
-        return resolve_callable(self.callable, self.base_dir)(params, **self.options)
+        return import_code(self.callable, self.base_dir, "objective.callable")(params, **self.options)
 
     def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The parameters as they are: a user callable declares nothing else."""

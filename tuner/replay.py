@@ -14,27 +14,28 @@ from typing import Any
 from tuner.evaluate import EvalRecord
 from tuner.objective import Evaluation
 from tuner.records import HistoryRow, RunError, cell
-from tuner.rundir import CHAIN, RunDir, check_chain, read_chain
+from tuner.rundir import CHAIN, RunDir, chain_note, chain_secret, check_chain, read_chain
+from tuner.safe_io import regular
 
 __all__ = ["Replay", "verify_history"]
 
 
 def verify_history(rd: RunDir) -> str:
-    """Check ``history.csv`` against ``history.chain`` (:class:`RunError` naming the first edited row).
+    """Check ``history.csv`` against ``history.chain`` (:class:`RunError` naming the first edited row; a history
+    without its chain, or keyed with a key not set here, is an error too).
 
-    Rows beyond the checkpoint without a digest (a kill between the two appends) are left out. Returns a
-    note for a history of an older tuner, which has no chain (still readable), else ''.
+    Rows beyond the checkpoint without a digest (a kill between the two appends) are left out. Returns a note
+    when the chain is unkeyed while the user has a chain key set (:func:`tuner.rundir.chain_note`), else ''.
     """
-    rows = rd.history_rows()
-    if not rows:
+    if not regular(rd.file("history.csv")):
         return ""
-    if not rd.file(CHAIN).exists():
-        return "history.csv has no history.chain (written by an older tuner): edits to it cannot be detected"
-    digests = read_chain(rd.file(CHAIN))
-    ck = rd.checkpoint() if rd.file("checkpoint.json").exists() else None
-    n = max(min(len(rows), len(digests)), ck.n_evals if ck else 0)
-    check_chain(rd.file("history.csv"), rows[:n], digests, rd.meta().config_hash)
-    return ""
+    chain = read_chain(rd.file(CHAIN))
+    key = chain_secret(chain, rd.file(CHAIN))
+    rows = rd.history_rows()
+    ck = rd.checkpoint() if regular(rd.file("checkpoint.json")) else None
+    n = max(min(len(rows), len(chain.digests)), ck.n_evals if ck else 0)
+    check_chain(rd.file("history.csv"), rows[:n], chain.digests, rd.meta().config_hash, key)
+    return chain_note(chain)
 
 
 class Replay:

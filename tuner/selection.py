@@ -132,10 +132,12 @@ def select_best(cfg: RunConfig, rd: RunDir, best: Best, names: list[str],
     that fails on the held-out fold scores inf.
     """
     from tuner.registry import build_objective
+    from tuner.trust import code_outside
 
     sel = cfg.validation.select
     assert sel is not None
-    full = build_objective(dict(cfg.objective), cfg.base_dir)
+    with code_outside(cfg.origin):  # a resumed run: no code from inside its directory (tuner.trust)
+        full = build_objective(dict(cfg.objective), cfg.base_dir)
     fold, tune, test = selection_split(cfg, full)
     cands = _candidates(rd, names, sel.top_k)
     table = []

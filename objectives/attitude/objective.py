@@ -298,6 +298,8 @@ class FilterObjective:
                     raise ValueError(f"{where}: {exc}") from None
                 except (OSError, KeyError, IndexError) as exc:  # unreadable or truncated files
                     raise ValueError(f"{where}: cannot load ({type(exc).__name__}: {exc})") from None
+            if split == "train" and not recs:  # an empty list, or a selection that keeps no recording
+                raise ValueError(f"{key}: no recordings to score; give at least one data spec")
             for rec in recs:
                 if self.warmup_s >= rec.duration_s:
                     raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "

@@ -39,6 +39,11 @@ def test_assets_written_once_and_replaced_when_changed(tmp_path):
     interactive.install_assets(tmp_path)
     js, plotly = tmp_path / "tuner_report.js", tmp_path / "plotly.min.js"
     assert plotly.stat().st_size > 1_000_000 and "tuner-data" in js.read_text()
+    from importlib import resources
+
+    with resources.as_file(resources.files("tuner").joinpath("static/tuner_report.js")) as src:
+        # never a hard link to the installed files: writing "tampered" below would change the package itself
+        assert not plotly.samefile(interactive._plotly_js()) and not js.samefile(src)
     mtime = plotly.stat().st_mtime_ns
     js.write_text("tampered")
     interactive.install_assets(tmp_path)

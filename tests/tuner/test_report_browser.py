@@ -498,6 +498,59 @@ def test_report_with_cross_validation_in_a_browser(browser, tmp_path):
     assert res["broken"] == [] and res["errors"] == [], res
 
 
+LONG = "a_variant_whose_name_says_everything_about_it"  # job ids of 90+ characters with the grid
+
+
+@pytest.fixture(scope="module")
+def long_names_dir(tmp_path_factory):
+    """A folder of runs holding a sweep whose job names are long (variant and three grid values)."""
+    def build(tmp):
+        base = {"name": "l", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
+                "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
+        doc = {"sweep": {"name": "long_names_of_jobs", "base": base, "variants": {LONG: {}, "pso": {}},
+                         "grid": {"optimizer.population": [4], "optimizer.generations": [2], "objective.dim": [2]},
+                         "seeds": [1, 2]}}
+        (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
+        out = run_tuner("sweep", tmp / "sweep.yaml", "--dir", tmp / "runs" / "sweeps" / "long", "-q")
+        assert out.returncode == 0, out.stderr
+        assert run_tuner("dashboard", tmp / "runs").returncode == 0
+
+    return _built_once(tmp_path_factory, "long-names", build) / "runs"
+
+
+#: the right edge (px) of every cell under a header named in HEADS, and the viewport width
+_EDGES = """(function () {
+  var HEADS = %s, out = {width: window.innerWidth, cells: []};
+  [].forEach.call(document.querySelectorAll('table'), function (t) {
+    var heads = [].map.call(t.querySelectorAll('thead th'), function (h) { return h.textContent.trim(); });
+    heads.forEach(function (h, i) {
+      if (HEADS.indexOf(h) < 0) { return; }
+      [].forEach.call(t.querySelectorAll('tbody tr'), function (r) {
+        var c = r.cells[i];
+        if (c) { out.cells.push({head: h, text: c.textContent, right: Math.round(c.getBoundingClientRect().right)}); }
+      });
+    });
+  });
+  return out;
+})()"""
+
+
+@needs_chromium
+@pytest.mark.parametrize("page, heads", [("index.html", ["status", "best"]),
+                                         ("sweeps/long/report.html", ["status", "best_fitness"])])
+def test_long_job_names_keep_status_and_best_on_screen_at_1200_px(long_names_dir, browser, page, heads):
+    """Long sweep job names pushed the status and best columns off-screen (into the table's horizontal
+    scroll) at 1200 px: the name cells wrap instead."""
+    path = long_names_dir / page
+    assert LONG[:40] in path.read_text()  # (a job id keeps 40 characters of each part)
+    with browser.open(path.resolve().as_uri(), 1200, 900, 4000) as p:
+        res = p.evaluate(_EDGES % json.dumps(heads))
+    cells = [c for c in res["cells"] if c["head"] in heads]
+    assert len(cells) >= 8, res
+    off = [c for c in cells if c["right"] > res["width"]]
+    assert not off, off
+
+
 @pytest.fixture(scope="module")
 def loop_run(tmp_path_factory):
     """The saturation trap (configs/examples/dc_motor_saturation.yaml) at a short budget: a closed loop whose

@@ -19,7 +19,8 @@ A package adds commands through the entry-point group ``tuner.commands`` (:data:
     align = "objectives.attitude.align:COMMAND"
 
 The value is an object with ``name`` (the entry point's name), ``help`` (one line), ``add_arguments(parser)``
-and ``run(args) -> int`` (:class:`Command`; a module with those four names is one). The group is read only
+and ``run(args) -> int`` (:class:`Command`; a module with those four names is one), and ``runs_code = True``
+if it may load the code a config names (else it runs under :func:`tuner.trust.data_only`). The group is read only
 when the command typed is not an engine command, and by ``tuner --help`` (which loads each object for its
 help line, so such a module should import its heavy parts where ``run`` needs them). An engine command's name
 is never looked up there: a package cannot replace ``tuner run``.
@@ -36,23 +37,27 @@ from typing import Any, Protocol
 from tuner.commands.common import UsageError
 
 __all__ = ["ENGINE", "ENTRY_POINT_GROUP", "Command", "EngineCommand", "engine_command", "plugin_names",
-           "load_plugin", "add_command"]
+           "load_plugin", "add_command", "runs_code"]
 
 ENTRY_POINT_GROUP = "tuner.commands"
 
 
 @dataclass(frozen=True)
 class EngineCommand:
-    """An engine command: its module under ``tuner/commands/`` and its line in ``tuner --help``."""
+    """An engine command: its module under ``tuner/commands/``, its line in ``tuner --help``, and whether it
+    runs the code a config names (``runs_code``; the others run under :func:`tuner.trust.data_only`)."""
 
     module: str
     help: str
+    runs_code: bool = False
 
 
-#: every engine command, in the order ``tuner --help`` lists them
+#: every engine command, in the order ``tuner --help`` lists them; ``runs_code`` marks the commands that may
+#: load the code a config names (a ``kind: python`` module, a plant's Python dynamics, an FMU), the rule of
+#: :mod:`tuner.trust` and of the README's "what happens when" table
 ENGINE: dict[str, EngineCommand] = {
-    "run": EngineCommand("run", "tune: run a job from a YAML config"),
-    "resume": EngineCommand("resume", "continue an interrupted run from its checkpoint"),
+    "run": EngineCommand("run", "tune: run a job from a YAML config", runs_code=True),
+    "resume": EngineCommand("resume", "continue an interrupted run from its checkpoint", runs_code=True),
     "show": EngineCommand("show", "summary of a run or a sweep directory"),
     "compare": EngineCommand("compare", "two or more runs side by side (parameters and metrics)"),
     "list": EngineCommand("listing", "what can be named in a config, or the runs of a directory"),
@@ -60,16 +65,19 @@ ENGINE: dict[str, EngineCommand] = {
                                           "optimizer, metric, objective kind or data source"),
     "export": EngineCommand("export", "best parameters as yaml, json, python or a C header, or the tuned "
                                       "system as C99 source"),
-    "verify-c": EngineCommand("verify_c", "compile a run's exported C, score it next to the model"),
-    "evaluate": EngineCommand("evaluate", "score parameters without tuning (default: a run's best)"),
-    "cv": EngineCommand("cv", "cross-validate a config: tune on the other folds, score the held-out fold"),
-    "sweep": EngineCommand("sweep", "run many jobs (configs x overrides x seeds) and write one report"),
+    "verify-c": EngineCommand("verify_c", "compile a run's exported C, score it next to the model", runs_code=True),
+    "evaluate": EngineCommand("evaluate", "score parameters without tuning (default: a run's best)", runs_code=True),
+    "cv": EngineCommand("cv", "cross-validate a config: tune on the other folds, score the held-out fold",
+                        runs_code=True),
+    "sweep": EngineCommand("sweep", "run many jobs (configs x overrides x seeds) and write one report",
+                           runs_code=True),
     "report": EngineCommand("report", "(re)write the report of a sweep directory or a run directory, or the "
                                       "dashboard (index.html) of a folder of runs"),
     "dashboard": EngineCommand("dashboard", "write DIR/index.html: every run and sweep under DIR, sortable, "
                                             "filterable, compared side by side"),
     "init": EngineCommand("init", "write a commented starter job for a filter or controller"),
-    "demo": EngineCommand("demo", "run a job shipped with the package (default: the demo, EKF vs FAEKF)"),
+    "demo": EngineCommand("demo", "run a job shipped with the package (default: the demo, EKF vs FAEKF)",
+                          runs_code=True),
 }
 
 
@@ -136,11 +144,19 @@ def load_plugin(name: str) -> Command:
     return cmd
 
 
+def runs_code(name: str, command: Any = None) -> bool:
+    """Whether command ``name`` (an engine command, or ``command``, one another package adds) may load the
+    code a config names (:mod:`tuner.trust`)."""
+    if name in ENGINE:
+        return ENGINE[name].runs_code
+    return getattr(command, "runs_code", False) is True
+
+
 def add_command(sub: Any, name: str, help: str, command: Any = None) -> argparse.ArgumentParser:
     """The sub-parser of ``name`` in ``sub``; with ``command`` (a module or :class:`Command`) its arguments."""
     about = getattr(command, "DESCRIPTION", None) or getattr(command, "help", None)
     p = sub.add_parser(name, help=help, description=about)
     if command is not None:
         command.add_arguments(p)
-        p.set_defaults(_run=command.run)
+        p.set_defaults(_run=command.run, _runs_code=runs_code(name, command))
     return p

@@ -9,7 +9,7 @@ from pathlib import Path
 from tuner.commands.common import UsageError
 from tuner.optimizers import OPTIMIZERS
 from tuner.registry import REGISTRY
-from tuner.sweep import list_runs
+from tuner.runinfo import list_runs
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

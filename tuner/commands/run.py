@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from pathlib import Path
 
@@ -11,8 +10,11 @@ from tuner.commands import sweep
 from tuner.commands.common import UsageError
 from tuner.config import load_config
 from tuner.failures import failure_groups
+from tuner.records import RunError
+from tuner.repeats import run as run_job
 from tuner.run import RunResult
-from tuner.run import run as run_job
+from tuner.rundir import RunDir
+from tuner.spread import spread_lines
 from tuner.sweep import is_sweep_file
 from tuner.verdict import defaults_verdict
 
@@ -25,6 +27,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="override a config value, e.g. optimizer.population=40 (repeatable)")
     p.add_argument("--seed", type=int, help="override the seed")
     p.add_argument("--n-jobs", type=int, help="override parallel.n_jobs")
+    p.add_argument("--repeats", type=int, metavar="N",
+                   help="run the job N times, seeds seed .. seed+N-1, and deploy one (held-out score, else the "
+                        "median fitness); the spread over the seeds is shown and reported")
     p.add_argument("--run-dir", help="use this run directory instead of runs/<time>-<name>-<hex>")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.add_argument("--no-report", action="store_true",
@@ -33,10 +38,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(a: argparse.Namespace) -> int:
     if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
-        if a.overrides or a.seed is not None or a.n_jobs or a.run_dir:
-            raise UsageError(f"{a.config}: is a sweep file; --set/--seed/--n-jobs/--run-dir apply to job files")
-        return sweep.run(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet, no_report=a.no_report))
-    cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
+        if a.seed is not None or a.n_jobs or a.run_dir or a.repeats:
+            raise UsageError(f"{a.config}: is a sweep file; --seed/--n-jobs/--run-dir/--repeats apply to job files "
+                             "(--set applies to every job of the sweep)")
+        return sweep.run(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet, no_report=a.no_report,
+                                            overrides=a.overrides))
+    cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs, repeats=a.repeats)
     return print_result(run_job(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report))
 
 
@@ -65,10 +72,17 @@ def print_result(res: RunResult) -> int:
     verdict = _stored_verdict(res.run_dir)
     if verdict:
         print(f"warning: {verdict}")
+    if res.repeats is not None:
+        print()
+        print("\n".join(spread_lines(res.repeats)))
     print(f"run directory: {res.run_dir}")
     if (res.run_dir / "report.md").exists():
         print(f"report: {res.run_dir / 'report.md'}")
-    if res.status == "finished" and res.n_evals and not res.best_params:
+    if res.status == "failed" and res.repeats is not None:
+        print(f"error: {res.run_dir}: no repeat to deploy (a repeat whose every evaluation failed is not chosen)",
+              file=sys.stderr)
+        return 1
+    if res.status == "failed":
         print(f"error: {res.run_dir}: every one of {res.n_evals} evaluations failed; "
               f"{failure_summary(res.run_dir)}", file=sys.stderr)
         return 1
@@ -79,9 +93,8 @@ def failure_summary(run_dir: Path, top: int = 3) -> str:
     """The most frequent reasons in a run's history (why every evaluation failed), grouped by
     :func:`tuner.failures.failure_groups`: each with the number of evaluations that give it and an example."""
     try:
-        with open(run_dir / "history.csv", newline="") as fh:
-            errors = [row.get("error", "") for row in csv.DictReader(fh)]
-    except OSError:
+        errors = [row.get("error", "") for row in RunDir(run_dir).history_rows()]
+    except (OSError, RunError):
         return "see history.csv"
     groups = failure_groups(errors)[:top]
     if not groups:

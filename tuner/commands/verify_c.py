@@ -8,6 +8,7 @@ import sys
 
 from tuner.commands.common import UsageError
 from tuner.export import verify_c
+from tuner.objective import ToolError
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -20,17 +21,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(a: argparse.Namespace) -> int:
     try:
         out = verify_c(a.run_dir, a.data, a.precision, ("-O2", "-ffast-math") if a.fast_math else ("-O2",))
-    except FileNotFoundError as exc:
+    except (ToolError, FileNotFoundError) as exc:  # no compiler, or one that failed: one line naming it
         raise UsageError(str(exc)) from None
     for w in out.get("warnings", []):
         print(f"warning: {w}", file=sys.stderr)
     py, c = out["python"], out["c"]
-    print(f"{out['name']} in C ({out['precision']}, {' '.join(out['flags'])}) vs the model: "
-          f"fitness {py.fitness:.6g} / {c.fitness:.6g} (difference {c.fitness - py.fitness:.3g}); "
-          f"{out['seconds']['python']:.2f} s / {out['seconds']['c']:.2f} s")
+    compiler = f" with {out['compiler']}" if out.get("compiler") else ""
+    print(f"{out['name']} compiled{compiler} ({out['precision']}, {' '.join(out['flags'])}): "
+          f"fitness model {py.fitness:.6g}, C {c.fitness:.6g} (C - model {c.fitness - py.fitness:.3g}); "
+          f"time model {out['seconds']['python']:.2f} s, C {out['seconds']['c']:.2f} s")
     angles = out.get("max_angle_rad") or {}
     for rec, m in py.recordings.items():
-        vals = "  ".join(f"{k}={v:.6g}/{c.recordings[rec][k]:.6g} ({c.recordings[rec][k] - v:+.2g})"
+        vals = "  ".join(f"{k} model {v:.6g} C {c.recordings[rec][k]:.6g} ({c.recordings[rec][k] - v:+.2g})"
                          for k, v in m.items() if isinstance(v, (int, float)) and k.endswith("deg"))
         angle = f"max angle {angles[rec]:.3g} rad  " if rec in angles else ""
         print(f"  {rec}: {angle}{vals}")

@@ -8,6 +8,7 @@ the contour plot uses to pick its two parameters). :class:`SweepContext` holds a
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -19,6 +20,7 @@ import pandas as pd
 
 from tuner.importance import Importance, quadratic_anova
 from tuner.records import RunError
+from tuner.safe_io import read_text, regular
 
 __all__ = ["RunContext", "SweepContext", "load_history", "MAX_POINTS"]
 
@@ -29,10 +31,10 @@ MAX_POINTS = 4000
 def load_history(run_dir: Path) -> pd.DataFrame:
     """``history.csv`` as a frame; a missing or unparsable file raises :class:`tuner.records.RunError`."""
     p = Path(run_dir) / "history.csv"
-    if not p.is_file():
+    if not regular(p):
         raise RunError(f"{p}: missing (nothing evaluated yet?)")
-    try:
-        df = pd.read_csv(p, keep_default_na=False, na_values=[""])
+    try:  # through tuner.safe_io: a link or a FIFO named history.csv is refused, never followed or waited on
+        df = pd.read_csv(io.StringIO(read_text(p)), keep_default_na=False, na_values=[""])
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         raise RunError(f"{p}: unreadable: {str(exc).strip()}") from None
     missing = [c for c in ("eval", "stage", "generation", "fitness", "status") if c not in df.columns]

@@ -3,6 +3,7 @@ method."""
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 from typing import Any
 
@@ -11,6 +12,7 @@ import pandas as pd
 
 from tuner.figures import LEGEND_PT, log_y_if_wide, method_color, new_figure
 from tuner.plots.context import SweepContext, log_scale
+from tuner.safe_io import read_text
 
 NAME = "convergence"
 FILE = "convergence_all.png"
@@ -20,8 +22,8 @@ POINTS = 200
 
 def best_so_far(run_dir: Path, points: int = POINTS) -> dict[str, list[float]] | None:
     """A run's best fitness so far against evaluations (``x``, ``y``; at most ``points``), or None."""
-    try:
-        h = pd.read_csv(Path(run_dir) / "history.csv", usecols=["eval", "fitness", "status"])
+    try:  # through tuner.safe_io: a link or a FIFO named history.csv is no curve, never followed or waited on
+        h = pd.read_csv(io.StringIO(read_text(Path(run_dir) / "history.csv")), usecols=["eval", "fitness", "status"])
     except (OSError, ValueError, pd.errors.ParserError, pd.errors.EmptyDataError):
         return None
     f = pd.to_numeric(h["fitness"], errors="coerce").where(h["status"] == "ok")

@@ -277,7 +277,7 @@
         } else {
           cell.textContent = fmt(r[c[0]]);
         }
-        if (typeof r[c[0]] !== 'number') { cell.className = 'txt'; }
+        if (typeof r[c[0]] !== 'number') { cell.className = c[0] === 'name' ? 'txt name' : 'txt'; }
         if (c[0] === 'date') { cell.textContent = String(r.date || '-').replace('T', ' ').slice(0, 16); }
         tr.appendChild(cell);
       });

@@ -58,8 +58,9 @@ from objectives.control.plants.requirements import (
     violation,
 )
 from objectives.control.plants.scenario import cases_from_config, realism_from_spec
-from objectives.control.plants.uncertainty import draw_models, uncertainty_from_spec
+from objectives.control.plants.uncertainty import check_largest_delay, draw_models, uncertainty_from_spec
 from tuner.objective import PENALTY, Evaluation
+from tuner.sizes import MAX_LOOP_SAMPLES, check_count
 
 __all__ = ["SISOLoop", "DeployedController", "Scored"]
 
@@ -153,6 +154,9 @@ class SISOLoop:
         self.cases = cases_from_config(scenario, scenarios, self.period, n_meas, self._real, self._cost, job_req)
         self._weights = np.array([c.weight for c in self.cases])
         self._unc = uncertainty_from_spec(uncertainty, kind, self.spec, self.period)
+        _check_work(self._unc, sum(c.signals.t.size for c in self.cases))
+        if self._unc is not None:
+            check_largest_delay(self._unc, kind, self.spec, self.period, self.base_dir)
         if self._unc is None:
             self.models = ModelSet("tuning", [self.plant], ["nominal"], [{}])
         else:
@@ -425,3 +429,15 @@ def _met(sense: str, vals: np.ndarray, lim: float) -> np.ndarray:
     """Per value whether it meets ``lim`` (NaN never does)."""
     with np.errstate(invalid="ignore"):
         return vals <= lim if sense == "max" else vals >= lim
+
+
+def _check_work(unc: Any, n_samples: int) -> None:
+    """Models x samples of all scenarios, for the tuning set (every evaluation) and the held-out set (scored
+    once after the run), against :data:`tuner.sizes.MAX_LOOP_SAMPLES`, before any model is built."""
+    if unc is None:  # one model: the scenarios' samples are bounded by tuner.sizes.MAX_SAMPLES already
+        return
+    for key, name, n_models in (("objective.uncertainty.tune.samples", "the tuning set", unc.tuning_size()),
+                                ("objective.uncertainty.validate.samples", "the held-out set", unc.validate_samples)):
+        check_count(key, n_models * n_samples, MAX_LOOP_SAMPLES,
+                    f"one pass of {name} over the scenarios in sample steps ({n_models:,} models x {n_samples:,} "
+                    "samples of all scenarios)", "fewer models, shorter scenarios or a longer period_s")

@@ -43,6 +43,7 @@ from objectives.control.plants.tables import (
     text_table,
 )
 from tuner.objective import Evaluation
+from tuner.safe_io import write_atomic
 
 __all__ = ["write_report", "plot_responses", "plot_bode"]
 
@@ -250,7 +251,7 @@ def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: d
     if rows:
         md += ["## What each requirement measures", "", *_glossary(loop), ""]
     md += _heldout_md(loop, tuned, defaults) + _margins_md(loop, tuned)
-    (run_dir / "requirements.md").write_text("\n".join(md))
+    write_atomic(run_dir / "requirements.md", "\n".join(md), fsync=False)
     met = bool(rows) and all(r[5] == "yes" for r in rows if r[2].startswith("tuning"))
     out["requirements_met"] = met if rows else True
     if tuned.small is not None and rows:

@@ -40,6 +40,7 @@ import numpy as np
 from objectives.control.plants.cost import cost_from_spec
 from objectives.control.plants.metrics import windows
 from objectives.control.plants.requirements import REQUIREMENTS, check_limit, requirements_from_spec
+from tuner.sizes import check_samples, samples
 
 __all__ = ["Scenario", "scenario_from_spec", "Realism", "realism_from_spec", "Case", "cases_from_config"]
 
@@ -93,7 +94,7 @@ def scenario_from_spec(spec: Any, period_s: float, key: str = "objective.scenari
     if "duration_s" not in spec:
         raise ValueError(f"{key}.duration_s: missing; the simulated time (s)")
     dur = _num(f"{key}.duration_s", spec["duration_s"], 0.0, strict=True)
-    n = int(round(dur / period_s))
+    n = samples(f"{key}.duration_s", dur, period_s, "the scenario")  # before any array of that length
     if n < 2:
         raise ValueError(f"{key}.duration_s: {dur} s is shorter than two controller periods ({period_s} s)")
     t = np.arange(n) * period_s
@@ -271,6 +272,20 @@ def _case(i: int, spec: Mapping[str, Any], key: str, period_s: float, n_meas: in
     return Case(name, weight, sc, sig, win, c, limits, frozenset(own), std, seed)
 
 
+def _check_total(scenarios: list[Any], period_s: float) -> None:
+    """The samples of all scenarios of a list together (each holds its signals and noise) against
+    :data:`tuner.sizes.MAX_SAMPLES`, before any is built (a duration that is not a number is left to
+    :func:`scenario_from_spec`'s error)."""
+    total = 0
+    for i, spec in enumerate(scenarios):
+        dur = spec.get("duration_s") if isinstance(spec, Mapping) else None
+        if isinstance(dur, bool) or not isinstance(dur, (int, float)) or not math.isfinite(dur) or dur <= 0:
+            continue
+        key = f"objective.scenarios[{i}].duration_s"
+        total += samples(key, dur, period_s, "the scenario")
+        check_samples(key, total, f"the scenarios up to scenarios[{i}] together")
+
+
 def cases_from_config(scenario: Any, scenarios: Any, period_s: float, n_meas: int, real: Realism,
                       cost: dict[str, Any], job_req: Mapping[str, Any]) -> list[Case]:
     """The scenarios of a job: ``scenarios`` (a list) or the single ``scenario`` (a mapping; the default
@@ -280,6 +295,7 @@ def cases_from_config(scenario: Any, scenarios: Any, period_s: float, n_meas: in
             raise ValueError("objective.scenarios: give scenario (one) or scenarios (a list), not both")
         if not isinstance(scenarios, list) or not scenarios:
             raise ValueError(f"objective.scenarios: expected a non-empty list of scenario mappings, got {scenarios!r}")
+        _check_total(scenarios, period_s)
         cases = [_case(i, s, f"objective.scenarios[{i}]", period_s, n_meas, real, cost, job_req, True)
                  for i, s in enumerate(scenarios)]
         names = [c.name for c in cases]

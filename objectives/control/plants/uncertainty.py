@@ -42,8 +42,10 @@ from typing import Any
 
 import numpy as np
 
+from tuner.sizes import MAX_MODELS, check_count
+
 __all__ = ["Dist", "Uncertainty", "uncertainty_from_spec", "ModelDraw", "draw_models", "set_path", "spec_leaves",
-           "MAX_CORNERS", "DELAY"]
+           "MAX_CORNERS", "DELAY", "check_largest_delay"]
 
 #: the most corners a tuning set may have (2^6: six parameters)
 MAX_CORNERS = 64
@@ -239,6 +241,10 @@ def uncertainty_from_spec(spec: Any, kind: Any, plant_spec: Mapping[str, Any], p
                     _int(f"{key}.tune.seed", tune.get("seed", 1), 0),
                     _int(f"{key}.validate.samples", val.get("samples", 200), 1),
                     _int(f"{key}.validate.seed", val.get("seed", 2), 0))
+    # each model is a built plant (and its frequency responses) in memory: bounded before any is drawn
+    check_count(f"{key}.tune.samples", u.tuning_size(), MAX_MODELS, "the tuning set's size in models (nominal, "
+                "corners and samples)")
+    check_count(f"{key}.validate.samples", u.validate_samples, MAX_MODELS, "the held-out set's size in models")
     if u.corners is False and u.samples == 0:
         raise ValueError(f"{key}.tune: without corners and samples the tuning set is the nominal plant alone; give "
                          "samples or corners: true")
@@ -288,3 +294,19 @@ def draw_models(u: Uncertainty, which: str, period_s: float) -> ModelDraw:
             labels.append(f"sample {i + 1}")
             values.append({d.name: float(cols[j][i]) for j, d in enumerate(u.dists)})
     return ModelDraw(tuple(labels), tuple(_snap(v, period_s) for v in values))
+
+
+def check_largest_delay(u: Uncertainty, kind: Any, spec: Mapping[str, Any], period_s: float, base_dir: Any) -> None:
+    """The plant at the largest delay the block can draw (a range's high end, a normal's truncation), other
+    values nominal, built once before any model set: a delay the builder refuses (its size checks,
+    :mod:`tuner.sizes`) is one error line before tuning, not after the run when the held-out set is drawn."""
+    dist = next((d for d in u.dists if d.name == DELAY), None)
+    if dist is None:
+        return
+    high = dist.mean + NORMAL_TRUNC * dist.std if dist.kind == "normal" else dist.high
+    values = _snap({**u.nominal, DELAY: high}, period_s)
+    try:
+        kind.build((kind.perturb or set_path)(spec, values), period_s, base_dir, "objective.plant")
+    except ValueError as exc:
+        raise ValueError(f"objective.uncertainty.parameters.{DELAY}: the largest delay it can draw "
+                         f"({values[DELAY]:g} s) cannot be built: {exc}") from None
