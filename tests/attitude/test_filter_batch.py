@@ -108,22 +108,24 @@ def test_configurations_without_a_kernel_return_none(flt, section):
 
 
 def test_the_kernel_is_declared_by_the_class_itself():
-    """Every declared ``batch_kernel`` is a kernel of the batch; a subclass (which may change ``_run``) is batched
-    only under a declaration of its own."""
+    """Every declared ``population`` is a :class:`Population` of the class's unit; a subclass (which may change
+    ``_run``) is batched only under a declaration of its own."""
     from types import SimpleNamespace
 
-    from objectives.attitude.batch import _KERNELS
+    from objectives.attitude.batch import Population
     from objectives.attitude.filters import FILTERS, get_filter
+    from objectives.attitude.filters.base import own
     from objectives.attitude.filters.mahony import Mahony
 
-    declared = {n: vars(get_filter(n)).get("batch_kernel") for n in FILTERS}
-    assert {k for k in declared.values() if k} == set(_KERNELS)
+    declared = {n: own(get_filter(n), "population") for n in FILTERS}
+    assert all(isinstance(p, Population) for p in declared.values() if p is not None)
+    assert {n for n, p in declared.items() if p} == {"madgwick", "mahony", "ekf", "faekf", "kf1d", "qukf", "qraukf"}
 
     class Tuned(Mahony):
         def _run(self, rec, q0):  # pragma: no cover - never run
             raise AssertionError
 
-    assert Tuned.batch_kernel == "mahony"
+    assert Tuned.population is Mahony.population  # inherited as an attribute, but not the subclass's own
     assert not batchable(SimpleNamespace(_cls=Tuned, metric="euler_rmse_mean"))
 
 

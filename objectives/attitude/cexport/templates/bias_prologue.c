@@ -146,8 +146,3 @@ void PFX_set_quaternion(PFX_filter *f, const PFX_real q[4])
     from_output(q, f->q);
     f->started = 1;
 }
-
-void PFX_gyro_bias(const PFX_filter *f, PFX_real b[3])
-{
-    BIAS_OUT
-}
