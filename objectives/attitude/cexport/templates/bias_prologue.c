@@ -1,4 +1,4 @@
-/* ---- the robust blocks' prologue of Madgwick and Mahony (_bias_filter.robust_sample) ------------------ */
+/* ---- the robust blocks' prologue of the quaternion-and-bias filters (_bias_filter.robust_sample) ------- */
 /* (x, y, z) / |(x, y, z)| and 1, or unchanged and 0 (zero or non-finite norm): _scalar.unit */
 static int unit3(real *x, real *y, real *z)
 {

@@ -1,11 +1,11 @@
 /* ---- robust blocks (ported from objectives/attitude/filters/robust.py) ------------------------------ */
-/* gain of a first-order low-pass, 1 - exp(-dt/tau) (VQF eq. 8); tau = 0: 1 */
+/* gain of a first-order low-pass, 1 - exp(-dt/tau) (Laidig & Seel 2023, eq. 8); tau = 0: 1 */
 static real lp_gain(real tau_s, real dt_s)
 {
     return tau_s == 0.0 ? 1.0 : 1.0 - EXP(-dt_s / tau_s);
 }
 
-/* block (a) coefficients: mag_dist_coefficients(dt, norm_th, dip_th_deg, max_rejection_s), other VQF defaults */
+/* block (a) coefficients: mag_dist_coefficients(dt, norm_th, dip_th_deg, max_rejection_s), the rest default */
 static void mag_dist_coefficients(real *c, real dt, real norm_th, real dip_th_deg, real max_rejection_s)
 {
     c[0] = dt; c[1] = norm_th; c[2] = DEG2RAD(dip_th_deg); c[3] = lp_gain(20.0, dt); c[4] = lp_gain(0.05, dt);
@@ -21,7 +21,7 @@ static void mag_dist_state(real *s, int n)
     s[6] = 1.0;
 }
 
-/* block (b) coefficients: rest_coefficients(dt, th_acc=th_acc, tau_bias_s=tau_bias_s), other VQF defaults */
+/* block (b) coefficients: rest_coefficients(dt, th_acc=th_acc, tau_bias_s=tau_bias_s), the rest default */
 static void rest_coefficients(real *c, real dt, real th_acc, real tau_bias_s)
 {
     real th_g = DEG2RAD(2.0);
