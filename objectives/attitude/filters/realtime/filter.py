@@ -37,7 +37,8 @@ from objectives.attitude.cexport.port import CMember, CPort
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.layout import Layout
-from objectives.attitude.filters.realtime.kernel import LOW_PASSES, C, S, coefficients, initial_state, realtime_kernel
+from objectives.attitude.filters.realtime.coefficients import LOW_PASSES, C, S, coefficients, initial_state
+from objectives.attitude.filters.realtime.kernel import realtime_kernel
 from objectives.attitude.filters.stream import StateStream
 from objectives.params import NONNEG, POSITIVE, Interval, Param, ParamSet
 
@@ -95,8 +96,8 @@ DECL = ParamSet("realtime", (
 
 #: the C port's start phase of each low-pass of the state (the kernel marks a low-pass not yet started by NaN)
 LP = Layout("LP", tuple((name, 1, f"phase of the low-pass S_{name}") for name in LOW_PASSES))
-#: the C port (port.c, ported from kernel.py with the same layouts; sine and cosine of the shared parts): the
-#: params are every value of DECL in its units, the C derives the per-sample coefficients as the kernel does
+#: the C port (port.c, ported from kernel.py with the layouts of coefficients.py; sine and cosine of the shared
+#: parts): the params are every value of DECL in its units, the C derives the per-sample coefficients as the kernel
 C_PORT = CPort((__package__, "port.c"), ("trig.c",), (
     CMember("real", "c", (C.LEN,), "per-sample coefficients at dt_s (layout C of kernel.py)"),
     CMember("real", "s", (S.LEN,), "the state carried between samples (layout S)"),

@@ -1,5 +1,5 @@
 /* ---- realtime: VQF's design (Laidig & Seel 2023) with the project's additions; ported from
-   objectives/attitude/filters/realtime/kernel.py (its layouts C and S are the enums above, same operations) -- */
+   objectives/attitude/filters/realtime/kernel.py (the layouts C and S of coefficients.py are the enums above) */
 /* second-order Butterworth low-pass (b0, b1, b2, a1, a2) of time constant tau at dt; pass-through below dt/2 */
 static void rt_butter2(real tau, real dt, real *o)
 {
@@ -366,7 +366,7 @@ void PFX_init(PFX_filter *f, const PFX_params *p)
 }
 
 /* start_q0: the strapdown quaternion starts at q; start self (VQF's identity start) takes no start
-   orientation, as the model (filters/realtime.py) ignores one */
+   orientation, as the model (filters/realtime/filter.py) ignores one */
 void PFX_set_quaternion(PFX_filter *f, const PFX_real q[4])
 {
     real w[4];
