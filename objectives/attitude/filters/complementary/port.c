@@ -1,7 +1,7 @@
 /* ---- LCF / NCF / CCF on ZYX Euler angles (ported from objectives/attitude/filters/complementary/kernel.py;
         Narkhede et al. 2021, eqs. (1)-(14)) ----------------------------------------------------------- */
 
-/* angle wrapped to [-pi, pi): complementary._wrap */
+/* angle wrapped to [-pi, pi): steps._wrap */
 static real wrap_(real a)
 {
     if (fabs(a) < 3.0) /* (a + pi) / (2 pi) in (0.02, 0.98): the floor below is 0, no division needed */
@@ -9,7 +9,7 @@ static real wrap_(real a)
     return a - TWO_PI_ * floor_((a + PI_) / TWO_PI_);
 }
 
-/* q = q_z(psi) q_y(theta) q_x(phi): complementary._quat_zyx */
+/* q = q_z(psi) q_y(theta) q_x(phi): steps._quat_zyx */
 static void quat_zyx(real phi, real th, real psi, real q[4])
 {
     real c1, s1, c2, s2, c3, s3;
@@ -39,7 +39,7 @@ static real one_minus_exp_neg(real x)
     return 1.0 - EXP(-x);
 }
 
-/* the per-sample gains at dt (complementary._ComplementaryBase._coef) and the blocks' coefficients */
+/* the per-sample gains at dt (filters._ComplementaryBase.kernel_setup) and the blocks' coefficients */
 static void set_rate(PFX_filter *f, real dt)
 {
     const PFX_params *p = &f->p;

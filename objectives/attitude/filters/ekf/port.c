@@ -5,7 +5,7 @@ static void set_rate(PFX_filter *f, real dt)
     robust_rate(f, dt, 0.5 * f->p.g / 9.81, 2.0);
 }
 
-/* time update (eqs. 16, 20, 21) with the gyro sample w: _ekf_kernel._predict */
+/* time update (eqs. 16, 20, 21) with the gyro sample w: kernel._predict */
 static void predict(PFX_filter *f, const real *w_in, real h)
 {
     real *x = f->x, (*P)[X_LEN] = f->P, A[4][4], B[4][3], T[4][X_LEN];
@@ -64,7 +64,7 @@ static void north_(const real *x, real n[3])
     n[2] = 2.0 * (x[1] * x[3] + x[0] * x[2]);
 }
 
-/* block (a)'s gain at the predicted attitude (1 until a first reference): _ekf_kernel._mag_gain */
+/* block (a)'s gain at the predicted attitude (1 until a first reference): kernel._mag_gain */
 static real mag_gain(PFX_filter *f, const real n[3], real mx, real my, real mz)
 {
     const real *x = f->x, *rs = f->rs;
@@ -77,7 +77,7 @@ static real mag_gain(PFX_filter *f, const real n[3], real mx, real my, real mz)
     return f->ms[0] == 0.0 ? 1.0 : gm;
 }
 
-/* the TRIAD's second vector for a gain gm < 1: _ekf_kernel._blend_north */
+/* the TRIAD's second vector for a gain gm < 1: kernel._blend_north */
 static void blend_north(real ax, real ay, real az, real gm, const real n[3], real m[3])
 {
     real an = SQRT(ax * ax + ay * ay + az * az), ux = ax / an, uy = ay / an, uz = az / an;
@@ -128,7 +128,7 @@ static int triad(real ax, real ay, real az, real mx, real my, real mz, real z[4]
     return !ISNAN_(z[0]);
 }
 
-/* measurement update (eqs. 17, 22) by Cholesky of S = P_qq + R_k: the loop of _ekf_kernel._steps */
+/* measurement update (eqs. 17, 22) by Cholesky of S = P_qq + R_k: the loop of kernel._steps */
 static void correct(PFX_filter *f, real z[4], const real *acc)
 {
     real *x = f->x, (*P)[X_LEN] = f->P, L[4][4], W[4][X_LEN], v[4], dot, r_k, s, inv;
@@ -192,7 +192,7 @@ static void correct(PFX_filter *f, real z[4], const real *acc)
         }
 }
 
-/* bias pseudo-measurement at rest (three scalar updates): _ekf_kernel._rest_bias_update */
+/* bias pseudo-measurement at rest (three scalar updates): kernel._rest_bias_update */
 static void rest_bias_update(PFX_filter *f)
 {
     real *x = f->x, (*P)[X_LEN] = f->P, w[X_LEN], s, innov;
