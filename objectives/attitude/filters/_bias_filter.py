@@ -18,10 +18,11 @@ default (the kernels then run the papers' algorithms, bit for bit):
 - ``acc_lp_tau_s`` (block c): the accelerometer low-passed in the earth frame replaces the raw one in the
   gravity correction.
 
-With a block on, the coefficient array is the filter's own padded to :data:`ROBUST_AT` followed by the
-flags and the blocks' coefficients (:func:`with_robust`), and the state is :data:`STATE_LEN` long (the
-blocks' states after q and bias, :func:`initial_state`); the shared per-sample prologue is
-:func:`robust_sample`.
+Layouts, declared once (:class:`~objectives.attitude.filters.layout.Layout`): the state :data:`S` (q and bias,
+then with a block on the blocks' states, :func:`initial_state`) and the blocks' part of the coefficient array
+:data:`RC`, which with a block on follows the filter's own coefficients (each unit's ``C``) padded to
+:data:`ROBUST_AT` (:func:`with_robust`); the shared per-sample prologue is :func:`robust_sample`. The units' C
+ports share their state members (:data:`C_MEMBERS`, sized from :data:`S`) and parts (:data:`C_PARTS`).
 
 Each filter keeps its own short loop over :func:`sample_inputs`: the loops differ in the update's gains
 and in where and how the bias output is written (Madgwick before its update, ``b + offset``; Mahony after
