@@ -55,7 +55,8 @@ def register_filter(name: str, target: str) -> None:
 
     A filter outside this package (a plugin, a test's toy filter) enters the registry this way and is then a
     filter like the others: configs name it, the C export renders its ``c_port``, the population batch runs its
-    ``population``. ValueError for a name already registered (naming both targets) or a malformed target.
+    ``population``. A worker process finds a filter by its name, so a plugin registers in every process (where
+    its module is imported). ValueError for a name already registered (naming both targets) or a malformed target.
     """
     if not (isinstance(name, str) and name.isidentifier() and name.islower()):
         raise ValueError(f"filter name must be a lower-case identifier, got {name!r}")
