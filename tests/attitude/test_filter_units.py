@@ -115,6 +115,16 @@ def test_the_c_params_are_the_declaration(name):
                 assert f"P_{enum} = {i}" in header
 
 
+def test_a_declared_value_without_a_c_type_is_an_error_naming_it():
+    from objectives.attitude.cexport.port import decl_fields
+    from objectives.params import Param, ParamSet
+
+    decl = ParamSet("x", (Param("gain", 1.0), Param("table", None, kind="any", nullable=True)))
+    assert [f.name for f in decl_fields(decl, {"gain": 2.0, "table": None}, skip=("table",))] == ["gain"]
+    with pytest.raises(ValueError, match="parameter 'table' .* has no C type; the port leaves it out"):
+        decl_fields(decl, {"gain": 2.0, "table": None})
+
+
 def test_filters_of_a_family_without_a_c_port_say_so():
     """A subclass does not inherit its parent's port (the FAEKF's kernel is not the EKF's)."""
     assert own(get_filter("ekf"), "c_port") is not None and own(get_filter("faekf"), "c_port") is None

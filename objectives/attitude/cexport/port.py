@@ -171,6 +171,9 @@ def decl_fields(decl: Any, values: dict, skip: Sequence[str] = ()) -> list[CFiel
         if p.name in ("init", *skip):
             continue
         v = values[p.name]
+        if p.kind == "any" or v is None:
+            raise ValueError(f"c-filter: parameter {p.name!r} ({p.kind}, value {v!r}) has no C type; the port leaves "
+                             "it out (skip) or derives what the C needs from it (fields)")
         if isinstance(p.default, bool):
             out.append(CField("int", p.name, bool(v), _doc(p)))
         elif p.choices:
