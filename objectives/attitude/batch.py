@@ -17,6 +17,10 @@ and this module never names a filter. Batched where a unit has one (``docs/archi
 recordings that all have truth; with ``mse_1d`` only where the kernel keeps the angle. For any other
 configuration :func:`evaluate_batch` returns None and the engine evaluates serially.
 
+Importing this module (which every unit's ``population.py`` does, so every filter class) leaves ``numba.typed``
+unimported until a batch runs: its templates make numba type every later kernel 2-5 % slower (measured on the
+EKF's compile).
+
 The population kernels call kernels of other modules and are cached on disk under rule 3 of
 :mod:`objectives.jit` (each entry keyed on the whole package's sources): they compile once per machine,
 not in every process on its first batch; their callees are compiled into them (rule 2).
@@ -32,7 +36,6 @@ from typing import Any
 
 import numpy as np
 from numba import njit
-from numba.typed import List
 
 from objectives.attitude.divergence import N_SEGMENTS, _segment_ms_inner, growth_verdict, recording_failure
 from objectives.attitude.filters.base import gravity_in_units, initial_quaternion, own
@@ -167,6 +170,8 @@ class BatchData:
     """
 
     def __init__(self, obj: Any):
+        from numba.typed import List  # here, not at import: its templates slow the typing of every later kernel
+
         recs = obj.prepare("train").recordings
         self.recs = recs
         c = np.ascontiguousarray
@@ -192,8 +197,10 @@ class BatchData:
             self._memo[key] = make()
         return self._memo[key]
 
-    def angles(self) -> List:
-        """The true angles ``mse_1d`` compares with, per recording (``FilterObjective._mse_1d``'s choice)."""
+    def angles(self) -> Any:
+        """The true angles ``mse_1d`` compares with, per recording (``FilterObjective._mse_1d``'s choice): a typed
+        list."""
+        from numba.typed import List
 
         def make() -> List:
             out = []

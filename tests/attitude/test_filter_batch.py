@@ -129,6 +129,19 @@ def test_the_kernel_is_declared_by_the_class_itself():
     assert not batchable(SimpleNamespace(_cls=Tuned, metric="euler_rmse_mean"))
 
 
+def test_importing_every_filter_leaves_numba_typed_lists_unloaded():
+    """The typed-list templates, once loaded, make numba type every later kernel slower: the filter classes and
+    their population kernels import them only when a batch runs."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom objectives.attitude.filters import FILTERS, get_filter\n"
+            "for n in FILTERS: get_filter(n).population\n"
+            "import objectives.attitude.batch\nprint('numba.typed.typedlist' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
 def _history(rd):
     with open(rd / "history.csv") as fh:
         return [{k: v for k, v in row.items() if k != "seconds"} for row in csv.DictReader(fh)]

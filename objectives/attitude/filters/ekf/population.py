@@ -9,7 +9,6 @@ from functools import partial
 
 import numpy as np
 from numba import njit, prange
-from numba.typed import List
 
 from objectives.attitude.batch import N_SUMS, Population, claim_pair, pair_sums
 from objectives.attitude.filters.ekf.fuzzy import faekf_rules, fuzzy_scale_inner
@@ -50,8 +49,10 @@ def _population(fuzzy, data, pairs, lanes_, fz, bufs, sums):
             p, r, n, q, mag = claim_pair(lanes_, data, pairs, qbuf, lane, no_mag)
 
 
-def _disturbances(obj, data, flt) -> tuple[List, List, List]:
-    """The FAEKF's fuzzy inputs per recording, the prepared ones its serial path uses."""
+def _disturbances(obj, data, flt) -> tuple:
+    """The FAEKF's fuzzy inputs per recording (typed lists), the prepared ones its serial path uses."""
+    from numba.typed import List  # on use (objectives.attitude.batch)
+
     outs = ([], [], [])
     prepared = obj.prepare("train")
     for i, rec in enumerate(data.recs):
@@ -64,6 +65,8 @@ def _disturbances(obj, data, flt) -> tuple[List, List, List]:
 
 def _run(fuzzy: bool, obj, data, params_list, rows, pairs, lanes_, shape, sums) -> None:
     """The EKF or (``fuzzy``) the FAEKF on every pair (:func:`_population`), with each pair's fuzzy tables."""
+    from numba.typed import List  # on use (objectives.attitude.batch)
+
     n_lanes, n_max = shape
     P = len(rows)
     mf_kind = np.zeros((3, 3), dtype=np.int64)  # objectives.fuzzy.GAUSS, as FAEKF.scale

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit, prange
-from numba.typed import List
 
 from objectives.attitude.batch import N_SUMS, Population, lane_sums, mse_1d_kernel
 from objectives.attitude.filters.kf1d.kernel import C, X, kf1d_kernel_inner, quat_from_tilt_inner
@@ -54,6 +53,8 @@ def _population(data, pairs, lanes_, bufs, sums, mse):
 def _tilt_inputs(data) -> tuple:
     """The kernel's inputs per recording (gyro y, acc x, acc z, as ``tilt.tilt_inputs``) and each frame's up
     sign, made once per objective like the batch's other arrays (not per generation)."""
+    from numba.typed import List  # on use (objectives.attitude.batch)
+
     c = np.ascontiguousarray
     cols = tuple(List([c(getattr(r, a)[:, k], dtype=np.float64) for r in data.recs])
                  for a, k in (("gyr", 1), ("acc", 0), ("acc", 2)))
