@@ -93,13 +93,13 @@ def filter_starter(name: str) -> str | None:
 def closed_loop_starter(name: str) -> str | None:
     """A job tuning controller ``name`` on the wheeled mobile pendulum (None when no such controller)."""
     from objectives.control.controllers import CONTROLLERS, get_controller
-    from objectives.control.plants.controllers import LOOP_CONTROLLERS
 
-    if name in LOOP_CONTROLLERS:
-        return _loop_starter(name)
     if name not in CONTROLLERS:
         return None
-    d = get_controller(name).describe()
+    cls = get_controller(name)
+    if cls.family != "wmp":
+        return _loop_starter(name)
+    d = cls.describe()
     searched, fixed = _blocks(d["params"])
     fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
         fixed)
@@ -133,16 +133,16 @@ _LOOP_PLANTS = {
 
 def _loop_starter(name: str) -> str | None:
     """A job tuning loop controller ``name`` on a small example plant (README: closed loop, your own plant)."""
-    from objectives.control.plants.objective import LoopObjective
+    from objectives.control.objective import ClosedLoopObjective
 
     if name == "open_loop":
         return None
     key = "cascade" if name == "pid_cascade" else "ss" if name == "lqr_sf" else "tf"
     text, plant = _LOOP_PLANTS[key]
     scenario = {"duration_s": 3.0, "reference": [{"t": 0.1, "value": 1.0}], "load": [{"t": 2.0, "value": 0.5}]}
-    obj = LoopObjective(plant=plant, controller=name, period_s=0.01, scenario=scenario)
-    searched, fixed = _blocks(obj._decl.describe())
-    summary = (obj._ctrl.__doc__ or "").strip().splitlines()[0]
+    obj = ClosedLoopObjective(plant=plant, controller=name, period_s=0.01, scenario=scenario)
+    searched, fixed = _blocks(obj.decl.describe())
+    summary = (obj.loop.ctrl.__doc__ or "").strip().splitlines()[0]
     fixed_block = "  fixed:                         # values not searched; uncomment a line to set one\n" + "\n".join(
         fixed)
     return (f"# Starter job: tune the {name} controller ({summary})\n"
@@ -153,7 +153,11 @@ def _loop_starter(name: str) -> str | None:
             f"{fixed_block}\n"
             "  period_s: 0.01                 # controller period (s)\n"
             "  scenario: {duration_s: 3.0, reference: [{t: 0.1, value: 1.0}], load: [{t: 2.0, value: 0.5}]}\n"
+            "  # or scenarios: [{name: large, ...}, {name: small, ...}]: steps of several amplitudes, loads, noise,\n"
+            "  # each with its weight and requirements (tuner describe scenario)\n"
             "  cost: {iae: 1.0}               # iae, ise, itae, itse, effort, tv, or {mae_product: {e: 1.4, u: 0.4}}\n"
             "  requirements: {}               # e.g. {max_overshoot_pct: 10, max_ms: 1.6} (a failed one fails)\n"
+            "  # uncertainty: {parameters: {\"tf.num[0]\": {rel: 0.3}}}   # tune on perturbed plants too\n"
+            "  #   (tuner describe uncertainty; requirements.md then gives the pass rate on held-out plants)\n"
             "parameters:                      # searched: {low, high, scale: linear|log} or {fixed: value}\n"
             + "\n".join(searched) + "\n" + _TAIL.format(evals=200))

@@ -148,7 +148,9 @@ class ValidationConfig:
 
 @dataclass(frozen=True)
 class RunConfig:
-    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory."""
+    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory. ``origin`` is the
+    run (or sweep) directory the config was read back from (:func:`tuner.setup.run_config`), None for a config
+    file: no code is loaded from inside it (:func:`tuner.trust.code_outside`)."""
 
     name: str
     seed: int
@@ -162,6 +164,7 @@ class RunConfig:
     raw: Mapping[str, Any]
     description: str = ""
     validation: ValidationConfig = field(default_factory=ValidationConfig)
+    origin: Path | None = None
 
     def space(self, objective: Any = None) -> Space:
         """The search space: ``parameters`` if given, else the objective's ``default_space()``.

@@ -30,24 +30,14 @@ from typing import Any
 import numpy as np
 
 from tuner import signals as stop_signals
+from tuner._version import __version__
 from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
+from tuner.records import Best, Checkpoint, HistoryRow, Meta, RunError, Timing, config_hash, plain, read_back
 from tuner.replay import Replay as _Replay
-from tuner.rundir import (
-    Best,
-    Checkpoint,
-    Meta,
-    RunDir,
-    RunError,
-    Timing,
-    atomic_write,
-    config_hash,
-    fmt_cell,
-    parse_cell,
-    plain,
-)
+from tuner.rundir import RunDir, atomic_write
 from tuner.selection import select_best
 from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
 from tuner.setup import build as _build  # the old name, used by benchmarks
@@ -135,31 +125,12 @@ def _versions() -> dict[str, str]:
             out[mod] = version(dist)
         except PackageNotFoundError:  # pragma: no cover
             out[mod] = ""
-    from tuner import __version__
-
     out["tuner"] = __version__
     return out
 
 
 def _now() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
-def _cell(v: Any) -> str:
-    return "" if v is None else str(fmt_cell(v))
-
-
-def _clip(text: str, limit: int = 4000) -> str:
-    """An error text as stored in ``history.csv``: at most ``limit`` characters, its length noted when cut
-    (a 128 kB message would exceed the CSV reader's field limit and make the history unreadable)."""
-    if len(text) <= limit:
-        return text
-    return f"{text[:limit]} [... {len(text):,} characters, cut to {limit:,}]"
-
-
-def _metrics(m: dict[str, Any]) -> dict[str, Any]:
-    """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
-    return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
 
 
 def _preload_report() -> None:
@@ -217,8 +188,7 @@ class Run:
         stages = self.cfg.optimizer.refine.stages
         history = self.rd.history(self.base_space.names, self.meta.config_hash)
         live = LiveMap(self.cfg, self.n_jobs)
-        replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
-                         history.path)
+        replay = _Replay(list(replay_rows or []), self.base_space.names, live, history.path)
         t = self.meta.timing
         self._write_meta(status="running", started=self.meta.started or _now(), backend_detail=live.describe(),
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
@@ -303,26 +273,25 @@ class Run:
                 self.progress(f"interrupted; resume with: tuner resume {self.dir}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
         extra = self._finish() if self.best is not None else {}
-        self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
+        # a run whose every evaluation failed has no result: it ends "failed", not "finished"
+        status = "finished" if self.best is not None or not n_evals else "failed"
+        reason = optimizer.stop_reason if status == "finished" else f"every one of {n_evals} evaluations failed"
+        self._write_meta(status=status, finished=_now(), stop_reason=reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None and self.report:
             self._report()  # after meta.json: the report shows the final status
-        return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
+        return self._result(status, n_evals, state["gens"], reason, extra)
 
     def _best_doc(self, g: Generation) -> Best | None:
         b = g.best
         if b is None:
             return None
-        return Best(plain(b.params), b.fitness, _metrics(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
+        return Best(plain(b.params), b.fitness, read_back(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
 
-    def _row(self, g: Generation, i: int) -> dict[str, Any]:
+    def _row(self, g: Generation, i: int) -> HistoryRow:
         r, ev = g.records[i], g.records[i].evaluation
-        row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
-        row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
-        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=_clip(ev.error.replace("\n", " ")),
-                   seconds=f"{r.seconds:.6f}")
-        row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
-        return row
+        return HistoryRow(g.first_eval + i, g.stage, g.generation, i, g.params[i], ev.fitness, ev.status, ev.error,
+                          r.seconds, ev.metrics)
 
     def _progress(self, g: Generation, stages: int, secs: float) -> None:
         if not self.progress:
@@ -330,13 +299,20 @@ class Run:
         opt = g.optimizer
         gen, G, n = opt.generation, opt.generations, len(g.records)
         rate = n / secs if secs > 0 else math.inf
-        eta = ""
+        later = stages - g.stage - 1  # stages still to come, each with the same budget
+        left_s = []  # the time each budget still needs at this generation's pace; the first one spent ends the run
         if G:
-            left = (G - gen) + (stages - g.stage - 1) * G
-            eta = f"  ETA {_dt.timedelta(seconds=round(left * secs))}"
+            left_s.append(((G - gen) + later * G) * secs)
+        cap = getattr(opt, "max_evals", None)
+        if cap and n:
+            left_s.append((max(cap - opt.n_evals, 0) + later * cap) * secs / n)
+        eta = f"  ETA {_dt.timedelta(seconds=round(min(left_s)))}" if left_s else ""
         st = f"stage {g.stage + 1}/{stages} " if stages > 1 else ""
+        head = f"gen {gen}/{G}" if G else f"gen {gen}"
+        if cap:
+            head += f"  evals {opt.n_evals}/{cap}"
         fail = f"  failed {g.n_failed}" if g.n_failed else ""
-        self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
+        self.progress(f"{st}{head}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
     def _finish(self) -> dict[str, Any]:
         """The end of a finished run: the final choice on a held-out fold (``validation.select``), the
@@ -477,6 +453,9 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
             meta = rd.meta()  # a run that got that far had a meta.json: its loss is an error, not a restart
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
+        if meta is not None and meta.status == "failed":
+            raise RunError(f"{rd.path}: already ended, every evaluation failed ({meta.stop_reason}); fix the objective "
+                           "and start the job again")
         ck = rd.checkpoint()
         cfg = run_config(rd, rd.check_config(meta) if meta is not None else None)
         objective, space = _build(cfg)

@@ -14,7 +14,8 @@ returns for the same parameters, bit for bit (tests/attitude/test_filter_batch.p
 The population kernel belongs to the filter's unit (``population.py`` beside its kernel): a class declares it
 as its own ``population`` (a :class:`Population`; a subclass, which may change ``_run``, declares its own),
 and this module never names a filter. Batched where a unit has one (``docs/architecture.md`` lists them), on
-recordings that all have truth; with ``mse_1d`` only where the kernel keeps the angle. For any other
+recordings that all have truth, without ``heading_offset: remove`` (its truth depends on each candidate's
+output); with ``mse_1d`` only where the kernel keeps the angle. For any other
 configuration :func:`evaluate_batch` returns None and the engine evaluates serially.
 
 Importing this module (which every unit's ``population.py`` does, so every filter class) leaves ``numba.typed``
@@ -149,6 +150,8 @@ def batchable(obj: Any) -> bool:
     """True when :func:`evaluate_batch` can evaluate this objective's configuration (module docstring)."""
     kernel = _population(obj)
     if kernel is None or (obj.metric == "mse_1d" and not kernel.mse_1d):
+        return False
+    if obj.metric_options.get("heading_offset") == "remove":  # the truth depends on each candidate's output
         return False
     if not kernel.robust:
         try:

@@ -33,6 +33,12 @@ Metrics (lower is better):
 ``broad_mean_rmse``    mean over recordings of BROAD's total RMSE (deg) on motion samples: the
                        criterion of BROAD's trial-agnostic good parameters (TAGP).
 ``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
+``heading_rmse_mean``, ``inclination_rmse_mean``
+                       mean over recordings of BROAD's heading / inclination RMSE (deg): from the error
+                       quaternion, the same at any mounting (the Euler metrics warn near pitch +-90 deg).
+
+``metric_options.heading_offset: remove`` compares each recording with its truth turned by the constant heading
+offset that fits the estimate best (:func:`objectives.attitude.metrics.heading_offset`).
 
 A filter whose output is not finite, or whose error grows without bound (:mod:`objectives.attitude.divergence`)
 is a failed evaluation naming the recording. Each split's recordings load once per worker, on first use,
@@ -59,9 +65,12 @@ from objectives.attitude.data_specs import check_specs as _check_specs
 from objectives.attitude.data_specs import split_data as _split_data
 from objectives.attitude.divergence import recording_failure, unbounded_growth
 from objectives.attitude.fused_errors import error_sums
+from objectives.attitude.metrics import remove_heading_offset
 from objectives.attitude.objective_data import FilterData
 from objectives.attitude.objective_options import (
     AGG_KEYS,
+    ERROR_KEYS,
+    RECORDING_KEYS,
     aggregate_scores,
     check_metric_options,
     check_prior,
@@ -73,6 +82,8 @@ from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
+#: the metrics of BROAD's total, heading and inclination error angles, mean over recordings (that order)
+_BROAD_ANGLES = ("broad_mean_rmse", "heading_rmse_mean", "inclination_rmse_mean")
 _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
 
 
@@ -107,10 +118,10 @@ class FilterObjective(FilterData, FilterReporting):
         if unknown:
             raise ValueError(f"objective.fixed.{unknown[0]}: not a parameter of {self.filter}; "
                              f"known: {sorted(self._cls.defaults)}")
-        bad = sorted(set(self.metric_options) - {"weights", "normalize", *AGG_KEYS})
+        bad = sorted(set(self.metric_options) - {"weights", "normalize", *AGG_KEYS, *ERROR_KEYS})
         if bad:
             raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize, "
-                             + ", ".join(AGG_KEYS))
+                             + ", ".join((*AGG_KEYS, *ERROR_KEYS)))
         check_metric_options(self.metric, self.metric_options)
         self.prior = check_prior(self.prior, list(self._cls.defaults))
         w = self.metric_options.get("weights", (1.0, 1.0, 1.0))
@@ -125,6 +136,7 @@ class FilterObjective(FilterData, FilterReporting):
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._data = DataSplit()
         self._prepared: dict[Split, Prepared] = {}
+        self._notes: list[str] = []  # what with_data found about its data (the preflight's first warnings)
 
     # --- construction -------------------------------------------------------------------------
     @classmethod
@@ -232,8 +244,10 @@ class FilterObjective(FilterData, FilterReporting):
             mask = self._mask(rec)
             m: dict[str, float] = {}
             if rec.quat is not None:
-                es = error_sums(q, rec.quat, mask)
-                failed = recording_failure(rec.name, es, failed, partial(unbounded_growth, q, rec.quat, mask))
+                truth = remove_heading_offset(q, rec.quat, mask) if self.metric_options.get("heading_offset") == \
+                    "remove" else rec.quat
+                es = error_sums(q, truth, mask)
+                failed = recording_failure(rec.name, es, failed, partial(unbounded_growth, q, truth, mask))
                 m.update(es.as_dict())
                 sums.append(es)
             elif not np.isfinite(q).all() and not failed:
@@ -266,7 +280,7 @@ class FilterObjective(FilterData, FilterReporting):
         """The configured metric from the per-recording sums (definitions in the module docstring)."""
         opts = self.metric_options
         if opts.get("aggregate", "mean") != "mean" or opts.get("group_balanced", False):
-            key = {"broad_mean_rmse": "total_rmse_deg", "mse_1d": "mse_1d"}.get(self.metric)
+            key = RECORDING_KEYS.get(self.metric)
             names = list(per) if names is None else names
             scores = ([per[n][key] for n in names] if key else [float(np.mean(s.rmse_deg)) for s in sums])
             groups = self.prepare(split).group_map() if opts.get("group_balanced", False) else None
@@ -283,8 +297,8 @@ class FilterObjective(FilterData, FilterReporting):
             return float(np.exp(log_sum / root))
         if self.metric == "euler_rmse_mean":
             return float(np.mean([np.mean(s.rmse_deg) for s in sums]))
-        if self.metric == "broad_mean_rmse":
-            return float(np.mean([s.broad_rmse_deg[0] for s in sums]))
+        if self.metric in _BROAD_ANGLES:  # broad_mean_rmse, heading_rmse_mean, inclination_rmse_mean
+            return float(np.mean([s.broad_rmse_deg[_BROAD_ANGLES.index(self.metric)] for s in sums]))
         total = sum(s.broad_ms_rad2[0] * s.n for s in sums) / sum(s.n for s in sums)
         return float(np.degrees(np.sqrt(total)))
 
@@ -328,5 +342,5 @@ class FilterObjective(FilterData, FilterReporting):
             return Evaluation(s.fitness + pen, metrics)
         return Evaluation(s.fitness, metrics)
 
-    export_c_filter = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-filter)
-    verify_c_filter = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
+    export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
+    verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)

@@ -21,7 +21,8 @@ from objectives.attitude.data.plausibility import motion_start, unit_warnings
 from objectives.attitude.data.recording import Recording, RecordingError
 from objectives.attitude.data_specs import check_specs as _check_specs
 from objectives.attitude.data_specs import split_data as _split_data
-from objectives.attitude.objective_options import AGG_KEYS
+from objectives.attitude.metrics import euler_lock_warning
+from objectives.attitude.objective_options import AGG_KEYS, ungrouped_if_missing
 from objectives.attitude.prepared import DataSplit, Prepared, Split, check_split, prepare
 
 __all__ = ["FilterData"]
@@ -37,8 +38,11 @@ class FilterData:
         train, test = _split_data(data)
         specs = train + test
         _check_specs(specs, Path(self.base_dir), "data")
-        return type(self)(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
-                          self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
+        out = type(self)(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
+                         self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
+        if self.metric_options.get("group_balanced"):  # recordings without the run's groups score ungrouped
+            out.metric_options, out._notes = ungrouped_if_missing(out.metric_options, out.recordings("train"))
+        return out
 
     def with_recordings(self, *, train: Iterable[Recording] | None = None,
                         test: Iterable[Recording] | None = None) -> Any:
@@ -92,7 +96,7 @@ class FilterData:
 
     def preflight(self) -> list[str]:
         """Load every recording once (kept for the run), check ``warmup_s`` against each, warn on units."""
-        warnings: list[str] = []
+        warnings: list[str] = list(self._notes)
         for split, specs in (("train", self.train_specs), ("test", self.test_specs)):
             key = "objective.data" + (f".{split}" if self.test_specs else "")
             loaded = self._data.get(split)
@@ -105,15 +109,18 @@ class FilterData:
                     raise ValueError(f"{where}: {exc}") from None
                 except (OSError, KeyError, IndexError) as exc:  # unreadable or truncated files
                     raise ValueError(f"{where}: cannot load ({type(exc).__name__}: {exc})") from None
+            if split == "train" and not recs:  # an empty list, or a selection that keeps no recording
+                raise ValueError(f"{key}: no recordings to score; give at least one data spec")
             for rec in recs:
                 if self.warmup_s >= rec.duration_s:
                     raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "
                                      f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
-                warnings += unit_warnings(rec)
-                warnings += self._start_warning(rec)
+                warnings += unit_warnings(rec) + list(rec.meta.get("warnings", []))  # units, what reading found
+                warnings += self._start_warning(rec) + euler_lock_warning(rec.name, self.metric, rec.quat,
+                                                                          self._mask(rec))
             if loaded is None:
                 self._data = self._data.with_split(split, recs)
-        return warnings
+        return list(dict.fromkeys(warnings))  # windows of one file read it once each: one line per finding
 
     def start_init(self) -> Any:
         """The start the filter uses: its fixed ``init`` option unless ``auto``, else ``q0``."""
@@ -189,12 +196,11 @@ class FilterData:
         the engine scores it with ``score`` (no prior).
         """
         from objectives.attitude.objective_options import recording_groups
-        from objectives.attitude.trials import kfold_folds, logo_folds
+        from objectives.attitude.trials import check_unique_names, kfold_folds, logo_folds
 
         recs = list(self.recordings("train"))
         names = [r.name for r in recs]
-        if len(set(names)) != len(names):
-            raise ValueError("objective.data: recording names repeat; cross-validation needs unique names")
+        check_unique_names(recs, "objective.data")
         if len(recs) < 2:
             raise ValueError(f"objective.data{'.train' if self.test_specs else ''}: cross-validation needs >= 2 "
                              f"tuning recordings, got {len(recs)} (test recordings are never pooled into folds)")

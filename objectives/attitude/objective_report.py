@@ -15,6 +15,7 @@ from typing import Any
 
 from objectives.attitude import deployment as _deployment
 from objectives.attitude.catalog import METRICS
+from tuner.deployment import Deployment
 
 __all__ = ["FilterReporting"]
 
@@ -54,7 +55,7 @@ class FilterReporting:
             data = {"train": data, "test": specs(self.test_specs)}
         return {"objective": {"kind": "filter", "filter": self.filter, "metric": self.metric}, "data": data}
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned filter: every value, scoring-only settings apart (objectives.attitude.deployment)."""
         return _deployment.filter_deployment(self, params)
 

@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 import yaml
 
-from objectives.control.controllers.fuzzy import THESIS_OPTIMISED
-from objectives.control.metrics import mae_weighted_cost, rise_time_s
-from objectives.control.objective import THESIS_REQUIREMENTS, ClosedLoopObjective
+from objectives.control.objective import ClosedLoopObjective
+from objectives.control.plants.wmp.controllers.fuzzy import THESIS_OPTIMISED
+from objectives.control.plants.wmp.loop import THESIS_REQUIREMENTS
+from objectives.control.plants.wmp.metrics import mae_weighted_cost, rise_time_s
 
 CONFIGS = pathlib.Path(__file__).parents[2] / "configs"
 WMP_CONFIGS = ["wmp_fuzzy_protective.yaml", "wmp_pid.yaml", "wmp_lqr.yaml", "wmp_lqg.yaml"]
@@ -108,10 +109,11 @@ def test_initial_rise_times_match_table_2_4(controller, thesis_rise_s):
 @pytest.mark.parametrize("name", WMP_CONFIGS)
 def test_every_wmp_config_shares_the_thesis_requirements(name):
     obj = _objective(name)
-    assert obj.max_rise_time_s == THESIS_REQUIREMENTS["max_rise_time_s"] == 0.7
-    assert obj.max_mae_nu == THESIS_REQUIREMENTS["max_mae_nu"]
-    assert obj.max_mae_xi_deg_s == THESIS_REQUIREMENTS["max_mae_xi_deg_s"]
-    assert obj.profile == "thesis_2s" and obj.cost == {"alpha1": 1.4, "alpha2": 0.85, "beta": 1.6, "gamma": 0.4}
+    assert obj.loop.max_rise_time_s == THESIS_REQUIREMENTS["max_rise_time_s"] == 0.7
+    assert obj.loop.max_mae_nu == THESIS_REQUIREMENTS["max_mae_nu"]
+    assert obj.loop.max_mae_xi_deg_s == THESIS_REQUIREMENTS["max_mae_xi_deg_s"]
+    assert obj.loop.profile == "thesis_2s"
+    assert obj.loop.cost == {"alpha1": 1.4, "alpha2": 0.85, "beta": 1.6, "gamma": 0.4}
     ev = obj(obj.defaults)
     assert {"rise_time_nu_s", "rise_time_xi_s", "peak_theta3_deg", "peak_current_A"} <= set(ev.metrics)
 
@@ -128,7 +130,7 @@ def test_requirements_are_enforced_with_the_measured_value_in_the_message():
     ev = rise_only(slow)
     assert ev.status == "failed" and "rise time" in ev.error and ev.metrics["rise_time_nu_s"] > 0.7
     over = _objective("wmp_pid.yaml", max_mae_nu=1.0, max_rise_time_s=10.0)  # top-level keys override
-    assert over.max_mae_nu == 1.0 and over.max_rise_time_s == 10.0 and over.max_mae_xi_deg_s == 5.0
+    assert over.loop.max_mae_nu == 1.0 and over.loop.max_rise_time_s == 10.0 and over.loop.max_mae_xi_deg_s == 5.0
 
 
 def test_bad_requirements_name_the_key():
@@ -167,7 +169,7 @@ def test_short_pso_improves_f_under_the_requirements(pid_run):
 
 
 def test_settling_time_closed_form_first_order_decay():
-    from objectives.control.metrics import settling_time_s
+    from objectives.control.plants.wmp.metrics import settling_time_s
 
     ts, tau, a, band = 0.01, 0.2, 30.0, 5.0
     t = np.arange(200) * ts
@@ -200,7 +202,7 @@ def test_ib_settling_times_match_table_2_4(controller, thesis_settle_s):
 def test_ib_settling_requirement_is_optional_and_enforced(fuzzy):
     # "the oscillation of the IB is ... quickly suppressed (similarly, in less than 0.7 sec)" (2.3.4):
     # a requirement key, not in the preset (docs/control-cost.md section 4)
-    assert "max_settle_theta3_s" not in THESIS_REQUIREMENTS and fuzzy.max_settle_theta3_s is None
+    assert "max_settle_theta3_s" not in THESIS_REQUIREMENTS and fuzzy.loop.max_settle_theta3_s is None
     ev = fuzzy(fuzzy.defaults)
     assert ev.status == "ok" and ev.metrics["settle_theta3_s"] > 0.7  # the initial design: 1.22 s
     strict = _objective("wmp_fuzzy_protective.yaml", max_settle_theta3_s=0.7)

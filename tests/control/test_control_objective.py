@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 import yaml
 
-from objectives.control.metrics import log10_product, mae_weighted_cost, sae, sse, stae, stse
 from objectives.control.objective import ClosedLoopObjective
-from objectives.control.profiles import THESIS_PROFILE, Profile, profile_from_config
+from objectives.control.plants.wmp.metrics import log10_product, mae_weighted_cost, sae, sse, stae, stse
+from objectives.control.plants.wmp.profiles import THESIS_PROFILE, Profile, profile_from_config
+from objectives.control.plants.wmp.report import plot_response
 from tuner.objective import PENALTY
 
 CONFIGS = pathlib.Path(__file__).parents[2] / "configs"
@@ -91,7 +92,7 @@ def test_profiles():
 def test_plot_response_writes_a_png(tmp_path):
     obj = ClosedLoopObjective(controller="pid", duration_s=3.0)
     after = dict(obj.defaults, kp1=8.80, ki1=19.07, kp2=0.054, kd2=5.12e-7)
-    path = obj.plot_response(obj.defaults, after, tmp_path / "fig" / "pid.png")
+    path = plot_response(obj.loop, obj.defaults, after, tmp_path / "fig" / "pid.png")
     assert path.exists() and path.read_bytes()[:4] == b"\x89PNG"
 
 

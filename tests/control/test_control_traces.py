@@ -1,4 +1,4 @@
-"""Step responses for the interactive report (objectives.control.report.traces_doc): the tuned and the
+"""Step responses for the interactive report (objectives.control.plants.wmp.report.traces_doc): the tuned and the
 initial closed loop against the references, as the objective's own traces, in the engine's format."""
 
 import json
@@ -6,7 +6,7 @@ import json
 import numpy as np
 
 from objectives.control.objective import ClosedLoopObjective
-from objectives.control.report import traces_doc
+from objectives.control.plants.wmp.report import traces_doc
 from tuner.interactive import read_traces
 
 
@@ -14,7 +14,7 @@ def test_step_responses_hold_reference_initial_and_tuned(tmp_path):
     obj = ClosedLoopObjective(controller="lqr", duration_s=3.0)
     init = dict(obj.defaults)
     tuned = {**init, "q_nu": float(init["q_nu"]) * 10}
-    doc = traces_doc(obj, init, tuned)
+    doc = traces_doc(obj.loop, init, tuned)
     text = json.dumps(doc, allow_nan=False)  # plain JSON: NaN would break the page's JSON.parse
     (tmp_path / "traces.json").write_text(text)
     back = read_traces(tmp_path)

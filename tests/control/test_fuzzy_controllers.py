@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from objectives.control.controllers import get_controller
-from objectives.control.controllers.fuzzy import THESIS_OPTIMISED, LUTFuzzy, ProtectiveFuzzy
-from objectives.control.controllers.fuzzy_steps import _protective_step, lut_nearest
 from objectives.control.objective import ClosedLoopObjective
+from objectives.control.plants.wmp.controllers.fuzzy import THESIS_OPTIMISED, LUTFuzzy, ProtectiveFuzzy
+from objectives.control.plants.wmp.controllers.fuzzy_steps import _protective_step, lut_nearest
 from tests.reference import fuzzy_controller_reference as ref
 
 CONFIG = pathlib.Path(__file__).parents[2] / "configs" / "wmp_fuzzy_protective.yaml"

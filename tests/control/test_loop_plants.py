@@ -76,7 +76,7 @@ def test_pid_loop_matches_python_control_feedback():
     z = control.tf([1, 0], [1], h)
     C = K + ki / (z - 1) + bd * (z - 1) / (z - ad)
     P = control.sample_system(control.tf([1.0], [1.0, 3.0, 3.0, 1.0]), h)
-    ref = control.forced_response(control.feedback(C * P, 1), T=s["t"], U=o._sc.r).outputs.reshape(-1)
+    ref = control.forced_response(control.feedback(C * P, 1), T=s["t"], U=o.loop._sc.r).outputs.reshape(-1)
     assert np.allclose(s["y"][:, 0], ref, atol=1e-8)
 
 
@@ -93,10 +93,10 @@ def test_kernel_equals_slow_reference_with_realism(aw):
              actuator={"u_min": -1.2, "u_max": 1.3, "rate_limit": 20.0, "quantum": 0.01},
              sensor={"noise_std": 0.01, "quantum": 0.002, "seed": 5})
     s = o.simulate({})
-    p = o._plant
-    noise = o._sig[:, 2:]
+    p = o.loop.plant
+    noise = o.loop._sig[:, 2:]
     ctrl = pid_reference(3.0, 0.8, 0.1, 10.0, 0.7, 0.2, h, aw, umin=-1.5, umax=1.5)
-    y, u = loop_reference(p.Ad, p.Bd, p.Cd, p.Dd, p.delay_n, p.x0, o._sc.r, o._sc.load, noise, ctrl,
+    y, u = loop_reference(p.Ad, p.Bd, p.Cd, p.Dd, p.delay_n, p.x0, o.loop._sc.r, o.loop._sc.load, noise, ctrl,
                           -1.2, 1.3, 20.0 * h, 0.01, 0.002)
     assert np.allclose(s["y"], y, atol=1e-10) and np.allclose(s["u"][:, 0], u, atol=1e-10)
     assert np.all(np.abs(np.diff(s["u"][:, 0])) <= 20.0 * h + 1e-9)        # rate limit
@@ -126,7 +126,7 @@ def test_margins_and_ms_match_python_control():
     h, K, Ti, Td, N = 0.01, 1.2, 2.0, 0.4, 10.0
     o = _obj({"tf": {"num": [1.0], "den": [1.0, 3.0, 3.0, 1.0]}, "delay_s": 0.3}, "pid2dof", period_s=h,
              fixed={"K": K, "Ti_s": Ti, "Td_s": Td, "N": N})
-    m = o.loop_margins({})
+    m = o.loop.loop_margins({})
     ad, bd, ki = Td / (Td + N * h), K * Td * N / (Td + N * h), K * h / Ti
     z = control.tf([1, 0], [1], h)
     C = K + ki / (z - 1) + bd * (z - 1) / (z - ad)
@@ -163,7 +163,7 @@ def test_nonlinear_linear_dynamics_equal_the_lti_plant():
                 "pid2dof", fixed={"K": 2.0, "Ti_s": 1.0, "Td_s": 0.1})
     o_lti = _obj({"ss": {"A": [[0, 1], [-2, -0.5]], "B": [[0], [1]], "C": [[1, 0]]}}, "pid2dof",
                  fixed={"K": 2.0, "Ti_s": 1.0, "Td_s": 0.1})
-    assert o_nl._plant.compiled
+    assert o_nl.loop.plant.compiled
     a, b = o_nl.simulate({}), o_lti.simulate({})
     assert np.allclose(a["y"], b["y"], atol=1e-9)
 
@@ -173,7 +173,7 @@ def test_python_fallback_equals_the_compiled_loop():
     kw = dict(fixed={"K": 2.0, "Ti_s": 1.0}, scenario={"duration_s": 1.0, "reference": [{"t": 0.0, "value": 1.0}]})
     o_py = _obj({"python": "tests.control.loop_dynamics:linear_py", "x0": [0.0, 0.0], "outputs": [0]}, "pid2dof", **kw)
     o_nb = _obj({"python": "tests.control.loop_dynamics:linear", "x0": [0.0, 0.0], "outputs": [0]}, "pid2dof", **kw)
-    assert not o_py._plant.compiled and o_nb._plant.compiled
+    assert not o_py.loop.plant.compiled and o_nb.loop.plant.compiled
     assert np.array_equal(o_py.simulate({})["y"], o_nb.simulate({})["y"])
 
 
@@ -192,11 +192,11 @@ def test_cascade_inner_loop_and_margins():
     Ci, Co = 0.5 + 0.5 * h / 0.2 / (z - 1), 4.0 + 0 * z
     from objectives.control.plants.analysis import loop_response
 
-    w = o._omega[::50]
+    w = o.loop._omega[::50]
     zs = np.exp(1j * w * h)
     pz = P(zs)  # (outputs, inputs, len(w)), python-control's own evaluation of the state space
     ref = Ci(zs) * (Co(zs) * pz[0, 0] + pz[1, 0])
-    mine = loop_response(o._ctrl, o.coeffs({}), o._plant, w, {"outputs": o._plant.frequency_response(w)})
+    mine = loop_response(o.loop.ctrl, o.coeffs({}), o.loop.plant, w, {"outputs": o.loop.plant.frequency_response(w)})
     assert np.allclose(mine, ref, rtol=1e-6)
 
 
@@ -226,7 +226,7 @@ def test_closed_loop_poles_match_python_control():
     h, K, Ti, Td, N = 0.05, 1.5, 2.0, 0.3, 10.0
     o = _obj({"tf": {"num": [1.0], "den": [1.0, 3.0, 3.0, 1.0]}, "delay_s": 0.2}, "pid2dof", period_s=h,
              fixed={"K": K, "Ti_s": Ti, "Td_s": Td, "N": N})
-    mine = closed_loop_poles(o._ctrl.kind, o.coeffs({}), o._plant)
+    mine = closed_loop_poles(o.loop.ctrl.kind, o.coeffs({}), o.loop.plant)
     ad, bd, ki = Td / (Td + N * h), K * Td * N / (Td + N * h), K * h / Ti
     z = control.tf([1, 0], [1], h)
     C = K + ki / (z - 1) + bd * (z - 1) / (z - ad)
@@ -247,7 +247,7 @@ def test_closed_loop_poles_of_state_feedback_and_cascade():
     A, B = [[0.0, 1.0], [-2.0, -0.5]], [[0.0], [1.0]]
     o = _obj({"ss": {"A": A, "B": B, "C": [[1.0, 0.0]]}}, "lqr_sf", fixed={"q1": 10.0, "q2": 0.5, "r1": 0.1})
     k, _ = LQRStateFeedback.gains(o.coeffs({}))
-    p = o._plant
+    p = o.loop.plant
     cl = closed_loop_poles(3, o.coeffs({}), p)
     assert np.allclose(np.sort_complex(cl[np.abs(cl) > 1e-12]),  # the feedthrough's state adds a pole at 0
                        np.sort_complex(np.linalg.eigvals(p.Ad - p.Bd @ k)), atol=1e-9)
@@ -256,7 +256,7 @@ def test_closed_loop_poles_of_state_feedback_and_cascade():
     oc = _obj({"ss": ss, "output": 0, "inner_output": 1}, "pid_cascade", period_s=0.005,
               fixed={"K_o": 4.0, "Ti_o_s": math.inf, "K_i": 0.5, "Ti_i_s": 0.2, "N": 10.0, "c": 1.0, "b": 0.5},
               scenario={"duration_s": 30.0, "reference": [{"t": 0.0, "value": 1.0}]})
-    rho = np.max(np.abs(closed_loop_poles(2, oc.coeffs({}), oc._plant)))
+    rho = np.max(np.abs(closed_loop_poles(2, oc.coeffs({}), oc.loop.plant)))
     y = oc.simulate({})["y"][:, 0]
     e = np.abs(y - y[-1])  # b = 0.5 without outer integral action: y settles off the reference
     env = lambda k: np.max(e[k - 150:k + 150])  # noqa: E731 - the envelope of a possibly oscillating decay
@@ -265,20 +265,25 @@ def test_closed_loop_poles_of_state_feedback_and_cascade():
 
 
 def test_cost_terms_of_a_decaying_error_are_the_integrals():
-    """e = exp(-t): IAE = 1, ISE = 1/2, ITAE = 1, ITSE = 1/4; mae_product is prod mean|s|^w."""
-    from objectives.control.plants.scenario import loop_cost
+    """e = exp(-t): IAE = 1, ISE = 1/2, ITAE = 1, ITSE = 1/4; mae_product is prod mean|s|^w (the loop's
+    statistics kernel on a response written by hand, its cost from those statistics)."""
+    from objectives.control.plants.cost import cost_of_stats
+    from objectives.control.plants.metrics import _item_stats, row_metrics, stat_size, windows
 
     h = 1e-4
     t = np.arange(0, 30, h)
     e = np.exp(-t)
-    u = 2.0 * np.ones_like(t)
-    y = np.column_stack([1 - e, e])
-    f, terms = loop_cost({"iae": 2.0, "ise": 1.0}, t, e, u, y, y, h)
+    r = np.ones_like(t)
+    y = np.column_stack([r - e, e])
+    u = 2.0 * np.ones((t.size, 1))
+    row = np.zeros(stat_size(2, 2))
+    _item_stats(y, u, y, r, 0, h, windows(r, np.zeros_like(t)), t.size, 0.0, float(t.size), row)
+    terms, means, _ = row_metrics(row, 2, 2)
     assert terms["iae"] == pytest.approx(1.0, rel=1e-3) and terms["ise"] == pytest.approx(0.5, rel=1e-3)
     assert terms["itae"] == pytest.approx(1.0, rel=1e-3) and terms["itse"] == pytest.approx(0.25, rel=1e-3)
     assert terms["effort"] == pytest.approx(4.0 * 30, rel=1e-3) and terms["tv"] == 0.0
-    assert f == pytest.approx(2.0 * terms["iae"] + terms["ise"])
-    g, _ = loop_cost({"mae_product": {"e": 1.4, "u": 0.4, "y1": 1.0}}, t, e, u, y, y, h)
+    assert cost_of_stats({"iae": 2.0, "ise": 1.0}, terms, means) == pytest.approx(2.0 * terms["iae"] + terms["ise"])
+    g = cost_of_stats({"mae_product": {"e": 1.4, "u": 0.4, "y1": 1.0}}, terms, means)
     assert g == pytest.approx(np.mean(e) ** 1.4 * 2.0**0.4 * np.mean(e))
 
 

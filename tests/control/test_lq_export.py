@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import yaml
 
-from objectives.control.controllers.lqr import lq_design, reduced_model
 from objectives.control.objective import ClosedLoopObjective
+from objectives.control.plants.wmp.controllers.lqr import lq_design, reduced_model
 from tuner.export import export
 from tuner.export_formats import json_load
 
@@ -36,7 +36,8 @@ def _reference(run_dir):
     best = yaml.safe_load((run_dir / "best.yaml").read_text())["params"]
     obj = ClosedLoopObjective(controller="lqr", duration_s=3.0)
     q = [best["q_theta3"], best["q_nu"], best["q_omega3"], best["q_xi"]]
-    return lq_design(q, [best["r_u1"], best["r_u2"]], obj._sensors.Ts_s, obj._plant, reduced_model(obj._plant))
+    plant = obj.loop.plant
+    return lq_design(q, [best["r_u1"], best["r_u2"]], plant.sensors.Ts_s, plant.params, reduced_model(plant.params))
 
 
 def test_yaml_json_python_carry_k_nx_nu(lq_run, tmp_path):

@@ -6,10 +6,10 @@ import pytest
 from scipy.signal import lfilter
 
 from objectives.control.controllers import get_controller
-from objectives.control.controllers.kernels import _tustin_pid
-from objectives.control.controllers.lqr import LQR, linearize, lq_design, reduced_model
 from objectives.control.objective import ClosedLoopObjective
-from objectives.control.wmp import WMPParams
+from objectives.control.plants.wmp.controllers.kernels import _tustin_pid
+from objectives.control.plants.wmp.controllers.lqr import LQR, linearize, lq_design, reduced_model
+from objectives.control.plants.wmp.model import WMPParams
 from tests.reference import wmp_reference as ref
 
 P = WMPParams()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from objectives.batch_threads import _pairwise_sum
-from objectives.control import metrics as M
+from objectives.control.plants.wmp import metrics as M
 
 
 @pytest.mark.parametrize("n", [1, 7, 8, 9, 127, 128, 129, 255, 256, 1000, 1001, 4097, 100_003])

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from objectives.control.wmp import (
+from objectives.control.plants.wmp.model import (
     SensorParams,
     WMPParams,
     derivatives,

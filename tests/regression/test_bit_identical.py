@@ -120,8 +120,8 @@ def test_the_package_kernels_are_cached_under_the_package_locators():
     """Every cached kernel of the package, the cross-module population and closed-loop kernels among them,
     uses rule 3's locators (a kernel module imported before them would not; rule_violations reports it)."""
     from objectives.attitude.filters.madgwick import population
-    from objectives.control import batch as control_batch
-    from objectives.control import wmp
+    from objectives.control.plants.wmp import batch as control_batch
+    from objectives.control.plants.wmp import model as wmp
     from objectives.jit import CACHE, package_digest
 
     assert CACHE

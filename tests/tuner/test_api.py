@@ -249,7 +249,7 @@ def test_readme_example_runs_and_build_reproduces_the_score(tmp_path, monkeypatc
 def test_build_gives_the_tuned_controller(tmp_path):
     """Result.build() of a closed-loop run: the controller, simulated on the run's plant and profile, gives the
     run's cost (eq. 2.39); its values are the complete tuned configuration."""
-    from objectives.control.wmp import simulate_closed_loop
+    from objectives.control.plants.wmp.model import simulate_closed_loop
     from tuner.api import _objective_of
     from tuner.starter import starter_text
 
@@ -261,9 +261,10 @@ def test_build_gives_the_tuned_controller(tmp_path):
     assert set(res.best) > set(res.params) and res.deployment.kind == "closed_loop"
     obj, _ = _objective_of(res.run_dir)
     obj({**obj.fixed, **res.params})  # sets the objective up (plant, profile, noise)
-    sim = simulate_closed_loop(type(ctl).kind, ctl.param_array(), type(ctl).state_size, obj._ref, obj._noise,
-                               obj._plant, obj._sensors, None, obj.n_sub, obj.fall_limit_deg)
-    ev = obj._evaluation({"t": sim["t"], "references": obj._ref, "outputs": sim["y"], "measurements": sim["meas"],
+    loop = obj.loop
+    sim = simulate_closed_loop(type(ctl).kind, ctl.param_array(), type(ctl).state_size, loop._ref, loop._noise,
+                               loop.plant.params, loop.plant.sensors, None, loop.n_sub, loop.fall_limit_deg)
+    ev = loop.evaluation({"t": sim["t"], "references": loop._ref, "outputs": sim["y"], "measurements": sim["meas"],
                           "voltages": sim["u"], "currents": sim["x"][:, 6:8], "state": sim["x"],
                           "status": sim["status"], "status_name": sim["status_name"], "n_done": sim["n_done"]})
     assert ev.status == "ok" and ev.fitness == res.fitness

@@ -25,12 +25,8 @@ def test_every_listed_name_is_described():
 def test_parameters_equal_the_declaration(section):
     from objectives.attitude.filters import get_filter
     from objectives.control.controllers import get_controller
-    from objectives.control.plants.controllers import LOOP_CONTROLLERS
 
-    def get_any_controller(name):  # the pendulum's controllers and those of any plant share the section
-        return LOOP_CONTROLLERS[name] if name in LOOP_CONTROLLERS else get_controller(name)
-
-    get = get_filter if section == "filters" else get_any_controller
+    get = get_filter if section == "filters" else get_controller  # one registry: the pendulum's and any plant's
     for name in REGISTRY.catalog()[section][1]:
         (d,) = [x for x in describe(name) if x["section"] == section]
         decl = get(name).declaration()

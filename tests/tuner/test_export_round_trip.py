@@ -21,9 +21,9 @@ CONTROLLERS = REGISTRY.catalog()["controllers"][1]
 
 
 def _loop_names():
-    from objectives.control.plants.controllers import LOOP_CONTROLLERS
+    from objectives.control.controllers import controllers_of
 
-    return set(LOOP_CONTROLLERS)
+    return set(controllers_of("siso"))
 
 
 #: controllers of the pendulum (plant: wmp) and of any plant (objectives/control/plants), tested apart

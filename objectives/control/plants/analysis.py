@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.kinds import KIND_CASCADE, KIND_PID, KIND_SF
+
 __all__ = ["frequency_grid", "loop_response", "margins", "N_FREQ"]
 
 N_FREQ = 800
@@ -97,8 +99,6 @@ def _pid_block_ss(cp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
 
 def _controller_ss(ctrl_kind: int, cp: np.ndarray, plant: Any) -> tuple[np.ndarray, ...]:
     """The controller's feedback path (reference 0) as a state space from the measured vector to u."""
-    from objectives.control.plants.kernels import KIND_CASCADE, KIND_PID, KIND_SF
-
     m = plant.n_inputs
     if ctrl_kind == KIND_SF:
         n, mm = int(cp[0]), int(cp[1])
@@ -140,8 +140,6 @@ def _controller_ss(ctrl_kind: int, cp: np.ndarray, plant: Any) -> tuple[np.ndarr
 def closed_loop_poles(ctrl_kind: int, cp: np.ndarray, plant: Any) -> np.ndarray:
     """Eigenvalues of the linear closed loop (no limits, reference 0) of an LTI plant: plant states,
     the input-delay line, the delayed input of the feedthrough, and the controller's states."""
-    from objectives.control.plants.kernels import KIND_SF
-
     n, m, d = plant.n_states, plant.n_inputs, plant.delay_n
     ns = n + d * m + m
     fa = np.zeros((ns, ns))

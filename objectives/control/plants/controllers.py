@@ -1,7 +1,8 @@
-"""Controllers of the generic loop (any plant of :mod:`objectives.control.plants`), declared like the filters.
+"""Controllers of the generic loop (any plant of the ``siso`` family), declared like the filters.
 
-YAML ``objective.controller`` names (the pendulum's own ``pid``, ``lqr``... are in
-:mod:`objectives.control.controllers` and stay the pendulum's):
+YAML ``objective.controller`` names, registered in :data:`objectives.control.controllers.CONTROLLERS`
+with the pendulum's own (``pid``, ``lqr``... of :mod:`objectives.control.plants.wmp.controllers`, family
+``wmp``):
 
 - ``pid2dof``: PID in ideal (standard) form ``K (b r - y) + K/Ti int e + K Td d/dt (c r - y)``;
 - ``pid2dof_par``: the same PID in parallel form with gains ``Kp, Ki, Kd`` (``K = Kp``, ``Ti = Kp / Ki``,
@@ -27,10 +28,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from objectives.control.plants.kernels import KIND_CASCADE, KIND_OPEN, KIND_PID, KIND_SF
+from objectives.control.kinds import KIND_CASCADE, KIND_OPEN, KIND_PID, KIND_SF
 from objectives.params import NONNEG, POSITIVE, Declared, Interval, Param, ParamSet
 
-__all__ = ["LOOP_CONTROLLERS", "get_loop_controller", "pid_coeffs", "pid_tf"]
+__all__ = ["LoopController", "PID2DOF", "PID2DOFParallel", "PIDCascade", "LQRStateFeedback", "OpenLoop",
+           "pid_coeffs", "pid_tf"]
 
 _EXT = Interval(allow_inf=True)
 _AW = ("backcalc", "clamp", "none")
@@ -75,6 +77,8 @@ class LoopController(Declared):
 
     name: ClassVar[str] = ""
     kind: ClassVar[int] = KIND_OPEN
+    #: the loop these controllers run in (objectives.control.controllers)
+    family: ClassVar[str] = "siso"
     needs_inner: ClassVar[bool] = False
 
     @classmethod
@@ -301,16 +305,3 @@ class OpenLoop(LoopController):
     @classmethod
     def tables(cls, cp, plant):
         return {}
-
-
-LOOP_CONTROLLERS: dict[str, type[LoopController]] = {
-    c.name: c for c in (PID2DOF, PID2DOFParallel, PIDCascade, LQRStateFeedback, OpenLoop)
-}
-
-
-def get_loop_controller(name: str, key: str = "objective.controller") -> type[LoopController]:
-    if name not in LOOP_CONTROLLERS:
-        hint = " (the pendulum's 'pid'/'lqr' need plant: wmp; for any plant use pid2dof or lqr_sf)" \
-            if name in ("pid", "lqr", "lqg", "flc", "protective_fuzzy", "lut") else ""
-        raise ValueError(f"{key}: unknown controller {name!r} for this plant{hint}; known: {sorted(LOOP_CONTROLLERS)}")
-    return LOOP_CONTROLLERS[name]

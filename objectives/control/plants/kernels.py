@@ -10,7 +10,7 @@ Private pure functions over contiguous float64 arrays (STYLE 12); the public wra
 4. advance the plant one period with the delayed input held (ZOH): the discrete recursion
    ``x <- Ad x + Bd u`` (LTI), or ``n_sub`` RK4 steps of ``dx/dt = f(x, u, t, params)`` (nonlinear).
 
-Controller kinds and their coefficient arrays ``cp``:
+Controller kinds (:mod:`objectives.control.kinds`, the one kind space) and their coefficient arrays ``cp``:
 
 - ``KIND_OPEN`` (0): ``u0 = r`` (open loop, for tests and step responses);
 - ``KIND_PID`` (1): one PID block (``PID_COEFFS`` floats, below) on output ``out_idx``;
@@ -33,10 +33,10 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["KIND_OPEN", "KIND_PID", "KIND_CASCADE", "KIND_SF", "PID_COEFFS", "PID_STATE",
-           "STATUS_OK", "STATUS_DIVERGED", "OPT_SIZE"]
+from objectives.control.kinds import KIND_CASCADE, KIND_OPEN, KIND_PID, KIND_SF
 
-KIND_OPEN, KIND_PID, KIND_CASCADE, KIND_SF = 0, 1, 2, 3
+__all__ = ["PID_COEFFS", "PID_STATE", "STATUS_OK", "STATUS_DIVERGED", "OPT_SIZE"]
+
 PID_COEFFS = 10
 PID_STATE = 4
 STATUS_OK, STATUS_DIVERGED = 0, 2
@@ -72,11 +72,11 @@ def _pid_block(cp, o, cs, s, r, y):
 def _control(kind, cp, cs, r, meas, out_idx, inner_idx, u):
     """Controller output into ``u`` (length m) from reference ``r`` and the measurement vector."""
     u[:] = 0.0
-    if kind == 0:
+    if kind == KIND_OPEN:
         u[0] = r
-    elif kind == 1:
+    elif kind == KIND_PID:
         u[0] = _pid_block(cp, 0, cs, 0, r, meas[out_idx])
-    elif kind == 2:
+    elif kind == KIND_CASCADE:
         r_in = _pid_block(cp, 0, cs, 0, r, meas[out_idx])
         u[0] = _pid_block(cp, PID_COEFFS, cs, PID_STATE, r_in, meas[inner_idx])
     else:
@@ -177,7 +177,7 @@ def _loop_lti(ad, bd, cd, dd, x0, sig, cp, opt, y_out, u_out, x_out):
         _affine(cd, x, dd, u_applied, y)
         y_out[k] = y
         x_out[k] = x
-        _controller_period(k, x if kind == 3 else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
+        _controller_period(k, x if kind == KIND_SF else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
         _affine(ad, x, bd, u_applied, xn)
         if _diverged(xn, div):
             return STATUS_DIVERGED, k + 1
@@ -213,7 +213,7 @@ def _loop_nl(f, rk4, params, x0, sig, cp, opt, period, n_sub, y_idx, n_in, y_out
             y[i] = x[y_idx[i]]
         y_out[k] = y
         x_out[k] = x
-        _controller_period(k, x if kind == 3 else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
+        _controller_period(k, x if kind == KIND_SF else y, sig, cp, cs, opt, meas, u, u_prev, line, u_applied, u_out)
         xn = rk4(f, x, u_applied.copy(), k * period, params, h, n_sub)
         if xn.size != n:
             return 3, k + 1

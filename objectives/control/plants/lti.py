@@ -29,7 +29,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LTIPlant", "lti_from_spec", "LTI_KEYS"]
+from objectives.control.plants.base import DiscreteLTI, PlantKind
+from tuner.sizes import MAX_LOOP_STATES, MAX_MODEL_ORDER, check_count
+
+__all__ = ["LTIPlant", "lti_from_spec", "LTI_KEYS", "TF", "ZPK", "SS"]
 
 #: the model keys (exactly one is given)
 MODELS = ("tf", "zpk", "ss")
@@ -38,8 +41,9 @@ LTI_KEYS = {*MODELS, "dt", "delay_s", "method", "output", "inner_output", "x0"}
 
 
 @dataclass(frozen=True)
-class LTIPlant:
-    """A discrete LTI plant at the controller period.
+class LTIPlant(DiscreteLTI):
+    """A discrete LTI plant at the controller period (the :class:`~objectives.control.plants.base.DiscreteLTI`
+    variant of the ``Plant`` protocol).
 
     Attributes
     ----------
@@ -67,46 +71,6 @@ class LTIPlant:
     method: str
     output: int = 0
     inner_output: int = -1
-
-    @property
-    def n_states(self) -> int:
-        return self.Ad.shape[0]
-
-    @property
-    def n_inputs(self) -> int:
-        return self.Bd.shape[1]
-
-    @property
-    def n_outputs(self) -> int:
-        return self.Cd.shape[0]
-
-    def design_model(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(Ad, Bd)``: the model a state-feedback design uses (the delay is left out)."""
-        return self.Ad, self.Bd
-
-    def tracked_row(self) -> np.ndarray:
-        """The row of ``Cd`` of the controlled output (the state-feedback pre-filter's target)."""
-        return self.Cd[self.output]
-
-    def frequency_response(self, omega_rad_s: np.ndarray) -> np.ndarray:
-        """``P(e^{j w h})`` of every output to input 0 with the delay, shape (len(w), p) complex.
-
-        The feedthrough is delayed by one period as in the kernel (module docstring).
-        """
-        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float) * self.period_s)
-        n = self.n_states
-        out = np.empty((z.size, self.n_outputs), dtype=complex)
-        eye = np.eye(n)
-        for i, zi in enumerate(z):
-            g = self.Cd @ np.linalg.solve(zi * eye - self.Ad, self.Bd[:, 0]) if n else np.zeros(self.n_outputs)
-            out[i] = (g + self.Dd[:, 0] / zi) * zi ** (-self.delay_n)
-        return out
-
-    def state_frequency_response(self, omega_rad_s: np.ndarray) -> np.ndarray:
-        """``(zI - Ad)^-1 Bd[:, 0] z^-d`` at ``z = e^{j w h}``, shape (len(w), n) complex."""
-        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float) * self.period_s)
-        eye = np.eye(self.n_states)
-        return np.array([np.linalg.solve(zi * eye - self.Ad, self.Bd[:, 0]) * zi ** (-self.delay_n) for zi in z])
 
 
 def _matrix(key: str, value: Any, rows: int | None = None, cols: int | None = None) -> np.ndarray:
@@ -160,6 +124,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
                              f"{den.size - 1}); a physical plant needs deg num <= deg den")
         if num.size == 0:
             raise ValueError(f"{where}.num: the numerator is zero (the plant has no effect)")
+        check_count(f"{where}.den", den.size - 1, MAX_MODEL_ORDER, "the model's order")
         return kind, control.ss(control.tf(num, den, cdt))
     if kind == "zpk":
         if not {"p", "k"} <= set(body) <= {"z", "p", "k"}:
@@ -168,6 +133,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
         poles = _vector(f"{where}.p", body["p"], allow_empty=True)
         if zeros.size > poles.size:
             raise ValueError(f"{where}: not proper ({zeros.size} zeros > {poles.size} poles)")
+        check_count(f"{where}.p", poles.size, MAX_MODEL_ORDER, "the model's order (poles)")
         k = float(_vector(f"{where}.k", [body["k"]])[0])
         if k == 0:
             raise ValueError(f"{where}.k: the gain is zero (the plant has no effect)")
@@ -177,6 +143,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
         raise ValueError(f"{where}: needs keys A, B, C and optionally D, got {sorted(body)}")
     a = _matrix(f"{where}.A", body["A"])
     n = a.shape[0]
+    check_count(f"{where}.A", n, MAX_MODEL_ORDER, "the model's order (rows of A)")
     if a.shape != (n, n) or n == 0:
         raise ValueError(f"{where}.A: must be square n x n with n >= 1, got {a.shape[0]}x{a.shape[1]}")
     b = _matrix(f"{where}.B", body["B"], rows=n)
@@ -188,7 +155,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
 def lti_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Path | None = None,
                   key: str = "objective.plant") -> LTIPlant:
     """Build and discretise the plant of ``spec`` (its keys among :data:`LTI_KEYS`, checked by
-    :func:`~objectives.control.plants.build_plant`) at ``period_s``; ``ValueError`` naming the key otherwise.
+    :func:`~objectives.control.plants.plant_kind`) at ``period_s``; ``ValueError`` naming the key otherwise.
     ``base_dir`` is unused (a model given inline reads no file): the signature of every plant builder."""
     import control
 
@@ -224,6 +191,10 @@ def lti_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
         raise ValueError(f"{key}.delay_s: {delay} s is not a whole number of controller periods "
                          f"({period_s} s); choose period_s dividing the delay")
     n = ad.shape[0]
+    # the loop's linear analysis (poles at every evaluation) holds each delayed input sample as a state
+    check_count(f"{key}.delay_s", n + (round(d) + 1) * bd.shape[1], MAX_LOOP_STATES,
+                "the linear closed loop's size (plant states plus delayed input samples)",
+                f"a delay of {delay} s is {round(d):,} periods of {period_s} s")
     x0 = _vector(f"{key}.x0", spec["x0"]) if "x0" in spec else np.zeros(n)
     if x0.shape != (n,):
         raise ValueError(f"{key}.x0: needs {n} values (one per state), got {x0.size}")
@@ -239,3 +210,30 @@ def _index(spec: Mapping[str, Any], name: str, default: int, size: int, key: str
     if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v < size:
         raise ValueError(f"{key}.{name}: must be an output index in 0..{size - 1}, got {v!r}")
     return v
+
+
+def lti_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb, with their nominal values: every coefficient
+    of the model (``tf.num[i]``, ``tf.den[i]``, ``zpk.z[i]``, ``zpk.p[i]``, ``zpk.k``, ``ss.A[i][j]``,
+    ``ss.B[i][j]``, ``ss.C[i][j]``, ``ss.D[i][j]``) and ``delay_s``."""
+    from objectives.control.plants.uncertainty import spec_leaves
+
+    model = next(m for m in MODELS if m in spec)
+    body = spec[model]
+    out: dict[str, float] = {}
+    for part in {"tf": ("num", "den"), "zpk": ("z", "p", "k"), "ss": ("A", "B", "C", "D")}[model]:
+        if part in body:
+            out.update(spec_leaves(f"{model}.{part}", body[part]))
+    out["delay_s"] = float(spec.get("delay_s", 0.0))
+    return out
+
+
+_LTI_DOC = ("{what}; options dt (discrete model's period), method (zoh | tustin), delay_s, x0, output, "
+            "inner_output")
+#: the registered kinds (objectives.control.plants.PLANTS): one builder for the three model forms
+TF = PlantKind("tf", frozenset(LTI_KEYS), lti_from_spec, "siso",
+               _LTI_DOC.format(what="{num, den}: transfer function, highest power first"), uncertain=lti_uncertain)
+ZPK = PlantKind("zpk", frozenset(LTI_KEYS), lti_from_spec, "siso",
+                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"), uncertain=lti_uncertain)
+SS = PlantKind("ss", frozenset(LTI_KEYS), lti_from_spec, "siso",
+               _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"), uncertain=lti_uncertain)

@@ -1,4 +1,5 @@
-"""Validating wrapper of the loop kernels: allocate the outputs, pick the LTI or nonlinear kernel."""
+"""Validating wrapper of the loop kernels: the actuator and sensor options, the outputs allocated, and the
+plant's own ``run_loop`` (each ``Plant`` variant runs its kernel: :mod:`objectives.control.plants.base`)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from objectives.control.plants.kernels import OPT_SIZE, _loop_lti, _loop_nl, _rk4
+from objectives.control.plants.kernels import OPT_SIZE
 
 __all__ = ["simulate_loop", "DIVERGENCE_LIMIT"]
 
@@ -27,18 +28,9 @@ def simulate_loop(plant: Any, kind: int, cp: np.ndarray, sig: np.ndarray, real: 
     n_steps = sig.shape[0]
     cp = np.ascontiguousarray(cp, dtype=np.float64)
     opt = _opt(plant, kind, real)
-    n = plant.n_states
-    if hasattr(plant, "Ad"):
-        m = plant.n_inputs
-        y, u, x = np.zeros((n_steps, plant.n_outputs)), np.zeros((n_steps, m)), np.zeros((n_steps, n))
-        status, done = _loop_lti(plant.Ad, plant.Bd, plant.Cd, plant.Dd, plant.x0, sig, cp, opt, y, u, x)
-    else:
-        m = plant.n_inputs
-        y, u, x = np.zeros((n_steps, plant.n_outputs)), np.zeros((n_steps, m)), np.zeros((n_steps, n))
-        loop, rk4 = (_loop_nl, _rk4) if plant.compiled else (_loop_nl.py_func, getattr(plant, "advance", _rk4.py_func))
-        if hasattr(plant, "reset"):  # an FMU: back to its initial state for every simulation
-            plant.reset()
-        status, done = loop(plant.fn, rk4, plant.params, plant.x0, sig, cp, opt, plant.period_s, plant.n_sub,
-                            plant.outputs, m, y, u, x)
+    y = np.zeros((n_steps, plant.n_outputs))
+    u = np.zeros((n_steps, plant.n_inputs))
+    x = np.zeros((n_steps, plant.n_states))
+    status, done = plant.run_loop(sig, cp, opt, y, u, x)
     return {"t": np.arange(n_steps) * plant.period_s, "y": y, "u": u, "x": x, "status": int(status),
             "n_done": int(done)}
