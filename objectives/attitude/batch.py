@@ -19,8 +19,8 @@ output); with ``mse_1d`` only where the kernel keeps the angle. For any other
 configuration :func:`evaluate_batch` returns None and the engine evaluates serially.
 
 Importing this module (which every unit's ``population.py`` does, so every filter class) leaves ``numba.typed``
-unimported until a batch runs: its templates make numba type every later kernel 2-5 % slower (measured on the
-EKF's compile).
+unimported until a batch runs: its templates make numba type every later kernel 2-5 % slower (measured on a
+filter kernel's compile).
 
 The population kernels call kernels of other modules and are cached on disk under rule 3 of
 :mod:`objectives.jit` (each entry keyed on the whole package's sources): they compile once per machine,
