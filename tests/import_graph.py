@@ -3,8 +3,9 @@
 Every ``import`` and ``from ... import`` counts, also inside functions (a function-level import is a circle that
 only waits for its first call), but not under ``if TYPE_CHECKING:``. ``from pkg import name`` is an edge to the
 submodule ``pkg.name`` when there is one, else to the package face ``pkg`` (``pkg/__init__.py``): importing a
-name from a face that imports the importer back is the circle this finds. A module's parent packages, which
-Python runs first, are not edges (every package face that re-exports its submodules would otherwise be one).
+name from a face that imports the importer back is the circle this finds. ``import a.b.c`` and ``from a.b.c import
+x`` also pass through the faces ``a`` and ``a.b``: edges to them, except to the importer's own parent packages,
+which Python runs first anyway (every package face that re-exports its submodules would otherwise be one).
 """
 
 from __future__ import annotations
@@ -65,6 +66,10 @@ def import_edges(root: Path, package: str) -> dict[str, set[str]]:
                     t = t.rpartition(".")[0]
                 if t and t != mod:
                     edges[mod].add(t)
+                parts = t.split(".")  # the faces a dotted import passes through on the way (Python runs them)
+                for face in (".".join(parts[:i]) for i in range(1, len(parts))):
+                    if face in mods and face != mod and not mod.startswith(face + "."):
+                        edges[mod].add(face)
     return edges
 
 

@@ -268,3 +268,14 @@ def test_the_circle_check_finds_a_circle_through_a_package_face(tmp_path):
     (pkg / "sub" / "base.py").write_text("class Base:\n    def f(self):\n        from pkg.sub import get\n")
     (pkg / "other.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.sub import get\n")
     assert import_circles(import_edges(pkg, "pkg")) == [["pkg.sub", "pkg.sub.base"]]
+
+
+def test_the_circle_check_counts_the_faces_a_dotted_import_passes_through(tmp_path):
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("from pkg.sub.x import y\n")  # runs pkg/sub/__init__.py first
+    (pkg / "sub" / "__init__.py").write_text("def f():\n    from pkg import a\n")
+    (pkg / "sub" / "x.py").write_text("import pkg.sub.y\ny = 1\n")  # its own parent package: no edge to it
+    (pkg / "sub" / "y.py").write_text("")
+    assert import_circles(import_edges(pkg, "pkg")) == [["pkg.a", "pkg.sub"]]
