@@ -14,6 +14,7 @@ is written.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 from collections.abc import Callable, Mapping
@@ -110,6 +111,9 @@ class Result:
         Evaluations made, failures among them.
     stop_reason : str
         Why the optimiser stopped.
+    repeats : tuner.records.Repeats or None
+        A repeated run's spread over its seeds (``repeats.json``); ``params``, ``best`` and ``history`` are
+        then the deployed repeat's. None for a single run.
     """
 
     run_dir: Path
@@ -124,6 +128,7 @@ class Result:
     n_evals: int
     n_failed: int
     stop_reason: str
+    repeats: Any = None
 
     def report(self) -> Path:
         """(Re)write ``report.md``, ``report.html`` and ``figures/`` of the run; returns ``report.html``."""
@@ -204,7 +209,7 @@ def _check_kwargs(overrides: Any, seed: Any, n_jobs: Any) -> list[str]:
 def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None = None, n_jobs: int | None = None,
          run_dir: str | Path | None = None, progress: bool | Callable[[str], None] = True,
          callback: Callable[[GenerationSummary], None] | None = None,
-         overrides: list[str] | None = None, report: bool = True) -> Result:
+         overrides: list[str] | None = None, report: bool = True, repeats: int | None = None) -> Result:
     """Tune a job, as ``tuner run`` does, and return its :class:`Result`.
 
     Parameters
@@ -227,6 +232,9 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
         ``key.path=value`` strings, as ``--set`` (one string is one override).
     report : bool
         False: no report, live or final (``--no-report``; ``tuner report RUN_DIR`` writes it later).
+    repeats : int, optional
+        Override ``repeats`` (``--repeats``): run the job with seeds ``seed .. seed + repeats - 1`` and deploy
+        one of them (:mod:`tuner.repeats`); the :class:`Result` carries the spread in ``repeats``.
 
     Raises
     ------
@@ -240,11 +248,16 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
         reads it, ``tuner resume`` continues it), then the interrupt goes on to the caller, so a script
         looping over ``tune()`` stops too.
     """
-    from tuner.run import run
+    from tuner.repeats import run
 
     if not isinstance(report, bool):  # report="no" would be true: a report the caller asked to leave out
         raise ConfigError("tune()", "report", f"expected True or False, got {type(report).__name__} {report!r}")
     cfg = _config(config, overrides, seed, n_jobs)
+    if repeats is not None:
+        if isinstance(repeats, bool) or not isinstance(repeats, int):
+            raise ConfigError("tune()", "repeats", f"expected an integer, got {type(repeats).__name__} {repeats!r}")
+        checked = config_from_dict({**cfg.raw, "repeats": repeats}, source=cfg.source, base_dir=cfg.base_dir)
+        cfg = dataclasses.replace(cfg, repeats=checked.repeats, raw=checked.raw)
     printer = progress if callable(progress) else None
     on_generation = (lambda g: callback(GenerationSummary.from_generation(g))) if callback is not None else None
     res = run(cfg, run_dir=run_dir, quiet=not progress, progress=printer, on_generation=on_generation,
@@ -266,11 +279,13 @@ def load(run_dir: str | Path) -> Result:
     if not rd.path.is_dir():
         raise RunError(f"{rd.path}: not a run directory (no such directory)")
     meta = rd.meta()
+    repeats = rd.repeats()
+    src = RunDir(rd.chosen_repeat() or rd.path)  # a repeated run's history is its deployed repeat's
     try:
-        text = read_text(rd.file("history.csv")) if regular(rd.file("history.csv")) else ""
+        text = read_text(src.file("history.csv")) if regular(src.file("history.csv")) else ""
         history = pd.read_csv(io.StringIO(text)) if text else pd.DataFrame()
     except (UnicodeDecodeError, ValueError, pd.errors.ParserError) as exc:  # EmptyDataError is a ValueError
-        raise RunError(f"{rd.file('history.csv')}: unreadable ({str(exc).strip().splitlines()[0][:200]})") from None
+        raise RunError(f"{src.file('history.csv')}: unreadable ({str(exc).strip().splitlines()[0][:200]})") from None
     params: dict[str, Any] = {}
     best: dict[str, Any] = {}
     metrics: dict[str, Any] = {}
@@ -286,4 +301,4 @@ def load(run_dir: str | Path) -> Result:
             deployment = load_deployment(rd.path)
         best = dict(deployment.values)
     return Result(rd.path.resolve(), meta.status, fitness, params, best, deployment, metrics, history,
-                  rd.validation(), int(meta.n_evals), int(meta.n_failed), meta.stop_reason or "")
+                  src.validation(), int(meta.n_evals), int(meta.n_failed), meta.stop_reason or "", repeats)

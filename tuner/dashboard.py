@@ -78,7 +78,8 @@ def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
         meta = rd.meta().to_dict()
         best = rd.best().to_doc() if rd.has_best() else {}
         cfg = rd.config() if regular(d / "config.yaml") else {}
-        conv = best_so_far(d)
+        rep = rd.repeats()
+        conv = best_so_far(rd.chosen_repeat() or d)  # a repeated run: its deployed repeat's curve
     except Exception as exc:  # noqa: BLE001 - one damaged run must not hide the others
         return {**row, "status": f"unreadable: {unreadable(exc)}"}
     s = {"status": meta.get("status"), "n_evals": meta.get("n_evals"), "created": meta.get("created"),
@@ -101,6 +102,12 @@ def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
         "metrics": {k: _num(v) for k, v in {**s["metrics"], **ev}.items() if _num(v) is not None},
         "conv": conv,
     })
+    if rep is not None and rep.fitness is not None:  # the spread over the seeds beside the status
+        from tuner.spread import fmt
+
+        f = rep.fitness
+        row["status"] = (f"{row['status']} · {rep.n} seeds, best {fmt(f.low)} .. {fmt(f.high)}"
+                         + (" · large spread" if rep.warning else ""))
     if os.path.lexists(d / "report.html"):
         row["href"] = quote(f"{rel}/report.html", safe="/-_.~")
     return row

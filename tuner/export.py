@@ -57,14 +57,18 @@ def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
     best, meta, cfg = rd.best().to_doc(), rd.meta().to_dict(), rd.config()
     describe = hook(objective, "describe") if objective is not None else None
     desc = dict(describe()) if describe else {}
+    rep = rd.repeats()
+    chosen = rep.chosen_entry if rep is not None else None
+    extra = {} if chosen is None else {"repeat": {"run": chosen.run, "of": rep.n, "chosen_by": rep.rule}}
     return {
         "run": run_dir.name,
         "fitness": best.get("fitness"),
         "objective": dict(desc.get("objective") or {"kind": cfg.get("objective", {}).get("kind")}),
         "data": desc.get("data"),
         "optimizer": meta.get("optimizer"),
-        "seed": meta.get("seed"),
-        "n_evals": meta.get("n_evals"),
+        "seed": meta.get("seed") if chosen is None else chosen.seed,  # a repeated run deploys one seed's best
+        "n_evals": meta.get("n_evals") if chosen is None else chosen.n_evals,
+        **extra,
         "git_commit": meta.get("git_commit", ""),
         "exported": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "params": best["params"],

@@ -1,8 +1,9 @@
 """The records of a run directory: what its files hold, typed, and how each value is written.
 
-- :class:`Meta` (``meta.json``), :class:`Best` (``best.yaml``), :class:`Checkpoint` (``checkpoint.json``) and
-  :class:`HistoryRow` (one row of ``history.csv``: one evaluation), each read back with the file and key
-  named when malformed (:class:`RunError`);
+- :class:`Meta` (``meta.json``), :class:`Best` (``best.yaml``), :class:`Checkpoint` (``checkpoint.json``),
+  :class:`HistoryRow` (one row of ``history.csv``: one evaluation) and :class:`Repeats` (``repeats.json`` of a
+  repeated run: its :class:`RepeatEntry` per seed and the :class:`Spread` over them), each read back with the
+  file and key named when malformed (:class:`RunError`);
 - the encodings: :func:`fmt_cell` / :func:`parse_cell` (a value in ``history.csv``, floats as ``repr`` so they
   read back exactly), :func:`plain` (numpy values and paths as YAML/JSON-native data), :func:`dump_yaml`,
   :func:`config_hash` and :func:`first_difference` (a resolved config's identity, and where two differ).
@@ -26,9 +27,9 @@ import yaml
 
 from tuner.loop import BestPoint
 
-__all__ = ["RunError", "Meta", "Timing", "Best", "Checkpoint", "HistoryRow", "STATUSES", "FIXED_COLUMNS",
-           "RESULT_COLUMNS", "ERROR_LIMIT", "plain", "dump_yaml", "fmt_cell", "parse_cell", "cell", "read_back",
-           "clip_error", "config_hash", "first_difference", "load_json"]
+__all__ = ["RunError", "Meta", "Timing", "Best", "Checkpoint", "HistoryRow", "Spread", "RepeatEntry", "Repeats",
+           "STATUSES", "FIXED_COLUMNS", "RESULT_COLUMNS", "ERROR_LIMIT", "plain", "dump_yaml", "fmt_cell", "parse_cell",
+           "cell", "read_back", "clip_error", "config_hash", "first_difference", "load_json"]
 
 #: ``meta.json``'s status values
 STATUSES = ("created", "running", "finished", "interrupted", "failed")
@@ -355,3 +356,167 @@ class HistoryRow:
         metrics = {k: parse_cell(v) for k, v in row.items()
                    if isinstance(k, str) and k not in skip and isinstance(v, str) and v != ""}
         return cls(*counters, params, fit, row["status"], row.get("error") or "", secs, metrics)
+
+
+# --- repeats.json ------------------------------------------------------------------------------
+def _num_or_none(v: Any, where: Path, key: str) -> float | None:
+    if v is None:
+        return None
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise RunError(f"{where}: {key}: expected a number or null, got {v!r}")
+    return float(v)
+
+
+@dataclass(frozen=True)
+class Spread:
+    """A quantity over the repeats that have it: median, lowest, highest and how many (``n``); for a searched
+    parameter also ``range_share``, ``high - low`` as a share of its search range (log10 for log ones)."""
+
+    median: float
+    low: float
+    high: float
+    n: int
+    range_share: float | None = None
+
+    @property
+    def width(self) -> float:
+        """``high - low``: the spread over seeds."""
+        return self.high - self.low
+
+    @classmethod
+    def from_doc(cls, doc: Any, where: Path, key: str) -> Spread | None:
+        if doc is None:
+            return None
+        if not isinstance(doc, dict):
+            raise RunError(f"{where}: {key}: expected a mapping, got {doc!r}")
+        vals = [_num_or_none(doc.get(k), where, f"{key}.{k}") for k in ("median", "low", "high")]
+        if any(v is None for v in vals):
+            raise RunError(f"{where}: {key}: median, low and high are required")
+        n = _req(doc, "n", int, where)
+        return cls(*vals, n, _num_or_none(doc.get("range_share"), where, f"{key}.range_share"))  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class RepeatEntry:
+    """One repeat of a repeated run: its seed, its run directory (relative to the parent), how far it got and,
+    once it has a best, its best fitness, searched values, held-out score (``held_out_key`` says which:
+    :func:`tuner.spread.held_out_score`) and the defaults' fitness."""
+
+    index: int
+    seed: int
+    run: str
+    status: str
+    n_evals: int = 0
+    n_failed: int = 0
+    fitness: float | None = None
+    params: dict[str, Any] = field(default_factory=dict)
+    held_out: float | None = None
+    held_out_key: str = ""
+    defaults_fitness: float | None = None
+    wall_s: float = 0.0
+
+    @classmethod
+    def from_doc(cls, doc: Any, where: Path) -> RepeatEntry:
+        if not isinstance(doc, dict):
+            raise RunError(f"{where}: repeats: expected mappings, got {doc!r}")
+        idx, seed = _req(doc, "index", int, where), _req(doc, "seed", int, where)
+        at = f"repeats[{idx}]"
+        run, status = _req(doc, "run", str, where), _req(doc, "status", str, where)
+        if run.startswith("/") or ".." in Path(run).parts:
+            raise RunError(f"{where}: {at}.run: expected a path inside the run directory, got {run!r}")
+        params = doc.get("params") or {}
+        if not isinstance(params, dict):
+            raise RunError(f"{where}: {at}.params: expected a mapping, got {params!r}")
+        return cls(idx, seed, run, status, int(doc.get("n_evals") or 0), int(doc.get("n_failed") or 0),
+                   _num_or_none(doc.get("fitness"), where, f"{at}.fitness"), dict(params),
+                   _num_or_none(doc.get("held_out"), where, f"{at}.held_out"), str(doc.get("held_out_key") or ""),
+                   _num_or_none(doc.get("defaults_fitness"), where, f"{at}.defaults_fitness"),
+                   float(doc.get("wall_s") or 0.0))
+
+
+@dataclass(frozen=True)
+class Repeats:
+    """``repeats.json`` of a repeated run (``repeats: N``; computed by :func:`tuner.spread.summarize`).
+
+    Attributes
+    ----------
+    seeds : tuple of int
+        The repeats' seeds (:data:`tuner.spread.SEED_RULE`).
+    entries : tuple of RepeatEntry
+        One per repeat, in seed order.
+    complete : bool
+        Every repeat finished (False while the run goes on or after an interruption).
+    fitness : Spread or None
+        The best fitness over the repeats with a best.
+    params : dict
+        ``{name: Spread}`` of each searched parameter's best value.
+    held_out_key : str
+        ``test_fitness`` (the job's test data), ``selection`` (the held-out fold of ``validation.select``) or
+        ``""`` when the repeats have no held-out score.
+    held_out : Spread or None
+        That score over the repeats.
+    chosen : int or None
+        Index of the repeat whose best is the run's ``best.yaml`` (None until one is chosen).
+    chosen_by : str
+        ``held_out`` or ``median_fitness``; ``rule`` says it in words.
+    defaults_fitness, gain : float or None
+        The defaults' fitness (median over the repeats) and the gain of tuning, defaults minus the median
+        best fitness.
+    warning, warn_rule : str
+        The spread warning (empty when there is none) and its rule in words.
+    """
+
+    seeds: tuple[int, ...]
+    entries: tuple[RepeatEntry, ...]
+    complete: bool = False
+    fitness: Spread | None = None
+    params: dict[str, Spread] = field(default_factory=dict)
+    held_out_key: str = ""
+    held_out: Spread | None = None
+    chosen: int | None = None
+    chosen_by: str = ""
+    rule: str = ""
+    defaults_fitness: float | None = None
+    gain: float | None = None
+    warning: str = ""
+    warn_rule: str = ""
+    version: int = 1
+
+    @property
+    def n(self) -> int:
+        return len(self.seeds)
+
+    @property
+    def chosen_entry(self) -> RepeatEntry | None:
+        return None if self.chosen is None else self.entries[self.chosen]
+
+    def to_doc(self) -> dict[str, Any]:
+        doc = dataclasses.asdict(self)
+        doc["seeds"] = list(self.seeds)
+        return plain(doc)
+
+    @classmethod
+    def from_doc(cls, doc: Any, where: Path) -> Repeats:
+        if not isinstance(doc, dict):
+            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
+        if doc.get("version") != 1:
+            raise RunError(f"{where}: version: expected 1, got {doc.get('version')!r}")
+        seeds = _req(doc, "seeds", list, where)
+        if not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
+            raise RunError(f"{where}: seeds: expected integers, got {seeds!r}")
+        entries = tuple(RepeatEntry.from_doc(e, where) for e in _req(doc, "entries", list, where))
+        params = doc.get("params") or {}
+        if not isinstance(params, dict):
+            raise RunError(f"{where}: params: expected a mapping, got {params!r}")
+        chosen = doc.get("chosen")
+        if chosen is not None and (not isinstance(chosen, int) or not 0 <= chosen < len(entries)):
+            raise RunError(f"{where}: chosen: expected a repeat index in [0, {len(entries)}), got {chosen!r}")
+        fitness = Spread.from_doc(doc.get("fitness"), where, "fitness")
+        spreads = {str(k): Spread.from_doc(v, where, f"params.{k}") for k, v in params.items()}
+        return cls(tuple(seeds), entries, bool(doc.get("complete")), fitness,
+                   {k: s for k, s in spreads.items() if s is not None},
+                   str(doc.get("held_out_key") or ""), Spread.from_doc(doc.get("held_out"), where, "held_out"), chosen,
+                   str(doc.get("chosen_by") or ""), str(doc.get("rule") or ""),
+                   _num_or_none(doc.get("defaults_fitness"), where, "defaults_fitness"),
+                   _num_or_none(doc.get("gain"), where, "gain"), str(doc.get("warning") or ""),
+                   str(doc.get("warn_rule") or ""))

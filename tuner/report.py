@@ -39,6 +39,7 @@ from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
 from tuner.runinfo import run_summary
+from tuner.spread import spread_md
 
 __all__ = ["write_run_report", "load_history", "run_summary", "md_table", "pivot_metrics", "write_html",
            "write_live_report", "throttled", "sweep_warnings_md", "LIVE_REFRESH_S"]
@@ -283,6 +284,9 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
         md += [lead.rstrip(), ""]
     md += ["## Summary", "", _rows_table(_card(s, cfg), ["item", "value"], 6), ""]
     md += [f"Note: {md_escape(n)}." for n in s["notes"]] + ([""] if s["notes"] else [])
+    rep = RunDir(run_dir).repeats()
+    if rep is not None:
+        md += spread_md(rep)
 
     warnings = run_warnings(run_dir)
     val = _validation(run_dir)
@@ -433,9 +437,10 @@ def _results_md(s: dict[str, Any]) -> list[str]:
 def _figures(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[Drawn], list[Path]]:
     """The report's plots (:data:`tuner.plots.RUN_PLOTS`, each PNG written once) and the objective's own PNGs
     in ``figures/`` (not while the run is going: they come after it); nothing before the first evaluation."""
-    if not (run_dir / "history.csv").exists():
+    src = RunDir(run_dir).chosen_repeat() or run_dir  # a repeated run draws its deployed repeat's history
+    if not (src / "history.csv").exists():
         return [], []
-    hist = load_history(run_dir)
+    hist = load_history(src)
     if len(hist) == 0:
         return [], []
     figs = run_dir / "figures"

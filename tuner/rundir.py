@@ -20,6 +20,12 @@ Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
                       summary (tuning score, CV score, gap, large or not) and the final selection
 ``cv.md``, ``cv.csv`` the cross-validation tables (per fold, summary) of :mod:`tuner.cv`
 
+A repeated run (``repeats: N``, :mod:`tuner.repeats`) holds no ``history.csv`` or ``checkpoint.json`` of its
+own: ``config.yaml`` (with ``repeats``), ``meta.json`` (the counts and times summed over its repeats),
+``repeats/seed-<s>/`` (one ordinary run directory per seed, as ``tuner run --seed s`` writes it),
+``repeats.json`` (the spread over the repeats and which one was chosen, typed :class:`tuner.records.Repeats`)
+and ``best.yaml`` (the chosen repeat's, its ``run`` naming it: ``repeats/seed-<s>``), then the report.
+
 Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data. Every file
 is opened through :mod:`tuner.safe_io` (regular files only, no link of either kind where tuner writes, bounded
 size); the code a config names is loaded only as :mod:`tuner.trust` allows.
@@ -53,6 +59,7 @@ from tuner.records import (
     Checkpoint,
     HistoryRow,
     Meta,
+    Repeats,
     RunError,
     config_hash,
     dump_yaml,
@@ -65,10 +72,12 @@ from tuner.safe_io import UnsafeFile, named, open_append, open_lock, read_text, 
 #: what this module owns; the records it reads and writes (``Meta``, ``Best``, ``Checkpoint``, ``HistoryRow``,
 #: ``RunError`` and the encodings) are :mod:`tuner.records`'s, importable from here as well
 __all__ = ["RunDir", "History", "atomic_write", "read_chain", "check_chain", "chain_secret", "chain_note", "CHAIN",
-           "FAULT_ENV", "RunError", "mark_stopped"]
+           "FAULT_ENV", "REPEATS_DIR", "RunError", "mark_stopped"]
 
 FAULT_ENV = "TUNER_FAULT_KILL_AT_WRITE"
 LEGACY_CHECKPOINT = "checkpoint.pkl"
+#: the folder of a repeated run that holds its repeats' run directories
+REPEATS_DIR = "repeats"
 
 # --- writing -----------------------------------------------------------------------------------
 _n_writes = 0
@@ -320,6 +329,28 @@ class RunDir:
             return None
         return Checkpoint.from_doc(self._json("checkpoint.json", "checkpoint"), self.path / "checkpoint.json")
 
+    def repeat_count(self) -> int:
+        """``repeats`` of the run's config: N > 1 for a repeated run, 1 for a single run (or no config)."""
+        if not regular(self.path / "config.yaml"):
+            return 1
+        n = self.config().get("repeats", 1)
+        return n if isinstance(n, int) and not isinstance(n, bool) and n > 1 else 1
+
+    def repeat_name(self, seed: int) -> str:
+        """The repeat of ``seed``'s directory, relative to this one (``repeats/seed-<s>``)."""
+        return f"{REPEATS_DIR}/seed-{int(seed)}"
+
+    def repeats(self) -> Repeats | None:
+        """``repeats.json`` of a repeated run (None before its first repeat ended, or for a single run)."""
+        if not regular(self.path / "repeats.json"):
+            return None
+        return Repeats.from_doc(self._json("repeats.json", "the spread over the repeats"), self.path / "repeats.json")
+
+    def chosen_repeat(self) -> Path | None:
+        """A repeated run's chosen repeat's directory (None before one is chosen, or for a single run)."""
+        rep = self.repeats()
+        return None if rep is None or rep.chosen_entry is None else self.path / rep.chosen_entry.run
+
     def history(self, param_names: list[str], config_hash: str = "") -> History:
         return History(self.path / "history.csv", param_names, config_hash)
 
@@ -347,6 +378,9 @@ class RunDir:
 
     def write_best(self, best: Best) -> None:
         atomic_write(self.path / "best.yaml", dump_yaml(best.to_doc()))
+
+    def write_repeats(self, rep: Repeats) -> None:
+        atomic_write(self.path / "repeats.json", json.dumps(rep.to_doc(), indent=1))
 
     def write_checkpoint(self, ck: Checkpoint) -> None:
         atomic_write(self.path / "checkpoint.json", json.dumps(dataclasses.asdict(ck)))

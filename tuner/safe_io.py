@@ -38,7 +38,9 @@ __all__ = ["UnsafeFile", "LinkRefused", "MAX_READ_BYTES", "refuse_links", "check
            "read_bytes", "read_text", "open_append", "open_lock", "write_atomic", "open_nofollow"]
 
 #: folders of a run or sweep directory whose entries are checked too
-SUBDIRS = ("figures", "jobs")
+SUBDIRS = ("figures", "jobs", "repeats")
+#: those of them that hold run directories (a sweep's jobs, a repeated run's repeats), checked in turn
+NESTED = ("jobs", "repeats")
 #: the largest file read whole from a run or sweep directory (bytes); a history of a million evaluations with a
 #: dozen metrics is about 200 MB
 MAX_READ_BYTES = 512 * 2**20
@@ -91,8 +93,9 @@ def check_not_link(path: Path | str) -> None:
 
 
 def refuse_links(directory: Path | str, depth: int = 2) -> None:
-    """Refuse a directory holding a symbolic link among its entries, the entries of its ``figures/`` and
-    ``jobs/`` folders and (for a sweep) the entries of each job directory."""
+    """Refuse a directory holding a symbolic link among its entries, the entries of its ``figures/``, ``jobs/``
+    and ``repeats/`` folders and the entries of each run directory in the last two (a sweep's jobs, a repeated
+    run's repeats)."""
     directory = Path(directory)
     try:
         entries = list(os.scandir(directory))
@@ -105,7 +108,7 @@ def refuse_links(directory: Path | str, depth: int = 2) -> None:
             for sub in os.scandir(e.path):
                 if sub.is_symlink():
                     raise LinkRefused(sub.path)
-                if e.name == "jobs" and sub.is_dir(follow_symlinks=False):
+                if e.name in NESTED and sub.is_dir(follow_symlinks=False):
                     refuse_links(sub.path, depth - 1)
 
 

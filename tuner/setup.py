@@ -41,9 +41,12 @@ def run_config(rd: RunDir, raw: dict[str, Any] | None = None) -> RunConfig:
 
 
 def run_origin(run_dir: Path) -> Path:
-    """The directory whose content a command handed ``run_dir`` must not load code from: the run directory, or
-    for a sweep's job (``SWEEP/jobs/JOB``) the whole sweep directory."""
+    """The directory whose content a command handed ``run_dir`` must not load code from: the run directory, for
+    a sweep's job (``SWEEP/jobs/JOB``) the whole sweep directory, for a repeat (``RUN/repeats/seed-<s>``) its
+    parent's origin."""
     run_dir = Path(run_dir).resolve()
+    if run_dir.parent.name == "repeats" and os.path.lexists(run_dir.parent.parent / "config.yaml"):
+        return run_origin(run_dir.parent.parent)  # a repeat of a repeated run: its parent's origin
     sweep = run_dir.parent.parent
     if run_dir.parent.name == "jobs" and os.path.lexists(sweep / "sweep.yaml"):
         return sweep

@@ -375,8 +375,9 @@ def ranked_by(df: Any) -> tuple[str, str]:
 
 
 def summarize(df: Any) -> Any:
-    """Mean, median, std, min over seeds for each method and numeric metric, plus each method's defaults
-    row (its defaults scored as the ranked score); ranked by the median of :func:`ranked_by`'s score.
+    """Mean, median, std, min and max (the spread) over seeds for each method and numeric metric, plus each
+    method's defaults row (its defaults scored as the ranked score); ranked by the median of :func:`ranked_by`'s
+    score.
 
     Columns ``("kind", "")`` (``tuned`` or ``defaults``) and ``("ranked_by", "")`` say what each row is and
     which score ranks; a defaults row is named ``<method> (defaults)`` and fills the ranked score only.
@@ -391,7 +392,7 @@ def summarize(df: Any) -> Any:
     g = df[df["status"] == "finished"].groupby("method")
     parts = {}
     for m in metrics:
-        agg = g[m].agg(["mean", "median", "std", "min"])
+        agg = g[m].agg(["mean", "median", "std", "min", "max"])
         for stat in agg.columns:
             parts[(m, stat)] = agg[stat]
     out = pd.DataFrame(parts)
@@ -399,7 +400,7 @@ def summarize(df: Any) -> Any:
     out.insert(0, ("kind", ""), "tuned")
     dcol = DEFAULTS_OF[key_col]
     if dcol in df:
-        d = g[dcol].agg(["mean", "median", "std", "min"]).dropna(how="all")
+        d = g[dcol].agg(["mean", "median", "std", "min", "max"]).dropna(how="all")
         rows = pd.DataFrame({(key_col, stat): d[stat] for stat in d.columns})
         rows.insert(0, ("runs", "n"), g.size().loc[d.index])
         rows.insert(0, ("kind", ""), "defaults")
@@ -475,7 +476,7 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     fit_cols = tuple(dict.fromkeys((key_col, *(("train_fitness", "test_fitness") if "train_fitness.median"
                                                 in flat.columns else ("best_fitness",)))))
     show_cols = [c for c in ["rank", "kind", "runs"] if c in flat.columns] + \
-        [c for c in flat.columns if c.endswith((".median", ".mean", ".std")) and c.split(".")[0] in fit_cols]
+        [c for c in flat.columns if c.endswith((".median", ".min", ".max")) and c.split(".")[0] in fit_cols]
     ranking = flat[show_cols].reset_index().rename(columns={"index": "method"}) if len(flat) else flat
     if len(ranking):
         ranking = ranking[["rank", "method"] + [c for c in ranking.columns if c not in ("rank", "method")]]
@@ -487,13 +488,13 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
           f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
           f"Written {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}.", "",
           "## Ranking (over seeds)", "",
-          f"Ranked by the median {what} (`{key_col}`). Each method's defaults row holds its defaults (the "
-          "config's fixed values with the searched parameters at the objective's defaults) scored the same "
-          "way.", "", _md(ranking), "",
+          f"Ranked by the median {what} (`{key_col}`); min and max are the spread over the seeds (the best and "
+          "the worst seed). Each method's defaults row holds its defaults (the config's fixed values with the "
+          "searched parameters at the objective's defaults) scored the same way.", "", _md(ranking), "",
           "## Every job", "", _md(df[main_cols]), "",
           *sweep_warnings_md(jobs_dir, [j["id"] for j in sw["jobs"]]),
           "Full tables: [results.csv](results.csv) (one row per job, all metrics and parameters), "
-          "[summary.csv](summary.csv) (mean, median, std, min over seeds).", ""]
+          "[summary.csv](summary.csv) (mean, median, std, min, max over seeds).", ""]
     test_cols = [c for c in df.columns if c.startswith("test.")]
     if test_cols:
         md += ["## Held-out recordings (mean over test recordings)", "",
@@ -549,6 +550,8 @@ def ranking_lines(df: Any) -> list[str]:
     key_col, what = summ.attrs["ranked_by"]
     return [f"ranking by the median {what}, with each method's defaults scored the same way:",
             *(f"  {int(r[('rank', '')])}. {name}: {key_col} {r[(key_col, 'median')]:.4g}"
+              + (f" (seeds {r[(key_col, 'min')]:.4g} .. {r[(key_col, 'max')]:.4g}, {int(r[('runs', 'n')])} runs)"
+                 if int(r[("runs", "n")]) > 1 else "")
               for name, r in summ.iterrows())]
 
 

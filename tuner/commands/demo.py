@@ -25,5 +25,5 @@ def run(a: argparse.Namespace) -> int:
         path = packaged_config(a.job if a.job.endswith(".yaml") else f"{a.job}.yaml")
     except StarterError as exc:
         raise UsageError(str(exc)) from None
-    return run_command.run(argparse.Namespace(config=str(path), overrides=[], seed=None, n_jobs=None, run_dir=None,
-                                              no_report=False, quiet=a.quiet))
+    return run_command.run(argparse.Namespace(config=str(path), overrides=[], seed=None, n_jobs=None, repeats=None,
+                                              run_dir=None, no_report=False, quiet=a.quiet))

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 
 from tuner.commands.run import print_result
+from tuner.repeats import is_repeated
+from tuner.repeats import resume as resume_repeats
 from tuner.run import resume
 
 
@@ -15,4 +17,5 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(a: argparse.Namespace) -> int:
-    return print_result(resume(a.run_dir, quiet=a.quiet, report=not a.no_report))
+    go = resume_repeats if is_repeated(a.run_dir) else resume
+    return print_result(go(a.run_dir, quiet=a.quiet, report=not a.no_report))

@@ -11,9 +11,10 @@ from tuner.commands.common import UsageError
 from tuner.config import load_config
 from tuner.failures import failure_groups
 from tuner.records import RunError
+from tuner.repeats import run as run_job
 from tuner.run import RunResult
-from tuner.run import run as run_job
 from tuner.rundir import RunDir
+from tuner.spread import spread_lines
 from tuner.sweep import is_sweep_file
 
 DESCRIPTION = "Run a tuning job and store it in its own run directory."
@@ -25,6 +26,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="override a config value, e.g. optimizer.population=40 (repeatable)")
     p.add_argument("--seed", type=int, help="override the seed")
     p.add_argument("--n-jobs", type=int, help="override parallel.n_jobs")
+    p.add_argument("--repeats", type=int, metavar="N",
+                   help="run the job N times, seeds seed .. seed+N-1, and deploy one (held-out score, else the "
+                        "median fitness); the spread over the seeds is shown and reported")
     p.add_argument("--run-dir", help="use this run directory instead of runs/<time>-<name>-<hex>")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines")
     p.add_argument("--no-report", action="store_true",
@@ -33,12 +37,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(a: argparse.Namespace) -> int:
     if is_sweep_file(a.config):  # a sweep file runs as a sweep (e.g. the demo compares filters)
-        if a.seed is not None or a.n_jobs or a.run_dir:
-            raise UsageError(f"{a.config}: is a sweep file; --seed/--n-jobs/--run-dir apply to job files (--set "
-                             "applies to every job of the sweep)")
+        if a.seed is not None or a.n_jobs or a.run_dir or a.repeats:
+            raise UsageError(f"{a.config}: is a sweep file; --seed/--n-jobs/--run-dir/--repeats apply to job files "
+                             "(--set applies to every job of the sweep)")
         return sweep.run(argparse.Namespace(sweep=a.config, dir=None, jobs=None, quiet=a.quiet, no_report=a.no_report,
                                             overrides=a.overrides))
-    cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs)
+    cfg = load_config(a.config, a.overrides, seed=a.seed, n_jobs=a.n_jobs, repeats=a.repeats)
     return print_result(run_job(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report))
 
 
@@ -53,9 +57,16 @@ def print_result(res: RunResult) -> int:
     if summary:
         print()
         print(summary)
+    if res.repeats is not None:
+        print()
+        print("\n".join(spread_lines(res.repeats)))
     print(f"run directory: {res.run_dir}")
     if (res.run_dir / "report.md").exists():
         print(f"report: {res.run_dir / 'report.md'}")
+    if res.status == "failed" and res.repeats is not None:
+        print(f"error: {res.run_dir}: no repeat to deploy (a repeat whose every evaluation failed is not chosen)",
+              file=sys.stderr)
+        return 1
     if res.status == "failed":
         print(f"error: {res.run_dir}: every one of {res.n_evals} evaluations failed; "
               f"{failure_summary(res.run_dir)}", file=sys.stderr)

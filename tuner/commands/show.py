@@ -12,6 +12,7 @@ from tuner.commands.common import UsageError
 from tuner.replay import verify_history
 from tuner.rundir import RunDir
 from tuner.runinfo import fmt, run_summary, scores, tuned_system
+from tuner.spread import spread_lines
 from tuner.sweep import show_sweep
 
 
@@ -28,10 +29,15 @@ def run(a: argparse.Namespace) -> int:
     if not (path / "meta.json").exists() and not (path / "config.yaml").exists():
         raise UsageError(f"{path}: not a run or sweep directory (no meta.json / sweep.yaml)")
     note = verify_history(RunDir(path))  # RunError naming an edited row
+    chosen = RunDir(path).chosen_repeat()
+    if chosen is not None:  # a repeated run deploys its chosen repeat's best: that repeat's history is checked too
+        note = verify_history(RunDir(chosen)) or note
     s = run_summary(path)  # RunError naming the file if meta.json/best.yaml is corrupt
     warnings = run_warnings(path)
+    rep = RunDir(path).repeats()
     if a.json:
-        print(json.dumps({**s, "warnings": [asdict(w) for w in warnings]}, indent=1, default=str))
+        extra = {"repeats": rep.to_doc()} if rep is not None else {}
+        print(json.dumps({**s, "warnings": [asdict(w) for w in warnings], **extra}, indent=1, default=str))
         return 0
     print(f"run:        {s['run']}")
     print(f"status:     {s['status']} ({s['stop_reason']})")
@@ -41,6 +47,8 @@ def run(a: argparse.Namespace) -> int:
     if s["evaluation"].get("summary_table"):
         print()
         print(s["evaluation"]["summary_table"])
+    if rep is not None:
+        print("\n".join(spread_lines(rep)))
     for w in warnings:
         print(f"warning: {w.message}")
     if note:

@@ -33,6 +33,7 @@ from tuner.plots import (
     final_fitness,
     importance,
     parcoords,
+    repeats,
     responses,
     slices,
     sweep_convergence,
@@ -42,7 +43,7 @@ from tuner.render import md_escape, md_path
 __all__ = ["RUN_PLOTS", "SWEEP_PLOTS", "Drawn", "register", "draw", "figures_md", "objective_md", "plot_files"]
 
 #: a run report's plots, in the order the report shows them
-RUN_PLOTS: list[Any] = [convergence, importance, slices, parcoords, contour]
+RUN_PLOTS: list[Any] = [repeats, convergence, importance, slices, parcoords, contour]
 #: a sweep report's plots
 SWEEP_PLOTS: list[Any] = [sweep_convergence, final_fitness, errors_by_method, responses, best_parameters]
 _FACE = ("NAME", "FILE", "data", "title", "caption", "figure", "slot")
