@@ -40,7 +40,8 @@ def explain(name: str) -> dict[str, Any] | None:
         cls = get_controller(name)
         d = {"section": "controllers", **cls.describe()}
         if cls.family != "wmp":
-            d["usage"] = f"objective: {{kind: closed_loop, plant: {{tf: ...}}, controller: {name}}}"
+            plant = "{mujoco: robot.xml, keyframe: ...}" if cls.family == "mujoco" else "{tf: ...}"
+            d["usage"] = f"objective: {{kind: closed_loop, plant: {plant}, controller: {name}}}"
         return d
     if name == "mae_weighted_cost":
         from objectives.control.plants.wmp.metrics import DEFAULT_COST_WEIGHTS, mae_weighted_cost
