@@ -206,6 +206,8 @@ def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
     names = zipfile.ZipFile(wheels[0]).namelist()
     assert "tuner/data/configs/demo.yaml" in names and "objectives/starters.py" in names
     assert "tuner/static/tuner_report.js" in names  # the interactive report pages
+    # the C export's shared parts and the filter units' ports
+    assert {"objectives/attitude/cexport/templates/common.c", "objectives/attitude/filters/ekf/port.c"} <= set(names)
     assert not any(n.startswith(("tests/", "configs/", "benchmarks/")) for n in names)
     env["PYTHONDONTWRITEBYTECODE"] = "1"  # the linked dependencies are read, never written
     venv = tmp_path / "venv"
