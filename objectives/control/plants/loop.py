@@ -36,6 +36,7 @@ import numpy as np
 
 from objectives.control.plants.analysis import (
     closed_loop_poles,
+    exact_loop,
     frequency_grid,
     loop_response,
     margins,
@@ -197,7 +198,8 @@ class SISOLoop:
 
     def loop_margins(self, params: Mapping[str, Any] | None) -> dict[str, float]:
         """``ms``, ``gm_db``, ``pm_deg`` and ``cl_pole_max`` (largest |closed-loop pole| of the linear
-        loop) for linear plants (:mod:`.analysis`); an unstable linear loop has ``ms = inf`` and margins
+        loop) for linear plants (:mod:`.analysis`: the grid's extrema and crossings refined on the exact loop
+        response, so Ms is the true peak to far below 1e-6); an unstable linear loop has ``ms = inf`` and margins
         ``-inf``, since its frequency response says nothing of its robustness."""
         cp = self.coeffs(params)
         pole = float(np.max(np.abs(closed_loop_poles(self.ctrl.kind, cp, self.plant))))
@@ -205,7 +207,8 @@ class SISOLoop:
             return {"ms": math.inf, "gm_db": -math.inf, "pm_deg": -math.inf, "cl_pole_max": pole,
                     "wc_rad_s": math.nan, "w180_rad_s": math.nan}
         L = loop_response(self.ctrl, cp, self.plant, self._omega, self._pr)
-        return {**margins(L, self._omega), "cl_pole_max": pole}
+        exact = exact_loop(self.ctrl, cp, self.plant, "states" in self._pr)
+        return {**margins(L, self._omega, exact, math.pi / self.period), "cl_pole_max": pole}
 
     def evaluation(self, sim: Mapping[str, Any], params: Mapping[str, Any] | None = None) -> Evaluation:
         """Score one simulation of ``params``: cost, step metrics, margins (linear plants), requirements."""
