@@ -16,6 +16,7 @@ rest :mod:`.scenario`'s)::
     sensor: {noise_std: 0.0, seed: 0}
     cost: {iae: 1.0}
     requirements: {max_overshoot_pct: 10, max_ms: 1.6}
+    init: {rule: amigo, fit: area}  # optional: start from a tuning rule's PID (:mod:`.start`)
 
 An evaluation is :class:`tuner.objective.Evaluation`: the cost and the metrics (every cost term, the step
 metrics, ``peak_u``, and for linear plants ``ms``, ``gm_db``, ``pm_deg`` and ``cl_pole_max``, the largest
@@ -54,12 +55,13 @@ from objectives.control.plants.scenario import (
     step_metrics,
 )
 from objectives.control.plants.simulate import simulate_loop
+from objectives.control.plants.start import Start, init_from_spec, rule_start
 from tuner.objective import Evaluation
 
 __all__ = ["SISOLoop", "DeployedController"]
 
 #: the loop's settings (the objective's keys besides kind, plant, controller, fixed)
-_SETTINGS = ("period_s", "scenario", "actuator", "sensor", "cost", "requirements")
+_SETTINGS = ("period_s", "scenario", "actuator", "sensor", "cost", "requirements", "init")
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,7 @@ class SISOLoop:
 
     def __init__(self, kind: PlantKind, spec: Any, cls: Any, fixed: dict[str, Any], base_dir: Any = None,
                  period_s: Any = 0.01, scenario: Any = None, actuator: Any = None, sensor: Any = None,
-                 cost: Any = None, requirements: Any = None) -> None:
+                 cost: Any = None, requirements: Any = None, init: Any = None) -> None:
         p = period_s
         if isinstance(p, bool) or not isinstance(p, (int, float)) or not (math.isfinite(p) and p > 0):
             raise ValueError(f"objective.period_s: the controller period must be a number > 0 s, got {p!r}")
@@ -114,6 +116,14 @@ class SISOLoop:
         step = self._sc.first_step()
         self._req = requirements_from_spec(self.requirements, step is not None, self.linear,
                                            (step[1] - step[0]) * self.period if step else math.inf)
+        self.init = init
+        self._init = init_from_spec(init, self._req.get("max_ms"))
+        self._start: Start | None = None
+        if self._init is not None:
+            if cls.from_ideal(1.0, 1.0, 0.0) is None:
+                raise ValueError(f"objective.init: a rule gives one PID (pid2dof, pid2dof_par), not a {cls.name}")
+            if self._init["max_ms"] is not None and not self.linear:
+                raise ValueError("objective.init.max_ms: Ms needs an LTI plant (tf, zpk, ss); leave max_ms out")
         n_meas = self.plant.n_states if cls.name == "lqr_sf" else self.plant.n_outputs
         std = np.array(self._real.noise_std, dtype=float)
         if std.size not in (1, n_meas):
@@ -141,7 +151,7 @@ class SISOLoop:
         for k in ("fixed", "scenario", "actuator", "sensor", "cost", "requirements"):
             if section.get(k) is not None and not isinstance(section[k], Mapping):
                 raise ValueError(f"objective.{k}: expected a mapping, got {section[k]!r}")
-        return {"period_s": section.get("period_s", 0.01),
+        return {"period_s": section.get("period_s", 0.01), "init": section.get("init"),
                 **{k: dict(section.get(k) or {}) for k in ("scenario", "actuator", "sensor", "cost", "requirements")}}
 
     @staticmethod
@@ -154,7 +164,21 @@ class SISOLoop:
     def settings(self) -> dict[str, Any]:
         """The settings this loop was built from (the objective pickles them)."""
         return {"period_s": self.period, "scenario": self.scenario, "actuator": self.actuator,
-                "sensor": self.sensor, "cost": self.cost, "requirements": self.requirements}
+                "sensor": self.sensor, "cost": self.cost, "requirements": self.requirements, "init": self.init}
+
+    def start(self) -> Start | None:
+        """The rule's PID of ``init`` (computed once: a step response, a fit and the detuning), or None."""
+        if self._init is not None and self._start is None:
+            def ms_of(pid: tuple[float, float, float]) -> float:
+                return self.loop_margins(self.ctrl.from_ideal(*pid))["ms"]
+
+            self._start = rule_start(self.plant, self._init, ms_of, float(self._sc.t[-1]))
+        return self._start
+
+    def start_values(self) -> dict[str, float]:
+        """The controller's values of the ``init`` rule's PID (empty without ``init``)."""
+        s = self.start()
+        return {} if s is None else self.ctrl.from_ideal(*s.pid)
 
     # --- the objective's hooks -------------------------------------------------------------------
     @property
@@ -171,8 +195,9 @@ class SISOLoop:
                 "cost": self.cost, "requirements": self.requirements}
 
     def notes(self) -> list[str]:
+        s = self.start()
         return [f"the controller runs every period_s = {self.period:g} s; its discrete coefficients are "
-                "in the export's tables"]
+                "in the export's tables"] + ([f"the search started from {s.describe()}"] if s else [])
 
     def coeffs(self, params: Mapping[str, Any] | None) -> np.ndarray:
         """Kernel coefficients of ``params`` (with ``fixed`` and defaults); ValueError if not designable."""
