@@ -43,9 +43,10 @@ lint: setup
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache
 
-# The seeds' headline claims from configs/papers/ at reduced budgets, five seeds each; writes docs/papers.md
-# whole (budgets sized for under 15 min on 2 idle cores; the page gives the measured wall time).
-# papers-full: the papers' own budgets (hours).
+# The seeds' claims from configs/papers/ at reduced budgets, five seeds each: one run writes docs/papers.json
+# (every row's per-seed values) and docs/papers.md drawn from it (verdicts by the rules at its top; budgets sized
+# for under 15 min on 2 cores; the page gives the measured wall and CPU time). papers-full: the papers' own
+# budgets (hours). Regenerate from a clean tree, then commit both files: the header names the commit measured.
 papers: setup
 	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m benchmarks.papers
 

@@ -130,7 +130,7 @@ def sizes(tmp: Path, precisions=("double", "float"), configs=None) -> dict[str, 
             for name, text in render_c_filter(_filter(label), rate_hz=100.0, precision=precision,
                                               prefix="SZ").items():
                 (d / name).write_text(text)
-            subprocess.run([cc, *STRICT_FLAGS, "-O2", "-c", str(d / "sz.c"), "-o", str(d / "sz.o")], check=True)
+            subprocess.run([*cc, *STRICT_FLAGS, "-O2", "-c", str(d / "sz.c"), "-o", str(d / "sz.o")], check=True)
             sec = {}
             for line in subprocess.run(["size", "-A", str(d / "sz.o")], capture_output=True, text=True,
                                        check=True).stdout.splitlines():
@@ -141,7 +141,7 @@ def sizes(tmp: Path, precisions=("double", "float"), configs=None) -> dict[str, 
             (d / "main.c").write_text('#include <stdio.h>\n#include "sz.h"\nint main(void) { printf("%lu %lu\\n", '
                                       "(unsigned long)sizeof(SZ_filter), (unsigned long)sizeof(SZ_params)); "
                                       "return 0; }\n")
-            subprocess.run([cc, "-std=c99", "-o", str(d / "main"), str(d / "main.c")], check=True)
+            subprocess.run([*cc, "-std=c99", "-o", str(d / "main"), str(d / "main.c")], check=True)
             st, pa = subprocess.run([str(d / "main")], capture_output=True, text=True, check=True).stdout.split()
             out[f"{label} ({precision})"] = {"code_bytes": code, "state_bytes": int(st), "params_bytes": int(pa)}
     return out

@@ -234,7 +234,8 @@ def _analyse(name: str, runs: list[dict], budget: int) -> dict[str, Any]:
         ev = [evals_to_band(t, thr) for t in T]
         out["methods"][m] = {
             "final_median": float(np.median(final)), "final_q1": float(np.quantile(final, 0.25)),
-            "final_q3": float(np.quantile(final, 0.75)), "evals_to_1pct_median": _median_evals(ev),
+            "final_q3": float(np.quantile(final, 0.75)), "final_worst": float(np.max(final)),
+            "evals_to_1pct_median": _median_evals(ev),
             "finals": final.tolist(),
             "evals_to_1pct": ev, "reached": int(sum(math.isfinite(e) for e in ev)), "seeds": len(rs),
             "seconds_median": float(np.median([r["seconds"] for r in rs])),
@@ -445,7 +446,7 @@ def report(analyses: dict[str, Any], verdicts: dict[str, Any], meta: dict[str, A
     if skipped:
         lines.append("Skipped problems: " + "; ".join(f"{k}: {v}" for k, v in skipped.items()))
     lines.append("\nEvaluations to within 1 % of the best fitness any method found (median over seeds; "
-                 "`-` = not reached by half the seeds) and median final fitness:\n")
+                 "`-` = not reached by half the seeds), median final fitness and, in brackets, the worst seed's:\n")
     header = ["problem", "f*"] + [f"{m}" for m in methods]
     rows = []
     for name, a in analyses.items():
@@ -453,7 +454,7 @@ def report(analyses: dict[str, Any], verdicts: dict[str, Any], meta: dict[str, A
         for m in methods:
             v = a["methods"].get(m)
             row.append("n/a" if v is None else f"{fmt(v['evals_to_1pct_median'])} ({v['reached']}/{v['seeds']}) / "
-                       f"{fmt(v['final_median'])}")
+                       f"{fmt(v['final_median'])} [{fmt(v.get('final_worst', max(v['finals'])))}]")
         rows.append(row)
     lines.append(md_table(header, rows))
     lines.append("\nTarget: best of ours needs no more evaluations than the best of pyswarms, Optuna, scipy DE:\n")

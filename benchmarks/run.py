@@ -5,7 +5,12 @@ Benchmarks (one module each): ``filters`` (filter throughput against ahrs, imufu
 workers, engine overhead, peak memory) and ``optimizers`` (quality per evaluation against pyswarms,
 Optuna, scipy DE, random search) and ``broad_cv`` (leave-one-group-out CV of every ``configs/broad_*.yaml``
 on the shared BROAD trials, skipped without the data) and ``pid_benchmark`` (PID tuned by tuner against the
-AMIGO and SIMC rules on Åström and Hägglund's benchmark plants; also ``benchmarks/results/pid_benchmark.md``).
+AMIGO and SIMC rules on Åström and Hägglund's benchmark plants; also ``benchmarks/results/pid_benchmark.md``),
+``robust_control`` (controllers tuned on the nominal plant against tuned on an uncertain plant's model set,
+scored on 200 held-out perturbed plants; also ``benchmarks/results/robust_control.md``),
+``mujoco`` (MuJoCo plants: evaluations per second and the share in MuJoCo, a balancing LQR on held-out perturbed
+models; ``benchmarks/results/mujoco.md``) and ``mujoco_wmp`` (the thesis's pendulum as a MuJoCo model against
+our 8-state model; ``benchmarks/results/mujoco_wmp.md``); both skipped without the mujoco extra.
 Each writes ``<out>/<name>.json`` with the machine facts; the run writes ``<out>/SUMMARY.md`` with a table
 per benchmark, targets marked pass/FAIL, and curves as PNG.
 
@@ -30,7 +35,8 @@ from pathlib import Path
 
 from benchmarks.common import PEERS, RESULTS_DIR, fmt, machine_facts, md_table, peer, write_result
 
-BENCHMARKS = ["filters", "closed_loop", "parallel", "optimizers", "broad_cv", "pid_benchmark"]
+BENCHMARKS = ["filters", "closed_loop", "parallel", "optimizers", "broad_cv", "pid_benchmark", "robust_control",
+              "mujoco", "mujoco_wmp"]
 INSTALL_HINT = "pip install ahrs imufusion vqf pyswarms optuna cmaes"
 
 

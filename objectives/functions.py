@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from tuner.deployment import Deployment, build_deployment
 from tuner.objective import Evaluation
 from tuner.space import Real, Space
 
@@ -113,11 +114,10 @@ class FunctionObjective:
         """Provenance for ``tuner export``."""
         return {"objective": {"kind": "function", "function": self.function}, "data": None}
 
-    def deployment(self, params: dict[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: dict[str, Any]) -> Deployment:
         """The point itself: a test function has nothing else to deploy."""
         values = {f"x{i}": float(params[f"x{i}"]) for i in range(self.dim)}
-        return {"kind": "function", "name": self.function, "values": values,
-                "sources": {k: "searched" for k in values}, "scoring": {"dim": self.dim}}
+        return build_deployment("function", self.function, values, searched=values, scoring={"dim": self.dim})
 
     def build(self, params: dict[str, Any]) -> np.ndarray:
         """The point as a (dim,) array."""

@@ -6,6 +6,7 @@ group ``tuner.objectives`` in ``pyproject.toml``; this module only re-exports th
 
 from __future__ import annotations
 
-from tuner.registry import REGISTRY, PythonObjective, build_objective
+from tuner.python_objective import PythonObjective
+from tuner.registry import REGISTRY, build_objective
 
 __all__ = ["build_objective", "PythonObjective", "REGISTRY"]

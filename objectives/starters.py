@@ -153,7 +153,11 @@ def _loop_starter(name: str) -> str | None:
             f"{fixed_block}\n"
             "  period_s: 0.01                 # controller period (s)\n"
             "  scenario: {duration_s: 3.0, reference: [{t: 0.1, value: 1.0}], load: [{t: 2.0, value: 0.5}]}\n"
+            "  # or scenarios: [{name: large, ...}, {name: small, ...}]: steps of several amplitudes, loads, noise,\n"
+            "  # each with its weight and requirements (tuner describe scenario)\n"
             "  cost: {iae: 1.0}               # iae, ise, itae, itse, effort, tv, or {mae_product: {e: 1.4, u: 0.4}}\n"
             "  requirements: {}               # e.g. {max_overshoot_pct: 10, max_ms: 1.6} (a failed one fails)\n"
+            "  # uncertainty: {parameters: {\"tf.num[0]\": {rel: 0.3}}}   # tune on perturbed plants too\n"
+            "  #   (tuner describe uncertainty; requirements.md then gives the pass rate on held-out plants)\n"
             "parameters:                      # searched: {low, high, scale: linear|log} or {fixed: value}\n"
             + "\n".join(searched) + "\n" + _TAIL.format(evals=200))

@@ -15,7 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-__version__ = "0.1.0"
+from tuner._version import __version__
 
 __all__ = ["__version__", "tune", "load", "Result", "GenerationSummary", "ConfigError", "RunError", "load_best",
            "run_config"]

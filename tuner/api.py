@@ -7,13 +7,15 @@ back from the run directory, so a run made from code and one made by ``tuner run
 config and seed have the same files and the same ``history.csv`` (but for its ``seconds`` column).
 ``load`` gives the same :class:`Result` for a run that is already on disk.
 
-Bad input raises :class:`tuner.config.ConfigError` (or :class:`tuner.rundir.RunError` for a run
+Bad input raises :class:`tuner.config.ConfigError` (or :class:`tuner.records.RunError` for a run
 directory) whose text is the command line's ``error:`` line without the ``error:``, before anything
 is written.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import io
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -21,7 +23,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tuner.config import ConfigError, RunConfig, apply_overrides, config_from_dict, load_config
-from tuner.rundir import RunDir, RunError
+from tuner.records import RunError
+from tuner.rundir import RunDir
+from tuner.safe_io import read_text, regular
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -107,6 +111,9 @@ class Result:
         Evaluations made, failures among them.
     stop_reason : str
         Why the optimiser stopped.
+    repeats : tuner.records.Repeats or None
+        A repeated run's spread over its seeds (``repeats.json``); ``params``, ``best`` and ``history`` are
+        then the deployed repeat's. None for a single run.
     """
 
     run_dir: Path
@@ -121,6 +128,7 @@ class Result:
     n_evals: int
     n_failed: int
     stop_reason: str
+    repeats: Any = None
 
     def report(self) -> Path:
         """(Re)write ``report.md``, ``report.html`` and ``figures/`` of the run; returns ``report.html``."""
@@ -133,8 +141,10 @@ class Result:
         """The tuned filter or controller, ready for ``.run(...)`` / ``.stream(...)`` on new data.
 
         Built by the objective's ``build`` hook from :attr:`best` (the run's objective is re-created
-        from its ``config.yaml``; no data is loaded). ``ValueError`` when the run has no best point or
-        its objective kind builds nothing (e.g. ``function``, ``python``).
+        from its ``config.yaml``; no data is loaded). This runs the code the config names (a plant module,
+        an FMU), but none from inside the run directory (:mod:`tuner.trust`: ``ConfigError`` naming it).
+        ``ValueError`` when the run has no best point or its objective kind builds nothing (e.g.
+        ``function``, ``python``).
         """
         from tuner.objective import hook
 
@@ -199,7 +209,7 @@ def _check_kwargs(overrides: Any, seed: Any, n_jobs: Any) -> list[str]:
 def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None = None, n_jobs: int | None = None,
          run_dir: str | Path | None = None, progress: bool | Callable[[str], None] = True,
          callback: Callable[[GenerationSummary], None] | None = None,
-         overrides: list[str] | None = None, report: bool = True) -> Result:
+         overrides: list[str] | None = None, report: bool = True, repeats: int | None = None) -> Result:
     """Tune a job, as ``tuner run`` does, and return its :class:`Result`.
 
     Parameters
@@ -222,6 +232,9 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
         ``key.path=value`` strings, as ``--set`` (one string is one override).
     report : bool
         False: no report, live or final (``--no-report``; ``tuner report RUN_DIR`` writes it later).
+    repeats : int, optional
+        Override ``repeats`` (``--repeats``): run the job with seeds ``seed .. seed + repeats - 1`` and deploy
+        one of them (:mod:`tuner.repeats`); the :class:`Result` carries the spread in ``repeats``.
 
     Raises
     ------
@@ -230,16 +243,28 @@ def tune(config: str | Path | Mapping[str, Any] | RunConfig, *, seed: int | None
         nothing is written.
     RunError
         ``run_dir`` exists and is not empty, or is in use.
+    KeyboardInterrupt
+        Ctrl-C, SIGTERM or SIGHUP stopped the run: it is saved first (status ``interrupted``; :func:`load`
+        reads it, ``tuner resume`` continues it), then the interrupt goes on to the caller, so a script
+        looping over ``tune()`` stops too.
     """
-    from tuner.run import run
+    from tuner.repeats import run
 
     if not isinstance(report, bool):  # report="no" would be true: a report the caller asked to leave out
         raise ConfigError("tune()", "report", f"expected True or False, got {type(report).__name__} {report!r}")
     cfg = _config(config, overrides, seed, n_jobs)
+    if repeats is not None:
+        if isinstance(repeats, bool) or not isinstance(repeats, int):
+            raise ConfigError("tune()", "repeats", f"expected an integer, got {type(repeats).__name__} {repeats!r}")
+        checked = config_from_dict({**cfg.raw, "repeats": repeats}, source=cfg.source, base_dir=cfg.base_dir)
+        cfg = dataclasses.replace(cfg, repeats=checked.repeats, raw=checked.raw)
     printer = progress if callable(progress) else None
     on_generation = (lambda g: callback(GenerationSummary.from_generation(g))) if callback is not None else None
     res = run(cfg, run_dir=run_dir, quiet=not progress, progress=printer, on_generation=on_generation,
               report=report)
+    if res.status == "interrupted":  # saved; a script looping over tune() must stop as on any Ctrl-C
+        raise KeyboardInterrupt(f"interrupted; the run is saved: tuner.load({str(res.run_dir)!r}) reads it, "
+                                f"`tuner resume {res.run_dir}` continues it")
     return load(res.run_dir)
 
 
@@ -254,19 +279,26 @@ def load(run_dir: str | Path) -> Result:
     if not rd.path.is_dir():
         raise RunError(f"{rd.path}: not a run directory (no such directory)")
     meta = rd.meta()
-    hist_path = rd.file("history.csv")
-    history = pd.read_csv(hist_path) if hist_path.is_file() and hist_path.stat().st_size else pd.DataFrame()
+    repeats = rd.repeats()
+    src = RunDir(rd.chosen_repeat() or rd.path)  # a repeated run's history is its deployed repeat's
+    try:
+        text = read_text(src.file("history.csv")) if regular(src.file("history.csv")) else ""
+        history = pd.read_csv(io.StringIO(text)) if text else pd.DataFrame()
+    except (UnicodeDecodeError, ValueError, pd.errors.ParserError) as exc:  # EmptyDataError is a ValueError
+        raise RunError(f"{src.file('history.csv')}: unreadable ({str(exc).strip().splitlines()[0][:200]})") from None
     params: dict[str, Any] = {}
     best: dict[str, Any] = {}
     metrics: dict[str, Any] = {}
     deployment, fitness = None, math.inf
     if rd.has_best():
         from tuner.deployment import load_deployment
+        from tuner.trust import data_only
 
         b = rd.best()
         params, fitness = dict(b.params), float(b.fitness)
         metrics = {**dict(b.metrics), **dict(b.evaluation or {})}
-        deployment = load_deployment(rd.path)
+        with data_only("tuner.load"):  # reading a run loads no code its config names (tuner.trust)
+            deployment = load_deployment(rd.path)
         best = dict(deployment.values)
     return Result(rd.path.resolve(), meta.status, fitness, params, best, deployment, metrics, history,
-                  rd.validation(), int(meta.n_evals), int(meta.n_failed), meta.stop_reason or "")
+                  src.validation(), int(meta.n_evals), int(meta.n_failed), meta.stop_reason or "", repeats)

@@ -10,16 +10,17 @@ their most frequent reasons. The run report, the sweep report and ``tuner show``
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
-from tuner.rundir import RunDir, RunError
+from tuner.failures import failure_groups
+from tuner.records import RunError
+from tuner.rundir import RunDir
 from tuner.space import Real, Space, SpaceError
 
-__all__ = ["ReportWarning", "bound_warnings", "failure_warnings", "run_warnings", "BOUND_TOL"]
+__all__ = ["ReportWarning", "bound_warnings", "failure_warnings", "run_warnings", "run_space", "BOUND_TOL"]
 
 #: default distance to a bound (fraction of the searched range) that triggers a warning
 BOUND_TOL = 0.02
@@ -101,18 +102,20 @@ def bound_warnings(params: Mapping[str, Any], space: Space, tol: float = BOUND_T
 
 def failure_warnings(n_failed: int, n_evals: int, errors: list[str] | None = None,
                      top: int = 3) -> list[ReportWarning]:
-    """One warning when ``n_failed > 0``, naming the ``top`` most frequent error texts."""
+    """One warning when ``n_failed > 0``, naming the ``top`` most frequent reasons (grouped by
+    :func:`tuner.failures.failure_groups`: the same reason with other numbers counts once per evaluation)."""
     if n_failed <= 0:
         return []
     frac = n_failed / n_evals if n_evals else math.nan
     msg = f"{n_failed} of {n_evals} evaluations failed ({frac:.1%})"
-    common = Counter(e for e in (errors or []) if e).most_common(top)
+    common = failure_groups(errors or [])[:top]
     if common:
-        msg += "; most frequent: " + "; ".join(f"{e[:120]} (x{n})" for e, n in common)
+        msg += "; most frequent reasons: " + "; ".join(f"{g.example[:120]} (x{g.count})" for g in common)
     return [ReportWarning("failed", msg, value=float(n_failed), distance=frac)]
 
 
-def _run_space(run_dir: Path) -> Space | None:
+def run_space(run_dir: Path) -> Space | None:
+    """The search space of a run directory's config, or None when it has none or it does not build."""
     rd = RunDir(run_dir)
     if not rd.file("config.yaml").exists():
         return None
@@ -127,7 +130,7 @@ def run_warnings(run_dir: str | Path, tol: float = BOUND_TOL) -> list[ReportWarn
     ``history.csv``); files that do not exist yet (a run that just started) give no warning."""
     rd = RunDir(run_dir)
     out: list[ReportWarning] = []
-    space = _run_space(rd.path)
+    space = run_space(rd.path)
     if space is not None and rd.has_best():
         out += bound_warnings(dict(rd.best().params), space, tol)
     rows = rd.history_rows()

@@ -13,6 +13,7 @@ Shape of a job (see README for every key)::
                 refine: {stages: 2, shrink: 0.2}}
     parallel: {backend: loky, n_jobs: 2, address: null}
     output: runs                              # parent directory of run directories
+    repeats: 5                                # optional: 5 runs, seeds seed + 0..4 (tuner.repeats)
     validation: {cv: logo, select: {top_k: 5, holdout: 0.25, include_defaults: true}}   # optional, see ValidationConfig
 """
 
@@ -43,6 +44,7 @@ TOP_KEYS = {
     "optimizer": "{method: pso|cmaes|de|random, population, generations, ...options}",
     "parallel": "{backend: serial|loky|dask|threads, n_jobs, address}",
     "output": "directory holding the run directories (default: runs)",
+    "repeats": "number of runs of this job, seeds seed + 0 .. seed + repeats - 1 (default: 1)",
     "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, "
                   "select: {top_k, holdout, include_defaults}}",
 }
@@ -65,6 +67,8 @@ _ADDRESS = re.compile(r"(tcp|tls|ucx|ws|wss)://(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9][A
 #: the largest population or number of generations accepted (more would exhaust memory before the first
 #: generation, or take longer than any run: a typo such as 1e12)
 MAX_COUNT = 1_000_000
+#: the most repeats of one job (each is a whole run with a directory of its own)
+MAX_REPEATS = 1000
 
 
 @dataclass(frozen=True)
@@ -148,7 +152,9 @@ class ValidationConfig:
 
 @dataclass(frozen=True)
 class RunConfig:
-    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory."""
+    """A validated job. ``raw`` is the resolved YAML mapping written into the run directory. ``origin`` is the
+    run (or sweep) directory the config was read back from (:func:`tuner.setup.run_config`), None for a config
+    file: no code is loaded from inside it (:func:`tuner.trust.code_outside`)."""
 
     name: str
     seed: int
@@ -162,6 +168,8 @@ class RunConfig:
     raw: Mapping[str, Any]
     description: str = ""
     validation: ValidationConfig = field(default_factory=ValidationConfig)
+    origin: Path | None = None
+    repeats: int = 1
 
     def space(self, objective: Any = None) -> Space:
         """The search space: ``parameters`` if given, else the objective's ``default_space()``.
@@ -251,8 +259,9 @@ def read_yaml(path: str | Path, what: str = "") -> Any:
 
 
 def load_config(path: str | Path, overrides: list[str] | None = None, seed: int | None = None,
-                n_jobs: int | None = None) -> RunConfig:
-    """Read and validate a job file; ``overrides`` are ``key.path=value`` strings (``--set``)."""
+                n_jobs: int | None = None, repeats: int | None = None) -> RunConfig:
+    """Read and validate a job file; ``overrides`` are ``key.path=value`` strings (``--set``); ``seed``,
+    ``n_jobs`` and ``repeats`` replace the file's values (``--seed``, ``--n-jobs``, ``--repeats``)."""
     path = Path(path)
     raw = read_yaml(path)
     if not isinstance(raw, dict):
@@ -265,6 +274,8 @@ def load_config(path: str | Path, overrides: list[str] | None = None, seed: int 
         if not isinstance(par, dict):
             raise ConfigError(path, "parallel", f"expected a mapping, got {type(par).__name__} {par!r}")
         raw["parallel"] = {**par, "n_jobs": int(n_jobs)}
+    if repeats is not None:
+        raw["repeats"] = repeats
     return config_from_dict(raw, source=str(path), base_dir=path.resolve().parent)
 
 
@@ -431,6 +442,10 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     parallel = ParallelConfig(backend, n_jobs, address, float(timeout))
     output = str(_get(raw, "output", str, f, "", default="runs"))
     validation = parse_validation(raw.get("validation"), f)
+    repeats = _get(raw, "repeats", int, f, "", default=1)
+    if not 1 <= repeats <= MAX_REPEATS:
+        raise ConfigError(f, "repeats", f"expected an integer in [1, {MAX_REPEATS}] (runs of this job, seeds seed + "
+                                        f"0 .. seed + repeats - 1), got {repeats!r}")
 
     resolved = {
         "name": name,
@@ -446,5 +461,7 @@ def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir:
     }
     if raw.get("validation") is not None:  # absent stays absent: the config hash of older jobs is unchanged
         resolved["validation"] = raw["validation"]
+    if repeats > 1:  # one run is a job without the key: its config (and hash) is the plain run's
+        resolved["repeats"] = repeats
     return RunConfig(name, seed, objective, parameters, optimizer, parallel, output, source,
-                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")), validation)
+                     base_dir or Path.cwd(), resolved, str(raw.get("description", "")), validation, repeats=repeats)

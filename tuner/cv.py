@@ -239,8 +239,10 @@ def write_cv(out: CVOutcome, directory: str | Path, validation: ValidationConfig
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     md, table = cv_texts(out, validation)
-    (d / "cv.csv").write_text(table)
-    (d / "cv.md").write_text(md)
+    from tuner.safe_io import write_atomic
+
+    write_atomic(d / "cv.csv", table, fsync=False)  # never through a link of either kind (tuner.safe_io)
+    write_atomic(d / "cv.md", md, fsync=False)
     return d
 
 

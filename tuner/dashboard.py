@@ -14,6 +14,7 @@ page. While any listed run is running the page reloads itself every
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
@@ -34,19 +35,27 @@ def _num(v: Any) -> float | None:
     return float(v)
 
 
+def _dirs(d: Path) -> list[Path]:
+    """The folders in ``d`` (no symbolic link, nor hidden ones), sorted; none when ``d`` cannot be listed."""
+    try:
+        return sorted(p for p in d.iterdir() if not p.name.startswith(".") and p.is_dir() and not p.is_symlink())
+    except OSError:
+        return []
+
+
 def _walk(root: Path) -> list[tuple[str, Path]]:
-    """(kind, path) of every sweep and run directory under ``root``, in path order."""
+    """(kind, path) of every sweep, sweep job and run directory under ``root``, in path order: run and sweep
+    directories up to :data:`MAX_DEPTH` levels down, and every job of each sweep found (a sweep's jobs are
+    ``jobs/<id>`` below it, however deep the sweep lies: a folder of several ``runs/`` folders included)."""
     found: list[tuple[str, Path]] = []
 
     def visit(d: Path, depth: int) -> None:
-        try:
-            subs = sorted(p for p in d.iterdir() if p.is_dir() and not p.name.startswith("."))
-        except OSError:
-            return
-        for p in subs:
-            if (p / "sweep.yaml").exists():
+        for p in _dirs(d):
+            if os.path.lexists(p / "sweep.yaml"):
                 found.append(("sweep", p))
-            elif (p / "meta.json").exists():
+                found.extend(("job", j) for j in _dirs(p / "jobs") if os.path.lexists(j / "meta.json"))
+                continue  # nothing below a sweep directory but its jobs
+            if os.path.lexists(p / "meta.json"):
                 found.append(("job" if p.parent.name == "jobs" else "run", p))
                 continue  # nothing below a run directory is another run
             if depth < MAX_DEPTH:
@@ -57,18 +66,22 @@ def _walk(root: Path) -> list[tuple[str, Path]]:
 
 
 def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
-    from tuner.interactive import best_so_far
+    from tuner.plots.sweep_convergence import best_so_far
     from tuner.rundir import RunDir
+    from tuner.runinfo import unreadable
+    from tuner.safe_io import regular
 
     rel = d.relative_to(root).as_posix()
     row: dict[str, Any] = {"id": rel, "kind": kind, "name": rel if kind == "job" else d.name}
-    rd = RunDir(d)
     try:
+        rd = RunDir(d)
         meta = rd.meta().to_dict()
         best = rd.best().to_doc() if rd.has_best() else {}
-        cfg = rd.config() if (d / "config.yaml").exists() else {}
+        cfg = rd.config() if regular(d / "config.yaml") else {}
+        rep = rd.repeats()
+        conv = best_so_far(rd.chosen_repeat() or d)  # a repeated run: its deployed repeat's curve
     except Exception as exc:  # noqa: BLE001 - one damaged run must not hide the others
-        return {**row, "status": f"unreadable: {str(exc).splitlines()[0][:120]}"}
+        return {**row, "status": f"unreadable: {unreadable(exc)}"}
     s = {"status": meta.get("status"), "n_evals": meta.get("n_evals"), "created": meta.get("created"),
          "wall_s": (meta.get("timing") or {}).get("wall_s"), "best_fitness": best.get("fitness"),
          "params": best.get("params") or {}, "metrics": best.get("metrics") or {}}
@@ -76,7 +89,7 @@ def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
     ev = best.get("evaluation") or {}
     val = {}
     try:
-        val = (RunDir(d).validation() or {}).get("cv") or {}
+        val = (rd.validation() or {}).get("cv") or {}
     except Exception:  # noqa: BLE001 - a damaged validation.json only loses the CV columns
         pass
     row.update({
@@ -87,9 +100,15 @@ def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
         "n_evals": s["n_evals"], "wall_s": _num(s["wall_s"]), "date": (s["created"] or "")[:19],
         "params": {k: (v if isinstance(v, (int, float, str, bool)) else str(v)) for k, v in s["params"].items()},
         "metrics": {k: _num(v) for k, v in {**s["metrics"], **ev}.items() if _num(v) is not None},
-        "conv": best_so_far(d),
+        "conv": conv,
     })
-    if (d / "report.html").exists():
+    if rep is not None and rep.fitness is not None:  # the spread over the seeds beside the status
+        from tuner.spread import fmt
+
+        f = rep.fitness
+        row["status"] = (f"{row['status']} · {rep.n} seeds, best {fmt(f.low)} .. {fmt(f.high)}"
+                         + (" · large spread" if rep.warning else ""))
+    if os.path.lexists(d / "report.html"):
         row["href"] = quote(f"{rel}/report.html", safe="/-_.~")
     return row
 
@@ -109,7 +128,7 @@ def _sweep_row(root: Path, d: Path, jobs: list[dict[str, Any]]) -> dict[str, Any
            "n_evals": sum(int(j.get("n_evals") or 0) for j in mine),
            "wall_s": sum(j.get("wall_s") or 0.0 for j in mine) or None,
            "date": min((j.get("date") or "" for j in mine), default="")}
-    if (d / "report.html").exists():
+    if os.path.lexists(d / "report.html"):
         row["href"] = quote(f"{rel}/report.html", safe="/-_.~")
     return row
 
@@ -164,7 +183,7 @@ def write_dashboard(root: str | Path, refresh_s: float = LIVE_REFRESH_S) -> Path
         md += ["Click a column header to sort, type in the box to filter, tick runs to compare them.", "",
                "{{plot:dashboard}}", ""]
         best = [r["best"] for r in rows if r.get("best") is not None and r["best"] > 0]
-        data = {"runs": rows, "log_fitness": bool(best and max(best) / min(best) > 20)}
+        data = {"dashboard": {"runs": rows, "log": bool(best and max(best) / min(best) > 20)}}
         interactive.install_assets(root)
         scripts = interactive.SCRIPTS
     else:

@@ -19,24 +19,19 @@ they are. ``best.yaml`` holds it under ``deployment:``; :func:`load_deployment` 
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from tuner.objective import hook
+from tuner.records import plain
 
-__all__ = ["Deployment", "SOURCES", "DEFAULTS_MEANING", "as_deployment", "attach_deployment", "defaults_baseline",
-           "deployment_for", "load_best", "load_deployment"]
+__all__ = ["Deployment", "SOURCES", "DEFAULTS_MEANING", "as_deployment", "attach_deployment", "build_deployment",
+           "defaults_baseline", "deployment_for", "load_best", "load_deployment", "param_annotations"]
 
 #: where a value of :attr:`Deployment.values` comes from
 SOURCES = ("searched", "fixed", "default")
-
-
-def _plain(v: Any) -> Any:
-    from tuner.rundir import plain
-
-    return plain(v)
 
 
 @dataclass(frozen=True)
@@ -66,6 +61,10 @@ class Deployment:
         The rate per-sample values assume (None when unknown or irrelevant).
     notes : tuple[str, ...]
         What a user of the deployed system must know (e.g. how it starts on live data).
+    tables : Mapping[str, Any]
+        The objective's ``export_tables`` of ``values`` as the run computed them (look-up tables, gains,
+        difference equations: ``{name: {"table": nested lists, "doc", "unit", "x_range"/"y_range"}}``), so an
+        export writes them without rebuilding the objective (which may need code it never loads).
     """
 
     kind: str
@@ -78,6 +77,7 @@ class Deployment:
     scoring: Mapping[str, Any] = field(default_factory=dict)
     sample_rate_hz: float | None = None
     notes: tuple[str, ...] = ()
+    tables: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, str) or not self.kind:
@@ -113,7 +113,9 @@ class Deployment:
         doc["sample_rate_hz"] = self.sample_rate_hz
         if self.notes:
             doc["notes"] = list(self.notes)
-        return _plain(doc)
+        if self.tables:
+            doc["tables"] = dict(self.tables)
+        return plain(doc)
 
     @classmethod
     def from_doc(cls, doc: Any, where: str = "deployment") -> Deployment:
@@ -124,7 +126,7 @@ class Deployment:
             if key not in doc:
                 raise ValueError(f"{where}.{key}: missing")
         maps = {}
-        for key in ("values", "units", "docs", "sources", "choices", "scoring"):
+        for key in ("values", "units", "docs", "sources", "choices", "scoring", "tables"):
             v = doc.get(key) or {}
             if not isinstance(v, Mapping):
                 raise ValueError(f"{where}.{key}: expected a mapping, got {v!r}")
@@ -155,6 +157,36 @@ def param_annotations(decl: Any) -> tuple[dict[str, str], dict[str, str], dict[s
     return units, docs, choices
 
 
+def build_deployment(kind: str, name: str, values: Mapping[str, Any], *, searched: Collection[str] = (),
+                     fixed: Collection[str] = (), decl: Iterable[Any] | None = None,
+                     scoring: Mapping[str, Any] | None = None, sample_rate_hz: float | None = None,
+                     notes: Iterable[str] = (), sources: Mapping[str, str] | None = None,
+                     choices: Mapping[str, list] | None = None) -> Deployment:
+    """The :class:`Deployment` of a ``deployment`` hook: the one way an objective states what it deploys.
+
+    Parameters
+    ----------
+    kind, name : str
+        What is deployed (``"filter"``, ``"closed_loop"``...) and its name (``"madgwick"``, ``"pid"``).
+    values : mapping
+        Every value of the deployed system (searched, fixed and defaults), in the order it declares them.
+    searched, fixed : collections of names
+        Each value's source is ``searched`` if its name is in ``searched``, else ``fixed`` if in ``fixed``,
+        else ``default`` (:data:`SOURCES`); ``sources`` overrides single entries.
+    decl : iterable of parameter declarations, optional
+        Units, one-line docs and string choices of the values (:func:`param_annotations`); ``choices``
+        overrides single entries (e.g. the choices a deployed system has without ground truth).
+    scoring, sample_rate_hz, notes
+        As in :class:`Deployment`. Every field is made YAML/JSON-native (:func:`tuner.records.plain`).
+    """
+    sources_ = {k: "searched" if k in searched else "fixed" if k in fixed else "default" for k in values}
+    units, docs, choices_ = param_annotations(decl)
+    return Deployment(str(kind), str(name), plain(dict(values)), units=units, docs=docs,
+                      sources={**sources_, **dict(sources or {})}, choices=plain({**choices_, **dict(choices or {})}),
+                      scoring=plain(dict(scoring or {})), sample_rate_hz=plain(sample_rate_hz),
+                      notes=tuple(str(n) for n in notes))
+
+
 def as_deployment(value: Deployment | Mapping[str, Any], where: str = "deployment") -> Deployment:
     """A :class:`Deployment` from itself or from the dict a ``deployment`` hook returns."""
     return value if isinstance(value, Deployment) else Deployment.from_doc(value, where)
@@ -179,8 +211,7 @@ def deployment_for(objective: Any, params: Mapping[str, Any], searched: Collecti
         name = str(obj.get("function") or obj.get("callable") or obj.get("name") or getattr(objective, "__name__", ""))
         rate_fn = hook(objective, "sample_rate")
         rate = rate_fn()[0] if rate_fn is not None else None
-        dep = Deployment(kind, name, _plain(dict(params)), sources={k: "searched" for k in params},
-                         sample_rate_hz=rate)
+        dep = build_deployment(kind, name, params, searched=params, sample_rate_hz=rate)
     if searched is None and not fixed:
         return dep
     sources = dict(dep.sources)
@@ -192,17 +223,18 @@ def deployment_for(objective: Any, params: Mapping[str, Any], searched: Collecti
         elif searched is not None and sources.get(k) == "searched":
             sources[k] = "fixed"  # handed in by the run but not searched: a value of the space's fixed part
     return Deployment(dep.kind, dep.name, dep.values, dep.units, dep.docs, sources, dep.choices, dep.scoring,
-                      dep.sample_rate_hz, dep.notes)
+                      dep.sample_rate_hz, dep.notes, dep.tables)
 
 
 def load_deployment(run_dir: str | Path) -> Deployment:
     """The deployment of a finished run: ``best.yaml``'s ``deployment:``, else rebuilt from its config.
 
     Runs written before ``best.yaml`` held the deployment are rebuilt from their resolved config and
-    best parameters (the objective must still build). Raises :class:`tuner.rundir.RunError` naming the
+    best parameters (the objective must still build). Raises :class:`tuner.records.RunError` naming the
     file when the run has no best or a malformed deployment.
     """
-    from tuner.rundir import RunDir, RunError
+    from tuner.records import RunError
+    from tuner.rundir import RunDir
 
     rd = RunDir(run_dir)
     best = rd.best()
@@ -230,7 +262,7 @@ def load_best(run_dir: str | Path) -> dict[str, Any]:
 
 
 def attach_deployment(best: Any, objective: Any, space: Any) -> Any:
-    """``best`` (a :class:`tuner.rundir.Best`) with its deployment under ``objective`` and ``space``.
+    """``best`` (a :class:`tuner.records.Best`) with its deployment under ``objective`` and ``space``.
 
     A deployment that cannot be built (the hook raises ``ValueError`` or ``TypeError``) is recorded as
     ``{"error": text}``, so the finished run is kept and :func:`load_deployment` says why it has none.
@@ -239,6 +271,13 @@ def attach_deployment(best: Any, objective: Any, space: Any) -> Any:
 
     try:
         dep = deployment_for(objective, {**space.fixed, **best.params}, space.free_names, list(space.fixed))
+        tables_fn = hook(objective, "export_tables")
+        if tables_fn is not None:
+            try:
+                tables = tables_fn(dict(dep.values))
+            except (ValueError, TypeError, ArithmeticError):  # a design without tables: the values still deploy
+                tables = None
+            dep = dataclasses.replace(dep, tables=plain(dict(tables or {})))
         doc = dep.to_doc()
     except (ValueError, TypeError) as exc:
         doc = {"error": f"{type(exc).__name__}: {exc}"}

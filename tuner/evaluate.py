@@ -331,6 +331,9 @@ class Evaluator:
         self.close()
 
     def close(self) -> None:
+        # this process's copy of the objective goes with the evaluator (what it holds, e.g. an FMU's extraction
+        # folder, is released now, not at the next run); a worker drops its copy at its next run or its exit
+        _WORKER_CACHE.pop(self.token, None)
         if self._parallel is not None:
             self._parallel.__exit__(None, None, None)
             self._parallel = None

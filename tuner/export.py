@@ -24,23 +24,28 @@ from typing import Any
 
 from tuner.export_formats import FORMATS, c_prefix, to_c, to_json, to_python, to_yaml
 from tuner.objective import hook
+from tuner.trust import data_only
 
-__all__ = ["export", "FORMATS", "provenance", "export_c_filter", "verify_c"]
+__all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c"]
+
+#: the format name of the tuned system itself as C99 source (the objective's ``export_c`` hook), and the names it
+#: is also accepted under
+C_SOURCE = "c-source"
+C_SOURCE_ALIASES = ("c-filter",)
 
 
-def _build(run_dir: Path) -> Any:
-    """The run's objective, or None when it no longer builds (moved data, removed package...) or is a
-    ``kind: python`` callable: exporting reads a run directory as data and never imports code it names."""
-    from tuner.registry import build_objective
+def _build(run_dir: Path) -> tuple[Any, str]:
+    """The run's objective and '', or None and why it does not build (moved data, a removed package, or code
+    its config names: a plant module, an FMU, a ``kind: python`` callable, which no export loads and no
+    command loads from inside the run directory, :mod:`tuner.trust`)."""
+    from tuner.config import ConfigError
     from tuner.rundir import RunDir
+    from tuner.setup import build_objective, run_config
 
-    cfg = RunDir(run_dir).config()
-    if not isinstance(cfg.get("objective"), dict) or cfg["objective"].get("kind") == "python":
-        return None
     try:
-        return build_objective(dict(cfg["objective"]), Path(cfg.get("base_dir", run_dir)))
-    except (ValueError, OSError, ImportError):  # parameters still export if the objective no longer builds
-        return None
+        return build_objective(run_config(RunDir(run_dir))), ""
+    except (ConfigError, ValueError, OSError, ImportError) as exc:  # parameters still export
+        return None, str(exc)
 
 
 def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
@@ -52,14 +57,18 @@ def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
     best, meta, cfg = rd.best().to_doc(), rd.meta().to_dict(), rd.config()
     describe = hook(objective, "describe") if objective is not None else None
     desc = dict(describe()) if describe else {}
+    rep = rd.repeats()
+    chosen = rep.chosen_entry if rep is not None else None
+    extra = {} if chosen is None else {"repeat": {"run": chosen.run, "of": rep.n, "chosen_by": rep.rule}}
     return {
         "run": run_dir.name,
         "fitness": best.get("fitness"),
         "objective": dict(desc.get("objective") or {"kind": cfg.get("objective", {}).get("kind")}),
         "data": desc.get("data"),
         "optimizer": meta.get("optimizer"),
-        "seed": meta.get("seed"),
-        "n_evals": meta.get("n_evals"),
+        "seed": meta.get("seed") if chosen is None else chosen.seed,  # a repeated run deploys one seed's best
+        "n_evals": meta.get("n_evals") if chosen is None else chosen.n_evals,
+        **extra,
         "git_commit": meta.get("git_commit", ""),
         "exported": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "params": best["params"],
@@ -76,20 +85,24 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
     if fmt not in FORMATS:
         raise ValueError(f"unknown format {fmt!r}; allowed: {list(FORMATS)}")
     run_dir = Path(run_dir)
-    objective = _build(run_dir) if objective_tables else None
-    doc = provenance(run_dir, objective)
-    dep = _deployment(run_dir)
+    with data_only("tuner export"):  # a run directory is data: no code its config names is loaded
+        objective, why = _build(run_dir) if objective_tables else (None, "")
+        doc = provenance(run_dir, objective)
+        dep = _deployment(run_dir)
     units = _units(run_dir, objective, doc["params"])
-    rate = _sample_rate(objective)
+    rate = _sample_rate(objective, why)
     if dep is not None:  # the complete deployed system: every value, scoring-only settings apart
         doc["params"] = dict(dep.values)
-        doc["deployment"] = {k: v for k, v in dep.to_doc().items() if k not in ("values", "units", "docs")}
+        doc["deployment"] = {k: v for k, v in dep.to_doc().items() if k not in ("values", "units", "docs", "tables")}
         units = {**dict(dep.units), **units}  # a unit written in the config wins
         if dep.sample_rate_hz is not None and rate["sample_rate_hz"] is None:
             rate = {"sample_rate_hz": dep.sample_rate_hz, "sample_rate_note": "recorded with the run"}
     doc.update(units={k: units[k] for k in doc["params"] if k in units}, **rate)
     fn = hook(objective, "export_tables") if objective is not None else None
-    tables = fn(doc["params"]) if fn is not None else None
+    if dep is not None and dep.tables:  # as the run computed them (no objective, nor its code, needed)
+        tables = {name: dict(t) for name, t in dep.tables.items()}
+    else:
+        tables = fn(doc["params"]) if fn is not None else None
     if fmt != "c":  # what firmware runs (LQR gain K, Nx, Nu; fuzzy LUTs) in every format, as nested lists
         if tables:
             doc["tables"] = {name: {k: v for k, v in t.items()} for name, t in tables.items()}
@@ -104,9 +117,10 @@ def export(run_dir: str | Path, fmt: str, objective_tables: bool = True, prefix:
 def _deployment(run_dir: Path) -> Any:
     """The run's :class:`tuner.deployment.Deployment`, or None when ``best.yaml`` records none and the
     objective no longer builds (an older run: the parameters of ``best.yaml`` are exported then). A
-    recorded but malformed deployment is a :class:`tuner.rundir.RunError` naming the file."""
+    recorded but malformed deployment is a :class:`tuner.records.RunError` naming the file."""
     from tuner.deployment import load_deployment
-    from tuner.rundir import RunDir, RunError
+    from tuner.records import RunError
+    from tuner.rundir import RunDir
 
     if RunDir(run_dir).best().deployment:
         return load_deployment(run_dir)
@@ -130,10 +144,12 @@ def _units(run_dir: Path, obj: Any, params: dict[str, Any]) -> dict[str, str]:
     return {k: units[k] for k in params if k in units}
 
 
-def _sample_rate(obj: Any) -> dict[str, Any]:
+def _sample_rate(obj: Any, why: str = "") -> dict[str, Any]:
     """``sample_rate_hz`` and a note, from the objective's optional ``sample_rate()`` hook."""
     if obj is None:
-        return {"sample_rate_hz": None, "sample_rate_note": "objective not rebuilt"}
+        note = "objective not rebuilt" + (" (it names code, which an export never loads)" if "does not load" in why
+                                          else "")
+        return {"sample_rate_hz": None, "sample_rate_note": note}
     fn = hook(obj, "sample_rate")
     if fn is None:
         return {"sample_rate_hz": None, "sample_rate_note": "the objective gives no sample rate"}
@@ -141,31 +157,32 @@ def _sample_rate(obj: Any) -> dict[str, Any]:
     return {"sample_rate_hz": hz, "sample_rate_note": note}
 
 
-def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, dict[str, Any]]:
-    """The run's objective (on ``data_file``'s data when given) and the complete deployed values."""
+def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, Any]:
+    """The run's objective (on ``data_file``'s data when given) and its :class:`tuner.deployment.Deployment`."""
     from tuner.config import ConfigError
     from tuner.deployment import load_deployment
     from tuner.rescore import objective_on_data
 
-    objective = _build(run_dir)
+    objective, why = _build(run_dir)
     if objective is None:
-        raise ConfigError(run_dir / "config.yaml", "objective", "does not build any more (data moved?)")
+        raise ConfigError(run_dir / "config.yaml", "objective", f"does not build: {why}")
     if data_file:
         objective, _ = objective_on_data(objective, data_file)
-    return objective, dict(load_deployment(run_dir).values)
+    return objective, load_deployment(run_dir)
 
 
-def export_c_filter(run_dir: str | Path, precision: str = "double", prefix: str | None = None) -> dict[str, str]:
-    """``{filename: text}``: the C source of the run's deployed filter (the objective's ``export_c_filter``
-    hook), its header led by the run's provenance (run, fitness, optimiser, data, commit)."""
+def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None = None) -> dict[str, str]:
+    """``{filename: text}``: the C source of the run's deployed system (the objective's ``export_c`` hook: a
+    filter, a controller), its header led by the run's provenance (run, fitness, optimiser, data, commit)."""
     from tuner.config import ConfigError
     from tuner.rundir import RunDir
 
     run_dir = Path(run_dir)
-    objective, values = _deployed_objective(run_dir)
-    fn = hook(objective, "export_c_filter")
+    with data_only("tuner export"):  # a run directory is data: no code its config names is loaded
+        objective, dep = _deployed_objective(run_dir)
+    fn = hook(objective, "export_c")
     if fn is None:
-        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C filter export")
+        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C export (hook export_c)")
     doc = provenance(run_dir, objective)
     if prefix is None:
         prefix = c_prefix(RunDir(run_dir).meta().name or run_dir.name)
@@ -173,22 +190,24 @@ def export_c_filter(run_dir: str | Path, precision: str = "double", prefix: str 
              f"optimizer: {doc['optimizer']}, seed {doc['seed']}, {doc['n_evals']} evaluations",
              f"data: {doc['data']}", f"git commit: {doc['git_commit']}", f"exported: {doc['exported']}"]
     try:
-        return dict(fn(values, precision, c_prefix(prefix), "\n".join(lines)))
+        return dict(fn(dict(dep.values), precision, c_prefix(prefix), "\n".join(lines)))
     except ValueError as exc:
         raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
 
 
 def verify_c(run_dir: str | Path, data_file: str | Path | None = None, precision: str = "double",
              opt: tuple[str, ...] = ("-O2",)) -> dict[str, Any]:
-    """The run's exported C compiled and scored next to the model (the objective's ``verify_c_filter``)."""
+    """The run's exported C compiled and scored next to the model: the objective's ``verify_c`` hook's result
+    and ``name``, the deployed system's name."""
     from tuner.config import ConfigError
 
     run_dir = Path(run_dir)
-    objective, values = _deployed_objective(run_dir, data_file)
-    fn = hook(objective, "verify_c_filter")
+    objective, dep = _deployed_objective(run_dir, data_file)
+    fn = hook(objective, "verify_c")
     if fn is None:
-        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C filter to verify")
+        raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C export to verify "
+                          "(hook verify_c)")
     try:
-        return dict(fn(values, precision, tuple(opt)))
+        return {"name": dep.name, **dict(fn(dict(dep.values), precision, tuple(opt)))}
     except ValueError as exc:
         raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None

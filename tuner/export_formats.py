@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from tuner.rundir import plain as _plain
+from tuner.records import plain as _plain
 
 __all__ = ["to_yaml", "to_json", "json_load", "to_python", "to_c", "c_prefix", "NONFINITE_NOTE", "FORMATS"]
 

@@ -27,10 +27,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from tuner.space import Space
 
 __all__ = ["Evaluation", "EvalRecord", "SeededCall", "Score", "Objective", "TunableObjective", "HOOKS", "hook",
-           "as_evaluation", "PENALTY"]
+           "as_evaluation", "PENALTY", "ToolError"]
 
 #: fitness given to failed evaluations (exception, NaN, inf); finite so every optimiser copes.
 PENALTY = 1.0e12
+
+
+class ToolError(RuntimeError):
+    """A program a hook runs (the C compiler of ``verify_c``) is missing or failed: its message is one line
+    saying which program and why (``tuner verify-c`` prints it as its ``error:`` line, exit 2)."""
 
 
 @dataclass(frozen=True)
@@ -174,15 +179,16 @@ class TunableObjective(Objective, Protocol):
         """The ready deployed object for ``params`` (e.g. the filter instance with its complete
         configuration, whose ``run(gyr, acc, mag, rate_hz=...)`` and ``stream()`` work on live data)."""
 
-    def export_c_filter(self, params: Mapping[str, Any], precision: str, prefix: str,
-                        comment: str) -> Mapping[str, str]:
-        """``{filename: text}``: C source of the deployed system with ``params`` baked in (``tuner export
-        --format c-filter``); ``comment`` is the run's provenance for the header."""
+    def export_c(self, params: Mapping[str, Any], precision: str, prefix: str, comment: str) -> Mapping[str, str]:
+        """``{filename: text}``: C source of the deployed system (a filter, a controller) with ``params`` baked
+        in (``tuner export --format c-source``); ``comment`` is the run's provenance for the header."""
 
-    def verify_c_filter(self, params: Mapping[str, Any], precision: str, opt: tuple[str, ...]) -> Mapping[str, Any]:
+    def verify_c(self, params: Mapping[str, Any], precision: str, opt: tuple[str, ...]) -> Mapping[str, Any]:
         """The exported C compiled with the local compiler (flags ``opt``) and scored next to the model
-        (``tuner verify-c``): ``{"python": Score, "c": Score, "max_angle_rad": {recording: float}, ...}``;
-        ``FileNotFoundError`` without a compiler."""
+        (``tuner verify-c``): ``{"python": Score, "c": Score, "precision": str, "flags": [str], "seconds":
+        {"python": s, "c": s}}``, optionally ``"max_angle_rad": {recording: float}`` (the largest angle between
+        the two outputs), and ``"compiler"``: the command line of the compiler that ran. :class:`ToolError`
+        when the compiler is missing or fails."""
 
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
@@ -192,7 +198,7 @@ class TunableObjective(Objective, Protocol):
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "start_params", "parameter_names", "check_params", "preflight", "score",
          "has_test_data", "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds",
-         "evaluate_batch", "finalize", "deployment", "build", "export_c_filter", "verify_c_filter")
+         "evaluate_batch", "finalize", "deployment", "build", "export_c", "verify_c")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

@@ -6,7 +6,8 @@ A package adds kinds through the entry-point group ``tuner.objectives`` of its `
     filter = "objectives.attitude.objective:FilterObjective"
 
 (the name is the kind, the value a class or factory with ``from_config(section, base_dir)``). The
-engine itself registers only the generic ``python`` kind. Entry points are loaded on first use, so
+engine itself registers only the generic ``python`` kind (:mod:`tuner.python_objective`), by the same
+``"module:attr"`` spec. Entry points are loaded on first use, so
 ``tuner list optimizers`` imports no domain code. A name registered twice (two packages, or a
 package and the engine) is refused with both sources in the message.
 
@@ -21,12 +22,11 @@ from __future__ import annotations
 import importlib
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ENTRY_POINT_GROUP", "ENGINE_KEYS", "RegistryError", "Registry", "REGISTRY", "PythonObjective",
+__all__ = ["ENTRY_POINT_GROUP", "ENGINE_KEYS", "RegistryError", "Registry", "REGISTRY",
            "build_objective", "resolve_callable"]
 
 ENTRY_POINT_GROUP = "tuner.objectives"
@@ -63,55 +63,6 @@ def say_imports(objective: Mapping[str, Any], source: Any) -> None:
 
         print(f"note: {source}: objective.kind python imports and runs {objective.get('callable')!r}: "
               "trust it as you would the code itself", file=sys.stderr, flush=True)
-
-
-@dataclass(frozen=True)
-class PythonObjective:
-    """A user callable ``module:function`` as an objective; ``options`` are passed as keywords.
-
-    ``kind: python`` imports and runs the named code: a config naming it is code, and must be
-    trusted like code.
-    """
-
-    callable: str
-    options: dict = field(default_factory=dict)
-    #: the config's folder, searched first for the module (no PYTHONPATH needed)
-    base_dir: str | None = None
-
-    @classmethod
-    def from_config(cls, section: Mapping[str, Any], base_dir: Path | None = None) -> PythonObjective:
-        if "callable" not in section or ":" not in str(section["callable"]):
-            raise ValueError("objective.callable: expected 'package.module:function'")
-        unknown = sorted(set(section) - {"kind", "callable", "options"})
-        if unknown:
-            raise ValueError(f"objective.{unknown[0]}: unknown key; allowed: callable, options")
-        options = section.get("options") or {}
-        if not isinstance(options, Mapping):
-            raise ValueError(f"objective.options: expected a mapping of keyword arguments, got {options!r}")
-        obj = cls(str(section["callable"]), dict(options), str(base_dir) if base_dir is not None else None)
-        obj.preflight()
-        return obj
-
-    def preflight(self) -> list[str]:
-        """Import the callable (in the process that calls this: the driver, or a Dask worker)."""
-        try:
-            fn = resolve_callable(self.callable, self.base_dir)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(f"objective.callable: cannot import {self.callable!r} ({exc})") from None
-        if not callable(fn):
-            raise ValueError(f"objective.callable: {self.callable!r} is a {type(fn).__name__}, not callable")
-        return []
-
-    def __call__(self, params: dict[str, Any]) -> Any:
-        return resolve_callable(self.callable, self.base_dir)(params, **self.options)
-
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
-        """The parameters as they are: a user callable declares nothing else."""
-        from tuner.rundir import plain
-
-        values = plain(dict(params))
-        return {"kind": "python", "name": self.callable, "values": values,
-                "sources": {k: "searched" for k in values}, "scoring": {"options": plain(dict(self.options))}}
 
 
 class Registry:
@@ -222,7 +173,7 @@ class Registry:
 
 #: the process-wide registry (the engine's own ``python`` kind plus every installed entry point)
 REGISTRY = Registry()
-REGISTRY.register("python", PythonObjective, "tuner (built in)")
+REGISTRY.register("python", "tuner.python_objective:PythonObjective", "tuner (built in)")
 
 
 def build_objective(section: Mapping[str, Any], base_dir: Path | None = None) -> Any:

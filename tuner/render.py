@@ -81,6 +81,7 @@ th[aria-sort=descending]::after { content: " \25BC"; font-size: .7em; }
 .controls select, .controls input { font: inherit; max-width: 100%; }
 .muted { color: var(--muted); }
 td.txt, th.txt { text-align: left; white-space: nowrap; }
+td:first-child, td.txt.name { white-space: normal; overflow-wrap: anywhere; min-width: 8em; max-width: 22em; }
 img { max-width: 100%; height: auto; display: block; margin: .8em auto; }
 .missing-image { color: var(--muted); font-style: italic; }
 .status { display: inline-block; padding: .15em .7em; border-radius: 1em; font-weight: 600;
@@ -135,20 +136,11 @@ def md_path(path: str) -> str:
 
 
 def write_text_atomic(path: str | Path, text: str) -> Path:
-    """Write to a temporary file and rename: a reader (a reloading browser) sees the old or the new file."""
-    import os
+    """Write to a temporary file and rename: a reader (a reloading browser) sees the old or the new file
+    (:func:`tuner.safe_io.write_atomic`: no link of either kind written through, no temporary file left)."""
+    from tuner.safe_io import write_atomic
 
-    from tuner.safe_io import check_not_link, named, open_nofollow
-
-    path = Path(path)
-    check_not_link(path.parent)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    if os.path.lexists(tmp):
-        os.unlink(tmp)
-    with named(path), os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
-        fh.write(text.encode("utf-8"))
-    os.replace(tmp, path)
-    return path
+    return write_atomic(Path(path), text, fsync=False)
 
 
 def fmt_num(v: Any, digits: int = 6) -> str:
@@ -252,9 +244,15 @@ def _embed(src: str, base: Path | None) -> str | None:
         return None
     p = (base / unquote(src.split("#")[0].split("?")[0])).resolve()
     mime = _IMAGE_TYPES.get(p.suffix.lower())
-    if mime is None or not p.is_file() or base not in p.parents:
+    if mime is None or base not in p.parents:
         return None
-    return f"data:{mime};base64,{base64.b64encode(p.read_bytes()).decode('ascii')}"
+    from tuner.safe_io import UnsafeFile, read_bytes
+
+    try:
+        data = read_bytes(p)  # a regular file only: a FIFO named figures/x.png would block a plain read
+    except (UnsafeFile, OSError):
+        return None
+    return f"data:{mime};base64,{base64.b64encode(data).decode('ascii')}"
 
 
 def markdown_to_html(markdown: str, base_dir: str | Path | None = None) -> str:

@@ -13,31 +13,29 @@ from typing import Any
 
 from tuner.evaluate import EvalRecord
 from tuner.objective import Evaluation
-from tuner.rundir import CHAIN, RunDir, RunError, check_chain, fmt_cell, parse_cell, read_chain
+from tuner.records import HistoryRow, RunError, cell
+from tuner.rundir import CHAIN, RunDir, chain_note, chain_secret, check_chain, read_chain
+from tuner.safe_io import regular
 
 __all__ = ["Replay", "verify_history"]
 
 
 def verify_history(rd: RunDir) -> str:
-    """Check ``history.csv`` against ``history.chain`` (:class:`RunError` naming the first edited row).
+    """Check ``history.csv`` against ``history.chain`` (:class:`RunError` naming the first edited row; a history
+    without its chain, or keyed with a key not set here, is an error too).
 
-    Rows beyond the checkpoint without a digest (a kill between the two appends) are left out. Returns a
-    note for a history of an older tuner, which has no chain (still readable), else ''.
+    Rows beyond the checkpoint without a digest (a kill between the two appends) are left out. Returns a note
+    when the chain is unkeyed while the user has a chain key set (:func:`tuner.rundir.chain_note`), else ''.
     """
-    rows = rd.history_rows()
-    if not rows:
+    if not regular(rd.file("history.csv")):
         return ""
-    if not rd.file(CHAIN).exists():
-        return "history.csv has no history.chain (written by an older tuner): edits to it cannot be detected"
-    digests = read_chain(rd.file(CHAIN))
-    ck = rd.checkpoint() if rd.file("checkpoint.json").exists() else None
-    n = max(min(len(rows), len(digests)), ck.n_evals if ck else 0)
-    check_chain(rd.file("history.csv"), rows[:n], digests, rd.meta().config_hash)
-    return ""
-
-
-def _cell(v: Any) -> str:
-    return "" if v is None else str(fmt_cell(v))
+    chain = read_chain(rd.file(CHAIN))
+    key = chain_secret(chain, rd.file(CHAIN))
+    rows = rd.history_rows()
+    ck = rd.checkpoint() if regular(rd.file("checkpoint.json")) else None
+    n = max(min(len(rows), len(chain.digests)), ck.n_evals if ck else 0)
+    check_chain(rd.file("history.csv"), rows[:n], chain.digests, rd.meta().config_hash, key)
+    return chain_note(chain)
 
 
 class Replay:
@@ -47,9 +45,8 @@ class Replay:
     the re-created optimiser asks means the history was edited (or the code changed), and is refused.
     """
 
-    def __init__(self, rows: list[dict[str, str]], names: list[str], metric_names: list[str], live: Callable,
-                 where: Path):
-        self.rows, self.names, self.metric_names, self.live, self.where = rows, names, metric_names, live, where
+    def __init__(self, rows: list[dict[str, str]], names: list[str], live: Callable, where: Path):
+        self.rows, self.names, self.live, self.where = rows, names, live, where
         self.pos = 0
 
     @property
@@ -66,17 +63,11 @@ class Replay:
         out = []
         for (params, _), row in zip(items, chunk):
             for k in self.names:
-                if _cell(params[k]) != row.get(k):
+                if cell(params[k]) != row.get(k):
                     raise RunError(f"{self.where}: row eval={row.get('eval')}: {k} is {row.get(k)!r} but the "
-                                   f"optimiser re-created from the seed asks {_cell(params[k])!r}; the history "
+                                   f"optimiser re-created from the seed asks {cell(params[k])!r}; the history "
                                    "was edited or the code changed, so it cannot be resumed")
-            if row.get("status") not in ("ok", "failed"):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: status {row.get('status')!r}")
-            try:
-                fit, secs = float(row["fitness"]), float(row["seconds"])
-            except (TypeError, ValueError):
-                raise RunError(f"{self.where}: row eval={row.get('eval')}: fitness/seconds not numbers") from None
-            metrics = {k: parse_cell(row[k]) for k in self.metric_names if row.get(k) not in (None, "")}
-            out.append(EvalRecord(Evaluation(fit, metrics, row["status"], row.get("error") or ""), secs))
+            h = HistoryRow.parse(row, self.names, self.where)
+            out.append(EvalRecord(Evaluation(h.fitness, h.metrics, h.status, h.error), h.seconds))
         self.pos += len(items)
         return out

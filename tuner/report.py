@@ -1,6 +1,8 @@
 """Run reports: ``report.md`` and a self-contained ``report.html`` (figures embedded).
 
-Content: a summary card (status, best fitness, budget and evaluations, failures, wall time, train /
+Content: the objective's lead when it gives one (``headline_md`` among its ``finalize`` results: what a
+reader needs first, e.g. a controller's gains and its requirements' pass/fail table), a summary card
+(status, best fitness, budget and evaluations, failures, wall time, train /
 test / CV scores and the generalisation gap), warnings (parameters at a search bound, failed
 evaluations, see :mod:`tuner.bounds`; a large gap between CV and tuning score, see
 :mod:`tuner.validation`), the cross-validation summary and the final selection when the run has them,
@@ -19,30 +21,28 @@ import datetime as _dt
 import json
 import math
 import re
+import time
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
 from tuner import interactive
+from tuner.bounds import run_space, run_warnings
+from tuner.dashboard import find_dashboard, write_dashboard
 from tuner.deployment import DEFAULTS_MEANING
-from tuner.figures import (
-    convergence_table,
-    load_history,
-    plot_convergence,
-    plot_fitness_vs_params,
-    plot_parallel_coordinates,
-    sweep_figures,
-)
-from tuner.render import fmt_num, md_escape, md_path, write_text_atomic
+from tuner.objective import PENALTY
+from tuner.plots import RUN_PLOTS, Drawn, draw, figures_md, objective_md, plot_files
+from tuner.plots.context import RunContext, load_history
+from tuner.render import fmt_num, md_escape, write_text_atomic
 from tuner.render import md_table as _rows_table
 from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
 from tuner.runinfo import run_summary
+from tuner.spread import spread_md
 
-__all__ = ["write_run_report", "plot_convergence", "load_history", "run_summary", "md_table", "pivot_metrics",
-           "sweep_figures", "write_html", "convergence_table", "write_live_report", "throttled", "sweep_warnings_md",
-           "LIVE_REFRESH_S"]
+__all__ = ["write_run_report", "load_history", "run_summary", "md_table", "pivot_metrics", "write_html",
+           "write_live_report", "throttled", "sweep_warnings_md", "LIVE_REFRESH_S"]
 
 #: seconds between reloads of a running run's report page
 LIVE_REFRESH_S = 10.0
@@ -51,7 +51,6 @@ LIVE_MIN_INTERVAL_S = 5.0
 #: the interval is also at least this many times the time the previous live report took (overhead <= 1/x)
 LIVE_COST_FACTOR = 10.0
 _live_last: dict[str, tuple[float, float]] = {}  # run directory -> (time of the last live report, its cost)
-_OWN_FIGURES = ("convergence.png", "fitness_vs_params.png", "parallel_coordinates.png")
 
 
 def write_html(path: Path, markdown: str, base_dir: Path, title: str | None = None,
@@ -141,7 +140,11 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
                                                   else "-"]]
     for key in _CARD_KEYS:
         if isinstance(ev.get(key), (int, float)) and not (key in _SAME_AS_BEST and _same(ev[key], s["best_fitness"])):
-            rows.append([key.replace("_", " "), ev[key]])
+            v = ev[key] if not key.endswith(("fitness", "score")) else \
+                _score_text(ev[key], ev.get("initial_error") if key == "initial_fitness" else None)
+            rows.append([key.replace("_", " "), v])
+        elif key == "initial_fitness" and ev.get("initial_error"):  # the defaults failed: why, never a penalty
+            rows.append(["initial fitness", _score_text(math.inf, ev["initial_error"])])
     rows += [["evaluations / budget", f"{n} / {_budget(cfg)}"],
              ["failed evaluations", f"{nf} ({nf / n:.1%})" if n else str(nf)],
              ["wall time", _wall(s["wall_s"])],
@@ -157,13 +160,22 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
     return rows
 
 
+def _score_text(v: float, error: Any = None) -> Any:
+    """A score as the card shows it: a failed evaluation's penalty (or inf) is "failed" with its reason."""
+    if math.isfinite(v) and v < PENALTY:
+        return v
+    why = f": {str(error)[:160]}" if error else ""
+    return f"failed{why}"
+
+
 #: results the summary card shows (the "Other results" table leaves them out: no number printed twice)
 _CARD_KEYS = ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "initial_fitness",
-              "improvement_pct")
+              "improvement_pct", "initial_error")
 #: results left out of the card when they equal the best fitness (the tuning data's score is the best fitness)
 _SAME_AS_BEST = ("train_fitness", "best_fitness")
-#: multi-line results that repeat a table of the report (the terminal summary of the per-recording scores)
-_REPEATS = ("summary_table", "tables_md")
+#: multi-line results that repeat a table of the report (the terminal summary of the per-recording scores, the
+#: objective's lead shown first)
+_REPEATS = ("summary_table", "tables_md", "headline_md")
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -237,12 +249,6 @@ def _params_rows(params: dict[str, Any], space: Any) -> list[list[Any]]:
     return rows
 
 
-def _run_space(run_dir: Path):
-    from tuner.bounds import _run_space
-
-    return _run_space(run_dir)
-
-
 def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bool = False,
                      refresh_s: float = LIVE_REFRESH_S) -> Path:
     """Write ``report.md``, ``report.html`` and the report figures of a run directory.
@@ -257,12 +263,10 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
         A report of a running run: the HTML page reloads itself every ``refresh_s`` seconds while the
         status is ``running``. Objective figures are not redrawn (they come after the run).
     """
-    from tuner.bounds import run_warnings
-
     run_dir = Path(run_dir)
     s = run_summary(run_dir, meta)
     cfg = RunDir(run_dir).config() if (run_dir / "config.yaml").exists() else {}
-    space = _run_space(run_dir)
+    space = run_space(run_dir)
     running = live and s["status"] == "running"
     if not live:
         _live_last.pop(str(run_dir.resolve()), None)
@@ -275,8 +279,14 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     desc = cfg.get("description")
     if desc:
         md += [md_escape(desc), ""]
+    lead = s["evaluation"].get("headline_md")
+    if isinstance(lead, str) and lead.strip():  # the objective's lead (raw HTML stays off in the page)
+        md += [lead.rstrip(), ""]
     md += ["## Summary", "", _rows_table(_card(s, cfg), ["item", "value"], 6), ""]
     md += [f"Note: {md_escape(n)}." for n in s["notes"]] + ([""] if s["notes"] else [])
+    rep = RunDir(run_dir).repeats()
+    if rep is not None:
+        md += spread_md(rep)
 
     warnings = run_warnings(run_dir)
     val = _validation(run_dir)
@@ -292,18 +302,22 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
                                                               "position in bounds", "unit"], 6), ""]
     md += _results_md(s)
     at_figures = len(md)
-    md += _figures_md(run_dir, s, space, live)
+    drawn, own = _figures(run_dir, s, space, live)
+    md += ["## Figures", ""] + (figures_md(drawn, run_dir) + objective_md(own) if drawn
+                                else ["(no evaluation yet)", ""])
     after_figures = len(md)
     files = [("history.csv", "every evaluation"), ("best.yaml", "best parameters and scores"),
              ("config.yaml", "the resolved config"), ("meta.json", "status, times, versions"),
              ("scores.csv", "scores per recording"), ("cv.md", "cross-validation tables"),
              ("validation.json", "cross-validation summary and final selection")]
-    md += ["## Files", ""] + [f"- [{n}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
+    known = {n for n, _ in files} | {"report.md"}
+    files += [(p.name, "the objective's tables") for p in sorted(run_dir.glob("*.md")) if p.name not in known]
+    md += ["## Files", ""] + [f"- [{md_escape(n)}]({n}): {what}" for n, what in files if (run_dir / n).exists()]
     md += ["", f"Written {now}.", ""]
     text = "\n".join(md)
     path = run_dir / "report.md"
     write_text_atomic(path, text)
-    fig_md, data = _interactive(run_dir, s, space, live)
+    fig_md, data = _interactive(run_dir, drawn, own, live)
     html_md = text if data is None else "\n".join(md[:at_figures] + fig_md + md[after_figures:])
     write_html(run_dir / "report.html", html_md, run_dir, title=title, refresh_s=refresh_s if running else None,
                scripts=interactive.SCRIPTS if data is not None else (), data=data)
@@ -317,23 +331,16 @@ def _refresh_dashboard(run_dir: Path) -> None:
     Live reports are throttled (:func:`write_live_report`) and their cost includes this rewrite, so a
     dashboard over many runs makes the live view of each run less frequent, not the run slower.
     """
-    from tuner.dashboard import find_dashboard, write_dashboard
-
     root = find_dashboard(run_dir)
     if root is not None:
         write_dashboard(root, LIVE_REFRESH_S)
 
 
-def _interactive(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[str], dict[str, Any] | None]:
+def _interactive(run_dir: Path, drawn: list[Drawn], own: list[Path], live: bool) -> tuple[list[str], dict | None]:
     """The interactive figures section and page data (:mod:`tuner.interactive`), or ``([], None)``."""
-    if not interactive.available() or not (run_dir / "history.csv").exists():
+    if not interactive.available() or not drawn:
         return [], None
-    hist = load_history(run_dir)
-    if not len(hist):
-        return [], None
-    pngs = [] if live and s["status"] == "running" else \
-        [p for p in sorted((run_dir / "figures").glob("*.png")) if p.name not in _OWN_FIGURES]
-    fig_md, data = interactive.run_figures(run_dir, hist, space, s["params"], pngs, live)
+    fig_md, data = interactive.run_figures(run_dir, drawn, own, live)
     interactive.install_assets(run_dir)
     return fig_md, data
 
@@ -363,8 +370,6 @@ def throttled(key: str, write: Any, min_interval_s: float | None = None) -> Any:
 
     Returns what ``write()`` returned, or ``None`` when it was not due.
     """
-    import time
-
     now = time.monotonic()
     interval = LIVE_MIN_INTERVAL_S if min_interval_s is None else min_interval_s
     last, cost = _live_last.setdefault(key, (now, 0.0))
@@ -378,8 +383,6 @@ def throttled(key: str, write: Any, min_interval_s: float | None = None) -> Any:
 
 def sweep_warnings_md(jobs_dir: Path, job_ids: list[str]) -> list[str]:
     """The ``## Warnings`` section of a sweep report: bound and failure warnings of every job."""
-    from tuner.bounds import run_warnings
-
     rows = [[job, w.kind, w.message] for job in job_ids if (Path(jobs_dir) / job / "meta.json").exists()
             for w in run_warnings(Path(jobs_dir) / job)]
     if not rows:
@@ -403,12 +406,14 @@ def _results_md(s: dict[str, Any]) -> list[str]:
                    "", _frame_md(split_df), ""]
         else:
             piv = pivot_metrics(s["metrics"])
+            words = ev.get("metric_words") if isinstance(ev.get("metric_words"), dict) else {}
             if len(piv) == 1:  # one recording (or none): metric per row reads better than one wide row
                 md += ["Metrics of the best candidate.", "",
-                       _rows_table([[k, v] for k, v in piv.iloc[0].items()], ["metric", "value"], 4), ""]
+                       _rows_table([[words.get(k, k), k, v] if words else [k, v] for k, v in piv.iloc[0].items()],
+                                   ["metric", "key", "value"] if words else ["metric", "value"], 4), ""]
             elif len(piv):
                 md += ["Metrics of the best candidate on each recording.", "",
-                       _frame_md(piv.reset_index()), ""]
+                       _frame_md(piv.rename(columns=lambda c: words.get(c, c)).reset_index()), ""]
     shown = {str(k).rsplit("/", 1)[-1].rsplit(".", 1)[-1]: v for k, v in s["metrics"].items()}
     scalars = [[k, v] for k, v in ev.items() if not isinstance(v, (dict, list)) and k not in _REPEATS
                and not (isinstance(v, str) and "\n" in v) and k not in _CARD_KEYS
@@ -419,7 +424,8 @@ def _results_md(s: dict[str, Any]) -> list[str]:
     if scalars or nested:
         md += ["## Other results", ""]
         if scalars:
-            md += [_rows_table(scalars, ["result", "value"], 6), ""]
+            words = ev.get("metric_words") if isinstance(ev.get("metric_words"), dict) else {}
+            md += [_rows_table([[words.get(k, k), v] for k, v in scalars], ["result", "value"], 6), ""]
         for k, v in nested.items():
             rows = [[name] + [x if not isinstance(x, (dict, list)) else json.dumps(x) for x in d.values()]
                     for name, d in v.items()]
@@ -428,25 +434,17 @@ def _results_md(s: dict[str, Any]) -> list[str]:
     return md
 
 
-def _figures_md(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> list[str]:
-    figs = run_dir / "figures"
-    md = ["## Figures", ""]
-    if not (run_dir / "history.csv").exists():
-        return md + ["(no evaluation yet)", ""]
-    hist = load_history(run_dir)
+def _figures(run_dir: Path, s: dict[str, Any], space: Any, live: bool) -> tuple[list[Drawn], list[Path]]:
+    """The report's plots (:data:`tuner.plots.RUN_PLOTS`, each PNG written once) and the objective's own PNGs
+    in ``figures/`` (not while the run is going: they come after it); nothing before the first evaluation."""
+    src = RunDir(run_dir).chosen_repeat() or run_dir  # a repeated run draws its deployed repeat's history
+    if not (src / "history.csv").exists():
+        return [], []
+    hist = load_history(src)
     if len(hist) == 0:
-        return md + ["(no evaluation yet)", ""]
-    own = [("Convergence", plot_convergence(run_dir, figs / "convergence.png"))]
-    if space is not None and space.dim:
-        own.append(("Fitness against each parameter",
-                    plot_fitness_vs_params(hist, space, s["params"], figs / "fitness_vs_params.png")))
-        own.append(("Parallel coordinates of the best candidates",
-                     plot_parallel_coordinates(hist, space, figs / "parallel_coordinates.png")))
-    for title, p in own:
-        md += [f"### {title}", "", f"![{title}]({md_path('figures/' + p.name)})", ""]
-    if not live or s["status"] != "running":
-        for png in sorted(figs.glob("*.png")):
-            if png.name not in _OWN_FIGURES:
-                name = png.stem.replace("_", " ")
-                md += [f"### {md_escape(name)}", "", f"![{md_escape(name)}]({md_path('figures/' + png.name)})", ""]
-    return md
+        return [], []
+    figs = run_dir / "figures"
+    drawn = draw(RUN_PLOTS, RunContext(run_dir, hist, space, dict(s["params"])), figs)
+    mine = plot_files(RUN_PLOTS)
+    own = [] if live and s["status"] == "running" else [p for p in sorted(figs.glob("*.png")) if p.name not in mine]
+    return drawn, own

@@ -68,9 +68,10 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
             check(full)
     except ValueError as exc:
         raise ConfigError(params_file or target, "params", str(exc)) from None
-    warnings: list[str] = []  # the new data's preflight warnings (units, a start in motion)
-    if data_file:
+    if data_file:  # the new data's preflight warnings (units, a start in motion)
         objective, warnings = objective_on_data(objective, data_file)
+    else:  # the config's own data, loaded and checked as `tuner run` does: a NaN row is one error line
+        warnings = _preflight(objective, cfg.source)
     from tuner.deployment import deployment_for
 
     deployment = deployment_for(objective, full, space.free_names, list(space.fixed)).to_doc()
@@ -98,6 +99,21 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
 
 def _plain(recordings: Any) -> dict[str, dict[str, Any]]:
     return {name: dict(m) for name, m in recordings.items()}
+
+
+def _preflight(objective: Any, source: Any) -> list[str]:
+    """The objective's ``preflight`` (its data loaded and checked once), a ``ValueError`` as the
+    :class:`ConfigError` naming its key; the warnings."""
+    preflight = hook(objective, "preflight")
+    if preflight is None:
+        return []
+    try:
+        return list(preflight() or [])
+    except ValueError as exc:
+        key, _, rest = str(exc).partition(": ")
+        if key.startswith("objective") and rest:
+            raise ConfigError(source, key, rest) from None
+        raise ConfigError(source, "objective", str(exc)) from None
 
 
 def objective_on_data(objective: Any, data_file: str | Path) -> tuple[Any, list[str]]:

@@ -30,31 +30,22 @@ from typing import Any
 import numpy as np
 
 from tuner import signals as stop_signals
+from tuner._version import __version__
 from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
+from tuner.records import Best, Checkpoint, HistoryRow, Meta, Repeats, RunError, Timing, config_hash, plain, read_back
 from tuner.replay import Replay as _Replay
-from tuner.rundir import (
-    Best,
-    Checkpoint,
-    Meta,
-    RunDir,
-    RunError,
-    Timing,
-    atomic_write,
-    config_hash,
-    fmt_cell,
-    parse_cell,
-    plain,
-)
+from tuner.rundir import RunDir, atomic_write
 from tuner.selection import select_best
 from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
 from tuner.setup import build as _build  # the old name, used by benchmarks
 from tuner.space import Space
 from tuner.validation import validate_run
 
-__all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "RunError"]
+__all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "new_meta", "resolved_config",
+           "RunError"]
 
 
 @dataclass(frozen=True)
@@ -75,6 +66,8 @@ class RunResult:
         Why the run stopped.
     extra : dict
         What the objective's finalisation returned.
+    repeats : tuner.records.Repeats or None
+        A repeated run's spread over its seeds (``repeats.json``; :mod:`tuner.repeats`); None for one run.
     """
 
     run_dir: Path
@@ -84,6 +77,7 @@ class RunResult:
     generations: int
     stop_reason: str
     extra: dict[str, Any] = field(default_factory=dict)
+    repeats: Repeats | None = None
 
     @property
     def best_params(self) -> dict[str, Any]:
@@ -135,31 +129,12 @@ def _versions() -> dict[str, str]:
             out[mod] = version(dist)
         except PackageNotFoundError:  # pragma: no cover
             out[mod] = ""
-    from tuner import __version__
-
     out["tuner"] = __version__
     return out
 
 
 def _now() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
-def _cell(v: Any) -> str:
-    return "" if v is None else str(fmt_cell(v))
-
-
-def _clip(text: str, limit: int = 4000) -> str:
-    """An error text as stored in ``history.csv``: at most ``limit`` characters, its length noted when cut
-    (a 128 kB message would exceed the CSV reader's field limit and make the history unreadable)."""
-    if len(text) <= limit:
-        return text
-    return f"{text[:limit]} [... {len(text):,} characters, cut to {limit:,}]"
-
-
-def _metrics(m: dict[str, Any]) -> dict[str, Any]:
-    """Metrics as they read back from ``history.csv`` (so a replayed best equals the live one)."""
-    return {str(k): parse_cell(c) for k, v in m.items() if (c := _cell(v)) != ""}
 
 
 def _preload_report() -> None:
@@ -183,9 +158,10 @@ class Run:
 
     def __init__(self, cfg: RunConfig, rd: RunDir, objective: Any, space: Space,
                  progress: Callable[[str], None] | None, meta: Meta, n_jobs: int,
-                 on_generation: Callable[[Generation], None] | None = None, report: bool = True):
+                 on_generation: Callable[[Generation], None] | None = None, report: bool = True,
+                 resume_as: Path | None = None):
         self.cfg, self.rd, self.dir = cfg, rd, rd.path
-        self.report = report
+        self.report, self.resume_as = report, resume_as or rd.path  # what `tuner resume` continues it through
         self.objective, self.base_space, self.progress = objective, space, progress
         self.meta, self.n_jobs, self.on_generation = meta, n_jobs, on_generation or (lambda g: None)
         self.best: Best | None = None
@@ -217,8 +193,7 @@ class Run:
         stages = self.cfg.optimizer.refine.stages
         history = self.rd.history(self.base_space.names, self.meta.config_hash)
         live = LiveMap(self.cfg, self.n_jobs)
-        replay = _Replay(list(replay_rows or []), self.base_space.names, history.metric_names, live,
-                         history.path)
+        replay = _Replay(list(replay_rows or []), self.base_space.names, live, history.path)
         t = self.meta.timing
         self._write_meta(status="running", started=self.meta.started or _now(), backend_detail=live.describe(),
                          timing=Timing(t.wall_s, t.objective_s, t.sessions + 1))
@@ -284,7 +259,7 @@ class Run:
         except KeyboardInterrupt:  # a stop signal during the selection, the report step or the CV after a run
             self._write_meta(status="interrupted", interrupted=_now())
             if self.progress:
-                self.progress(f"interrupted; resume with: tuner resume {self.dir}")
+                self.progress(f"interrupted; resume with: tuner resume {self.resume_as}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
 
     def _conclude(self, optimizer, replay, history, interrupted: bool, n_evals: int, n_failed: int,
@@ -300,29 +275,28 @@ class Run:
             if self.report:
                 self._live_report(final=True)
             if self.progress:
-                self.progress(f"interrupted; resume with: tuner resume {self.dir}")
+                self.progress(f"interrupted; resume with: tuner resume {self.resume_as}")
             return self._result("interrupted", n_evals, state["gens"], "interrupted")
         extra = self._finish() if self.best is not None else {}
-        self._write_meta(status="finished", finished=_now(), stop_reason=optimizer.stop_reason, timing=timing,
+        # a run whose every evaluation failed has no result: it ends "failed", not "finished"
+        status = "finished" if self.best is not None or not n_evals else "failed"
+        reason = optimizer.stop_reason if status == "finished" else f"every one of {n_evals} evaluations failed"
+        self._write_meta(status=status, finished=_now(), stop_reason=reason, timing=timing,
                          n_evals=n_evals, n_failed=n_failed, generations=state["gens"])
         if self.best is not None and self.report:
             self._report()  # after meta.json: the report shows the final status
-        return self._result("finished", n_evals, state["gens"], optimizer.stop_reason, extra)
+        return self._result(status, n_evals, state["gens"], reason, extra)
 
     def _best_doc(self, g: Generation) -> Best | None:
         b = g.best
         if b is None:
             return None
-        return Best(plain(b.params), b.fitness, _metrics(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
+        return Best(plain(b.params), b.fitness, read_back(b.metrics), b.stage, b.generation, b.eval, self.dir.name)
 
-    def _row(self, g: Generation, i: int) -> dict[str, Any]:
+    def _row(self, g: Generation, i: int) -> HistoryRow:
         r, ev = g.records[i], g.records[i].evaluation
-        row = {"eval": g.first_eval + i, "stage": g.stage, "generation": g.generation, "index": i}
-        row.update({k: fmt_cell(v) for k, v in g.params[i].items()})
-        row.update(fitness=fmt_cell(float(ev.fitness)), status=ev.status, error=_clip(ev.error.replace("\n", " ")),
-                   seconds=f"{r.seconds:.6f}")
-        row.update({k: fmt_cell(v) for k, v in ev.metrics.items()})
-        return row
+        return HistoryRow(g.first_eval + i, g.stage, g.generation, i, g.params[i], ev.fitness, ev.status, ev.error,
+                          r.seconds, ev.metrics)
 
     def _progress(self, g: Generation, stages: int, secs: float) -> None:
         if not self.progress:
@@ -330,13 +304,20 @@ class Run:
         opt = g.optimizer
         gen, G, n = opt.generation, opt.generations, len(g.records)
         rate = n / secs if secs > 0 else math.inf
-        eta = ""
+        later = stages - g.stage - 1  # stages still to come, each with the same budget
+        left_s = []  # the time each budget still needs at this generation's pace; the first one spent ends the run
         if G:
-            left = (G - gen) + (stages - g.stage - 1) * G
-            eta = f"  ETA {_dt.timedelta(seconds=round(left * secs))}"
+            left_s.append(((G - gen) + later * G) * secs)
+        cap = getattr(opt, "max_evals", None)
+        if cap and n:
+            left_s.append((max(cap - opt.n_evals, 0) + later * cap) * secs / n)
+        eta = f"  ETA {_dt.timedelta(seconds=round(min(left_s)))}" if left_s else ""
         st = f"stage {g.stage + 1}/{stages} " if stages > 1 else ""
+        head = f"gen {gen}/{G}" if G else f"gen {gen}"
+        if cap:
+            head += f"  evals {opt.n_evals}/{cap}"
         fail = f"  failed {g.n_failed}" if g.n_failed else ""
-        self.progress(f"{st}gen {gen}/{G or '?'}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
+        self.progress(f"{st}{head}  best {g.stats.best:.6g}  {rate:.1f} eval/s{eta}{fail}")
 
     def _finish(self) -> dict[str, Any]:
         """The end of a finished run: the final choice on a held-out fold (``validation.select``), the
@@ -398,7 +379,8 @@ def _printer(quiet: bool) -> Callable[[str], None] | None:
     return None if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
 
 
-def _resolved(cfg: RunConfig, space: Space) -> dict[str, Any]:
+def resolved_config(cfg: RunConfig, space: Space) -> dict[str, Any]:
+    """What ``config.yaml`` of a run of ``cfg`` on ``space`` holds: the resolved config, its space, its origin."""
     resolved = dict(cfg.raw)
     resolved["parameters"] = space.to_dict()
     resolved["source"] = str(cfg.source)
@@ -406,7 +388,8 @@ def _resolved(cfg: RunConfig, space: Space) -> dict[str, Any]:
     return resolved
 
 
-def _new_meta(cfg: RunConfig, chash: str, n_jobs: int, notes: list[str]) -> Meta:
+def new_meta(cfg: RunConfig, chash: str, n_jobs: int, notes: list[str]) -> Meta:
+    """``meta.json`` of a run of ``cfg`` just created (config hash ``chash``, ``n_jobs`` workers, ``notes``)."""
     return Meta(status="created", name=cfg.name, seed=cfg.seed, created=_now(), config_source=str(cfg.source),
                 config_hash=chash, versions=_versions(), git_commit=_git_commit(), host=socket.gethostname(),
                 cpu_count=os.cpu_count(), backend=cfg.parallel.backend, n_jobs=n_jobs,
@@ -414,39 +397,55 @@ def _new_meta(cfg: RunConfig, chash: str, n_jobs: int, notes: list[str]) -> Meta
 
 
 #: files a run directory may hold when it was created but killed before ``meta.json`` existed
-_UNSTARTED = {"config.yaml", ".config.json", ".lock"}
+UNSTARTED = {"config.yaml", ".config.json", ".lock"}
+
+
+def default_run_dir(cfg: RunConfig) -> Path:
+    """``<output>/<UTC time>-<name>-<6 hex>``: where a run of ``cfg`` goes unless told."""
+    stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
+    out = Path(cfg.output)
+    return (out if out.is_absolute() else Path.cwd() / out) / f"{stamp}-{cfg.name}-{secrets.token_hex(3)}"
+
+
+def check_unstarted(rd: RunDir, printer: Callable[[str], None] | None) -> None:
+    """Refuse a directory that holds more than a run killed before it started (call it holding the lock)."""
+    rd.remove_tmp()
+    present = {p.name for p in rd.path.iterdir()}
+    if present - UNSTARTED:
+        raise RunError(f"{rd.path}: exists and is not empty; use `tuner resume {rd.path}` or another directory")
+    if present & {"config.yaml", ".config.json"} and printer:
+        printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
 
 
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         progress: Callable[[str], None] | None = None,
-        on_generation: Callable[[Generation], None] | None = None, report: bool = True) -> RunResult:
+        on_generation: Callable[[Generation], None] | None = None, report: bool = True,
+        built: tuple[Any, Space] | None = None, resume_as: Path | None = None) -> RunResult:
     """Create a run directory for ``cfg`` and run it to the end (or until interrupted); ``on_generation(g)``
     is called after each generation is written. Everything that can be refused (objective, parameters,
     optimiser options) is built before the directory is created, so a bad config leaves nothing behind.
     ``report=False`` leaves out the report, the live view during the run as well as the final one (report.md,
     report.html and their figures; ``tuner report RUN_DIR`` writes it later); the records and best.yaml are
     written as always.
+
+    One run: a job with ``repeats: N > 1`` is :func:`tuner.repeats.run`'s (a :class:`RunError` here).
+    ``built``: the ``(objective, space)`` :func:`tuner.setup.build` made of ``cfg`` already (the repeats of a
+    job share one preflight); ``resume_as``: the directory the interrupted message names (a repeat's parent).
     """
-    objective, space = _build(cfg)
+    if cfg.repeats > 1:
+        raise RunError(f"{cfg.source}: repeats: {cfg.repeats} runs of one job are tuner.repeats.run's "
+                       "(`tuner run` and tuner.tune call it); tuner.run.run runs one")
+    objective, space = built if built is not None else _build(cfg)
     n_jobs, notes = worker_count(cfg, space)
     printer = progress or _printer(quiet)
-    if run_dir is None:
-        stamp = _dt.datetime.now(_dt.UTC).strftime("%Y%m%dT%H%M%SZ")
-        out = Path(cfg.output)
-        run_dir = (out if out.is_absolute() else Path.cwd() / out) / f"{stamp}-{cfg.name}-{secrets.token_hex(3)}"
-    rd = RunDir(run_dir)
+    rd = RunDir(default_run_dir(cfg) if run_dir is None else run_dir)
     if rd.path.exists() and not rd.path.is_dir():
         raise RunError(f"{rd.path}: exists and is not a directory")
     with rd.lock():
-        rd.remove_tmp()
-        present = {p.name for p in rd.path.iterdir()}
-        if present - _UNSTARTED:
-            raise RunError(f"{rd.path}: exists and is not empty; use `tuner resume {rd.path}` or another directory")
-        if present & {"config.yaml", ".config.json"} and printer:
-            printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
-        meta = _new_meta(cfg, rd.write_config(_resolved(cfg, space)), n_jobs, notes)
+        check_unstarted(rd, printer)
+        meta = new_meta(cfg, rd.write_config(resolved_config(cfg, space)), n_jobs, notes)
         rd.write_meta(meta)
-        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation, report)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation, report, resume_as)
         if printer:
             printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
                     f"{cfg.parallel.backend} x {n_jobs})")
@@ -456,9 +455,10 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
 
 
 def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], None] | None = None,
-           report: bool = True) -> RunResult:
+           report: bool = True, resume_as: Path | None = None) -> RunResult:
     """Continue an interrupted (or killed) run: replay its recorded generations, then go on; ``report=False``
-    writes no report, as for :func:`run`.
+    writes no report, as for :func:`run` (and ``resume_as`` as there). A repeated run is
+    :func:`tuner.repeats.resume`'s.
 
     A finished run, a run in use by another process, a changed ``config.yaml`` and a legacy pickled
     checkpoint are refused with :class:`RunError`. A directory killed before ``meta.json`` existed is
@@ -477,8 +477,14 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
             meta = rd.meta()  # a run that got that far had a meta.json: its loss is an error, not a restart
         if meta is not None and meta.status == "finished":
             raise RunError(f"{rd.path}: already finished")
+        if meta is not None and meta.status == "failed":
+            raise RunError(f"{rd.path}: already ended, every evaluation failed ({meta.stop_reason}); fix the objective "
+                           "and start the job again")
         ck = rd.checkpoint()
         cfg = run_config(rd, rd.check_config(meta) if meta is not None else None)
+        if cfg.repeats > 1:
+            raise RunError(f"{rd.path}: a repeated run ({cfg.repeats} seeds): tuner.repeats.resume continues it "
+                           "(`tuner resume` calls it)")
         objective, space = _build(cfg)
         n_jobs, notes = worker_count(cfg, space)
         removed = rd.remove_tmp()
@@ -487,7 +493,7 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
         if meta is None:
             if printer:
                 printer(f"{rd.path}: no meta.json (killed before the run started): starting it from the beginning")
-            meta = _new_meta(cfg, config_hash(rd.config()), n_jobs, notes)
+            meta = new_meta(cfg, config_hash(rd.config()), n_jobs, notes)
         meta = meta.replace(n_jobs=n_jobs, notes=tuple(dict.fromkeys((*meta.notes, *notes))))
         if ck is None:  # killed before the first generation completed: start over in place
             for name in ("history.csv", "best.yaml"):
@@ -495,7 +501,7 @@ def resume(run_dir: str | Path, quiet: bool = False, progress: Callable[[str], N
             rows: list[dict[str, str]] = []
         else:
             rows = rd.history(space.names, meta.config_hash).truncate(ck.n_evals)
-        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, report=report)
+        r = Run(cfg, rd, objective, space, printer, meta, n_jobs, report=report, resume_as=resume_as)
         if printer:
             printer(f"resuming {rd.path} after {len(rows)} evaluations")
         return r.execute(rows)

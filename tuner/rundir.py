@@ -1,11 +1,14 @@
-"""The one owner of a run directory: its files, their formats, atomic writes and the lock.
+"""The one owner of a run directory: its paths, the lock, atomic writes and the history append.
+
+What the files hold (typed ``Meta``, ``Best``, ``Checkpoint``, ``HistoryRow``) and how a value is written
+(``fmt_cell``, ``plain``, ``config_hash``) are :mod:`tuner.records`; :class:`RunDir` reads and writes them.
 
 Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
 
 ``config.yaml``       the resolved config, defaults filled in, as run
 ``.config.json``      the same config as canonical JSON (to name what changed if config.yaml is edited)
-``meta.json``         status (running/finished/interrupted/failed), seed, config hash, times, versions,
-                      git commit, host, CPU count, backend, evaluation counts, stop reason, notes
+``meta.json``         status (running/finished/interrupted; failed: every evaluation failed), seed, config hash,
+                      times, versions, git commit, host, CPU count, backend, evaluation counts, stop reason, notes
 ``history.csv``       one row per evaluation: eval, stage, generation, index, every parameter,
                       fitness, status, error, seconds, metrics (the record of truth)
 ``best.yaml``         best parameters, fitness, metrics and where they were found, derived from the
@@ -17,8 +20,15 @@ Layout of ``runs/<UTC time>-<name>-<6 hex>/``:
                       summary (tuning score, CV score, gap, large or not) and the final selection
 ``cv.md``, ``cv.csv`` the cross-validation tables (per fold, summary) of :mod:`tuner.cv`
 
-Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data.
-(A config with ``objective.kind: python`` imports the module it names by design: trust the config.)
+A repeated run (``repeats: N``, :mod:`tuner.repeats`) holds no ``history.csv`` or ``checkpoint.json`` of its
+own: ``config.yaml`` (with ``repeats``), ``meta.json`` (the counts and times summed over its repeats),
+``repeats/seed-<s>/`` (one ordinary run directory per seed, as ``tuner run --seed s`` writes it),
+``repeats.json`` (the spread over the repeats and which one was chosen, typed :class:`tuner.records.Repeats`)
+and ``best.yaml`` (the chosen repeat's, its ``run`` naming it: ``repeats/seed-<s>``), then the report.
+
+Nothing read from a run directory is ever unpickled or executed: a handed-over directory is data. Every file
+is opened through :mod:`tuner.safe_io` (regular files only, no link of either kind where tuner writes, bounded
+size); the code a config names is loaded only as :mod:`tuner.trust` allows.
 
 Test hook: ``TUNER_FAULT_KILL_AT_WRITE=k`` (optionally ``k:after``) makes the process ``os._exit(137)``
 at its k-th write through this module: by default just before the write takes effect (an atomic write
@@ -31,36 +41,43 @@ from __future__ import annotations
 import csv
 import dataclasses
 import errno
-import hashlib
 import io
 import json
 import os
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 
 from tuner import digest, safe_yaml
-from tuner.loop import BestPoint
-from tuner.safe_io import check_not_link, named, open_nofollow, read_text, refuse_links
+from tuner.records import (
+    FIXED_COLUMNS,
+    RESULT_COLUMNS,
+    Best,
+    Checkpoint,
+    HistoryRow,
+    Meta,
+    Repeats,
+    RunError,
+    config_hash,
+    dump_yaml,
+    first_difference,
+    load_json,
+    plain,
+)
+from tuner.safe_io import UnsafeFile, named, open_append, open_lock, read_text, refuse_links, regular, write_atomic
 
-__all__ = ["RunError", "RunDir", "Meta", "Timing", "Best", "Checkpoint", "History", "atomic_write",
-           "config_hash", "first_difference", "fmt_cell", "parse_cell", "FAULT_ENV"]
+#: what this module owns; the records it reads and writes (``Meta``, ``Best``, ``Checkpoint``, ``HistoryRow``,
+#: ``RunError`` and the encodings) are :mod:`tuner.records`'s, importable from here as well
+__all__ = ["RunDir", "History", "atomic_write", "read_chain", "check_chain", "chain_secret", "chain_note", "CHAIN",
+           "FAULT_ENV", "REPEATS_DIR", "RunError", "mark_stopped"]
 
 FAULT_ENV = "TUNER_FAULT_KILL_AT_WRITE"
-FIXED_COLUMNS = ["eval", "stage", "generation", "index"]
-RESULT_COLUMNS = ["fitness", "status", "error", "seconds"]
-STATUSES = ("created", "running", "finished", "interrupted", "failed")
 LEGACY_CHECKPOINT = "checkpoint.pkl"
-
-
-class RunError(RuntimeError):
-    """A run directory that cannot be used as asked (missing, finished, corrupt, in use)."""
-
+#: the folder of a repeated run that holds its repeats' run directories
+REPEATS_DIR = "repeats"
 
 # --- writing -----------------------------------------------------------------------------------
 _n_writes = 0
@@ -77,42 +94,20 @@ def _fault(phase: str) -> None:
 
 
 def atomic_write(path: Path, data: bytes | str) -> None:
-    """Write to a temporary file, fsync, rename: readers see the old or the new file, never half."""
+    """Write to a temporary file, fsync, rename (:func:`tuner.safe_io.write_atomic`): readers see the old or the
+    new file, never half; a link of either kind or a special file at ``path`` is refused."""
     global _n_writes
     _n_writes += 1
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    check_not_link(path.parent)
-    if os.path.lexists(tmp):
-        os.unlink(tmp)  # a leftover of a killed process with this pid (a link is removed, not followed)
-    try:
-        with named(path):  # a full disk names the file, not `?`
-            with os.fdopen(open_nofollow(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL), "wb") as fh:
-                fh.write(data if isinstance(data, bytes) else data.encode())
-                fh.flush()
-                os.fsync(fh.fileno())
-    except OSError:
-        if os.path.lexists(tmp):
-            os.unlink(tmp)  # nothing half-written stays behind; the old file is untouched
-        raise
-    _fault("before")
-    os.replace(tmp, path)
-    try:
-        dfd = os.open(path.parent, os.O_RDONLY)
-        try:
-            os.fsync(dfd)
-        finally:
-            os.close(dfd)
-    except OSError:  # pragma: no cover - some filesystems refuse directory fsync
-        pass
+    write_atomic(path, data, before_replace=lambda: _fault("before"))
     _fault("after")
 
 
 def _append(path: Path, text: str) -> None:
-    """Append and fsync (a kill can leave a torn last line, which the checkpoint's row count excludes)."""
+    """Append and fsync (a kill can leave a torn last line, which the checkpoint's row count excludes); a link
+    of either kind or a special file at ``path`` is refused (:func:`tuner.safe_io.open_append`)."""
     global _n_writes
     _n_writes += 1
-    with named(path), os.fdopen(open_nofollow(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT), "a", newline="") as fh:
+    with named(path), os.fdopen(open_append(path), "a", newline="") as fh:
         if os.environ.get(FAULT_ENV):
             fh.write(text[: len(text) // 2])
             fh.flush()
@@ -126,222 +121,11 @@ def _append(path: Path, text: str) -> None:
     _fault("after")
 
 
-def plain(v: Any) -> Any:
-    """Numpy scalars/arrays, tuples and paths turned into YAML/JSON-native values."""
-    if isinstance(v, dict):
-        return {str(k): plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [plain(x) for x in v]
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, Path):
-        return str(v)
-    return v
-
-
-def dump_yaml(d: Any) -> str:
-    return yaml.safe_dump(plain(d), sort_keys=False, default_flow_style=False, width=100)
-
-
-def fmt_cell(v: Any) -> Any:
-    """How a value is written into ``history.csv`` (floats as ``repr``, so they read back exactly)."""
-    if isinstance(v, (bool, np.bool_)):
-        return str(bool(v))
-    if isinstance(v, (float, np.floating)):
-        return repr(float(v))
-    if isinstance(v, (list, tuple, dict)):
-        return json.dumps(plain(v))
-    return v
-
-
-def parse_cell(s: str) -> Any:
-    """Inverse of :func:`fmt_cell` for metric cells: int, float, JSON list/dict, else the string."""
-    for conv in (int, float):
-        try:
-            return conv(s)
-        except ValueError:
-            pass
-    if s[:1] in "[{":
-        try:
-            return json.loads(s)
-        except ValueError:
-            pass
-    return s
-
-
-def config_hash(doc: Any) -> str:
-    """sha256 of the canonical JSON of a resolved config."""
-    return hashlib.sha256(json.dumps(plain(doc), sort_keys=True, default=str).encode()).hexdigest()
-
-
-def first_difference(a: Any, b: Any, prefix: str = "") -> str:
-    """The first dotted key where two config documents differ ('' when they are equal)."""
-    if isinstance(a, dict) and isinstance(b, dict):
-        for k in sorted(set(a) | set(b), key=str):
-            if k not in a or k not in b:
-                return f"{prefix}{k}"
-            d = first_difference(a[k], b[k], f"{prefix}{k}.")
-            if d:
-                return d
-        return ""
-    return "" if a == b else prefix.rstrip(".") or "(top level)"
-
-
-# --- typed records -----------------------------------------------------------------------------
-def _req(doc: dict[str, Any], key: str, types: type | tuple[type, ...], where: Path) -> Any:
-    if key not in doc:
-        raise RunError(f"{where}: {key}: missing")
-    v = doc[key]
-    allowed = types if isinstance(types, tuple) else (types,)
-    if not isinstance(v, allowed) or (isinstance(v, bool) and bool not in allowed):  # True is not a count
-        raise RunError(f"{where}: {key}: expected {getattr(types, '__name__', types)}, got {v!r}")
-    return v
-
-
-@dataclass(frozen=True)
-class Timing:
-    """Wall time of all sessions, summed objective time, number of sessions (run + resumes)."""
-
-    wall_s: float = 0.0
-    objective_s: float = 0.0
-    sessions: int = 0
-
-
-@dataclass(frozen=True)
-class Meta:
-    """``meta.json``: what ran, where, how far it got. Unknown keys are kept in ``extra``."""
-
-    status: str
-    name: str
-    seed: int
-    created: str
-    config_source: str = ""
-    config_hash: str = ""
-    versions: dict[str, str] = field(default_factory=dict)
-    git_commit: str = ""
-    host: str = ""
-    cpu_count: int | None = None
-    backend: str = "serial"
-    n_jobs: int = 1
-    n_jobs_requested: int | None = None
-    backend_detail: str = ""
-    optimizer: str = ""
-    n_evals: int = 0
-    n_failed: int = 0
-    generations: int = 0
-    stop_reason: str = ""
-    timing: Timing = field(default_factory=Timing)
-    started: str = ""
-    finished: str = ""
-    interrupted: str = ""
-    notes: tuple[str, ...] = ()
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    def replace(self, **kw: Any) -> Meta:
-        return dataclasses.replace(self, **kw)
-
-    def to_dict(self) -> dict[str, Any]:
-        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "extra"}
-        d["timing"] = dataclasses.asdict(self.timing)
-        d["notes"] = list(self.notes)
-        return {**self.extra, **plain(d)}
-
-    @classmethod
-    def from_dict(cls, doc: Any, where: Path) -> Meta:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
-        status = _req(doc, "status", str, where)
-        if status not in STATUSES:
-            raise RunError(f"{where}: status: expected one of {list(STATUSES)}, got {status!r}")
-        _req(doc, "name", str, where)
-        _req(doc, "seed", int, where)
-        for key in ("n_evals", "n_failed", "generations"):
-            if key in doc:
-                _req(doc, key, int, where)
-        t = doc.get("timing") or {}
-        if not isinstance(t, dict):
-            raise RunError(f"{where}: timing: expected an object, got {t!r}")
-        try:
-            timing = Timing(float(t.get("wall_s", 0.0)), float(t.get("objective_s", 0.0)), int(t.get("sessions", 0)))
-        except (TypeError, ValueError) as exc:
-            raise RunError(f"{where}: timing: {exc}") from None
-        names = {f.name for f in dataclasses.fields(cls)}
-        kw = {k: v for k, v in doc.items() if k in names and k not in ("timing", "extra", "notes")}
-        kw.setdefault("created", "")
-        return cls(**kw, timing=timing, notes=tuple(doc.get("notes") or ()),
-                   extra={k: v for k, v in doc.items() if k not in names})
-
-
-@dataclass(frozen=True)
-class Best(BestPoint):
-    """``best.yaml``: the best successful evaluation of the history (a :class:`tuner.loop.BestPoint`),
-    the run it belongs to, the objective's held-out scores after the run (``evaluation``) and the
-    complete configuration of the tuned system (``deployment``: a :class:`tuner.deployment.Deployment`
-    as plain data; ``params`` stays the run's point as the history records it)."""
-
-    run: str = ""
-    evaluation: dict[str, Any] = field(default_factory=dict)
-    deployment: dict[str, Any] = field(default_factory=dict)
-
-    def to_doc(self) -> dict[str, Any]:
-        doc = {"params": self.params, "fitness": self.fitness, "metrics": self.metrics,
-               "found": {"stage": self.stage, "generation": self.generation, "eval": self.eval}, "run": self.run}
-        if self.evaluation:
-            doc["evaluation"] = self.evaluation
-        if self.deployment:
-            doc["deployment"] = self.deployment
-        return plain(doc)
-
-    @classmethod
-    def from_doc(cls, doc: Any, where: Path) -> Best:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a mapping, got {type(doc).__name__}")
-        params = _req(doc, "params", dict, where)
-        fitness = _req(doc, "fitness", (int, float), where)
-        found = doc.get("found") or {}
-        if not isinstance(found, dict):
-            raise RunError(f"{where}: found: expected a mapping, got {found!r}")
-        deployment = doc.get("deployment") or {}
-        if not isinstance(deployment, dict):
-            raise RunError(f"{where}: deployment: expected a mapping, got {deployment!r}")
-        return cls(dict(params), float(fitness), dict(doc.get("metrics") or {}), int(found.get("stage", 0)),
-                   int(found.get("generation", -1)), int(found.get("eval", -1)), str(doc.get("run", "")),
-                   dict(doc.get("evaluation") or {}), dict(deployment))
-
-
-@dataclass(frozen=True)
-class Checkpoint:
-    """``checkpoint.json``: the first ``n_evals`` rows of ``history.csv`` are complete generations.
-
-    Resuming recreates the optimiser from the run seed and replays ``tell`` with the recorded fitness
-    of those rows: the optimiser state (pycma's included) is rebuilt exactly, no object is stored, and
-    a history edited by hand is detected (the replayed optimiser asks other points than recorded).
-    """
-
-    n_evals: int
-    stage: int
-    generations: int
-    version: int = 2
-
-    @classmethod
-    def from_doc(cls, doc: Any, where: Path) -> Checkpoint:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
-        if doc.get("version") != 2:
-            raise RunError(f"{where}: version: expected 2, got {doc.get('version')!r}")
-        vals = [_req(doc, k, int, where) for k in ("n_evals", "stage", "generations")]
-        if min(vals) < 0:
-            raise RunError(f"{where}: negative counts {vals}")
-        return cls(*vals)
-
-
 # --- history -----------------------------------------------------------------------------------
 class History:
     """Append-only ``history.csv``; the header grows (file rewritten) if new metric names appear. Beside it,
-    ``history.chain``: each row's digest chained to the row before and to ``config_hash`` (:mod:`tuner.digest`);
-    an older history without it stays readable and is continued without digests."""
+    ``history.chain``: each row's digest chained to the row before and to ``config_hash`` (:mod:`tuner.digest`),
+    keyed when the user has set a chain key at the history's creation. A history without its chain is refused."""
 
     def __init__(self, path: Path, param_names: list[str], config_hash: str = ""):
         self.path = Path(path)
@@ -349,7 +133,7 @@ class History:
         self.param_names = list(param_names)
         self.metric_names: list[str] = []
         self.config_hash, self._last = config_hash, config_hash
-        if self.path.exists():
+        if regular(self.path):
             try:
                 header = next(csv.reader(io.StringIO(read_text(self.path), newline="")), None)
             except (UnicodeDecodeError, csv.Error) as exc:
@@ -358,12 +142,14 @@ class History:
             if header is None or header[:len(fixed)] != fixed:
                 raise RunError(f"{self.path}: header {header} does not start with the expected columns {fixed}")
             self.metric_names = header[len(fixed):]
-            self.chained = self.chain_path.exists()
+            self.chain = read_chain(self.chain_path)  # RunError when missing, or keyed with a key not set here
+            self.key = chain_secret(self.chain, self.chain_path)
             self._last = None  # read when first needed
         else:
-            self.chained = True
-            self._rewrite([])
-            atomic_write(self.chain_path, "")
+            key = _user_key()
+            self.chain, self.key = digest.Chain(key.id if key else None, []), key.secret if key else None
+            atomic_write(self.chain_path, self.chain.text())  # first: a kill between the two leaves no history
+            self._rewrite([])                                 # without its chain
 
     @property
     def columns(self) -> list[str]:
@@ -388,32 +174,33 @@ class History:
         rows = self.read_rows()
         if len(rows) < n_rows:
             raise RunError(f"{self.path}: {len(rows)} rows, but checkpoint.json says {n_rows} were written")
-        if self.chained:
-            digests = read_chain(self.chain_path)
-            check_chain(self.path, rows[:n_rows], digests, self.config_hash)
-            if len(digests) != n_rows:
-                atomic_write(self.chain_path, "".join(f"{e},{d}\n" for e, d in digests[:n_rows]))
-            self._last = digests[n_rows - 1][1] if n_rows else self.config_hash
+        digests = read_chain(self.chain_path).digests
+        check_chain(self.path, rows[:n_rows], digests, self.config_hash, self.key)
+        if len(digests) != n_rows:
+            atomic_write(self.chain_path, self.chain.text(digests[:n_rows]))
+        self._last = digests[n_rows - 1][1] if n_rows else self.config_hash
         if len(rows) != n_rows:
             self._rewrite(rows[:n_rows])
         return rows[:n_rows]
 
-    def append(self, rows: list[dict[str, Any]]) -> None:
+    def append(self, records: list[HistoryRow]) -> None:
+        """Append ``records`` (and their digests to ``history.chain``); a metric not in the header yet adds a
+        column (the file is rewritten with it)."""
+        rows = [r.cells() for r in records]
         new = sorted({k for r in rows for k in r} - set(self.columns))
         if new:
             old = self.read_rows()
             self.metric_names += new
             self._rewrite(old)
-        if self.chained and self._last is None:
-            digests = read_chain(self.chain_path)
+        if self._last is None:
+            digests = read_chain(self.chain_path).digests
             self._last = digests[-1][1] if digests else self.config_hash
         buf, lines = io.StringIO(), []
         w = csv.DictWriter(buf, fieldnames=self.columns, extrasaction="ignore", lineterminator="\n")
         for r in rows:
             w.writerow(r)
-            if self.chained:
-                self._last = digest.row_digest(str(self._last), r)
-                lines.append(f"{r.get('eval')},{self._last}\n")
+            self._last = digest.row_digest(str(self._last), r, self.key)
+            lines.append(f"{r.get('eval')},{self._last}\n")
         _append(self.path, buf.getvalue())
         if lines:
             _append(self.chain_path, "".join(lines))
@@ -422,16 +209,44 @@ class History:
 CHAIN = digest.CHAIN
 
 
-def read_chain(path: Path) -> list[tuple[str, str]]:
+def _user_key() -> digest.ChainKey | None:
+    try:
+        return digest.chain_key()
+    except digest.ChainKeyError as exc:
+        raise RunError(str(exc)) from None
+
+
+def read_chain(path: Path) -> digest.Chain:
+    """``history.chain`` parsed; :class:`RunError` when it is missing (a history is never used without it)."""
+    if not regular(path):
+        raise RunError(f"{path}: missing beside history.csv; without it the history cannot be checked for edits, "
+                       "so it is not used (restore it from where the run came from, or start the run again)")
     try:
         return digest.parse_chain(read_text(path))
     except UnicodeDecodeError as exc:
         raise RunError(f"{path}: unreadable ({exc})") from None
 
 
-def check_chain(path: Path, rows: list[dict[str, str]], digests: list[tuple[str, str]], config_hash: str) -> None:
+def chain_secret(chain: digest.Chain, where: Path) -> bytes | None:
+    """The key ``chain`` is keyed with (None: unkeyed); :class:`RunError` when the user's key is missing or another."""
+    try:
+        return digest.key_for(chain, where)
+    except digest.ChainKeyError as exc:
+        raise RunError(str(exc)) from None
+
+
+def chain_note(chain: digest.Chain) -> str:
+    """A note for an unkeyed chain read while the user has a chain key set (anyone could have recomputed it)."""
+    if chain.key_id is None and _user_key() is not None:
+        return ("history.chain is not keyed (written without a chain key): it shows no naive edit, but anyone "
+                "could have recomputed it after editing the history")
+    return ""
+
+
+def check_chain(path: Path, rows: list[dict[str, str]], digests: list[tuple[str, str]], config_hash: str,
+                key: bytes | None = None) -> None:
     """:class:`RunError` naming the first of ``rows`` that does not match ``history.chain`` (:mod:`tuner.digest`)."""
-    if (bad := digest.first_mismatch(rows, digests, config_hash)) is not None:
+    if (bad := digest.first_mismatch(rows, digests, config_hash, key)) is not None:
         raise RunError(f"{path}: row eval={bad[0]}: {bad[1]}: the history was edited (or rows removed or "
                        "reordered), so it is not used")
 
@@ -455,17 +270,19 @@ class RunDir:
         p = self.path / name
         if not self.path.is_dir():
             raise RunError(f"{self.path}: not a run directory (no such directory)")
-        if not p.is_file():
+        if not regular(p):  # a link, a FIFO or a device is an error naming it (tuner.safe_io), never followed
             raise RunError(f"{p}: missing ({what})")
         try:
             return read_text(p)
+        except UnsafeFile:
+            raise
         except (OSError, UnicodeDecodeError) as exc:
             raise RunError(f"{p}: unreadable: {exc}") from None
 
     def _json(self, name: str, what: str) -> Any:
         try:
-            return json.loads(self._text(name, what))
-        except json.JSONDecodeError as exc:
+            return load_json(self._text(name, what))
+        except ValueError as exc:
             raise RunError(f"{self.path / name}: not valid JSON: {exc}") from None
 
     def _yaml(self, name: str, what: str) -> Any:
@@ -476,7 +293,7 @@ class RunDir:
             raise RunError(f"{self.path / name}: not valid YAML: {msg}") from None
 
     def is_run(self) -> bool:
-        return (self.path / "meta.json").is_file()
+        return regular(self.path / "meta.json")
 
     def meta(self) -> Meta:
         return Meta.from_dict(self._json("meta.json", "not a run directory, or killed before it started"),
@@ -492,25 +309,47 @@ class RunDir:
     def config_snapshot(self) -> dict[str, Any] | None:
         p = self.path / ".config.json"
         try:
-            return json.loads(read_text(p)) if p.is_file() else None
+            return load_json(read_text(p)) if regular(p) else None
         except (OSError, ValueError):
             return None
 
     def has_best(self) -> bool:
-        return (self.path / "best.yaml").is_file()
+        return regular(self.path / "best.yaml")
 
     def best(self) -> Best:
         return Best.from_doc(self._yaml("best.yaml", "nothing evaluated yet?"), self.path / "best.yaml")
 
     def checkpoint(self) -> Checkpoint | None:
         """The checkpoint, ``None`` if the run never completed a generation; a legacy pickle is refused."""
-        if (self.path / LEGACY_CHECKPOINT).exists():
+        if os.path.lexists(self.path / LEGACY_CHECKPOINT):
             raise RunError(f"{self.path / LEGACY_CHECKPOINT}: a pickled checkpoint from an older tuner; pickles "
                            "can run arbitrary code, so it is never loaded and this run cannot be resumed "
                            "(its history.csv and best.yaml stay readable; start the job again)")
-        if not (self.path / "checkpoint.json").exists():
+        if not regular(self.path / "checkpoint.json"):
             return None
         return Checkpoint.from_doc(self._json("checkpoint.json", "checkpoint"), self.path / "checkpoint.json")
+
+    def repeat_count(self) -> int:
+        """``repeats`` of the run's config: N > 1 for a repeated run, 1 for a single run (or no config)."""
+        if not regular(self.path / "config.yaml"):
+            return 1
+        n = self.config().get("repeats", 1)
+        return n if isinstance(n, int) and not isinstance(n, bool) and n > 1 else 1
+
+    def repeat_name(self, seed: int) -> str:
+        """The repeat of ``seed``'s directory, relative to this one (``repeats/seed-<s>``)."""
+        return f"{REPEATS_DIR}/seed-{int(seed)}"
+
+    def repeats(self) -> Repeats | None:
+        """``repeats.json`` of a repeated run (None before its first repeat ended, or for a single run)."""
+        if not regular(self.path / "repeats.json"):
+            return None
+        return Repeats.from_doc(self._json("repeats.json", "the spread over the repeats"), self.path / "repeats.json")
+
+    def chosen_repeat(self) -> Path | None:
+        """A repeated run's chosen repeat's directory (None before one is chosen, or for a single run)."""
+        rep = self.repeats()
+        return None if rep is None or rep.chosen_entry is None else self.path / rep.chosen_entry.run
 
     def history(self, param_names: list[str], config_hash: str = "") -> History:
         return History(self.path / "history.csv", param_names, config_hash)
@@ -518,10 +357,12 @@ class RunDir:
     def history_rows(self) -> list[dict[str, str]]:
         """The rows of ``history.csv`` as strings (empty when nothing was evaluated yet)."""
         p = self.path / "history.csv"
-        if not p.is_file():
+        if not regular(p):
             return []
         try:
             return list(csv.DictReader(io.StringIO(read_text(p), newline="")))
+        except UnsafeFile:
+            raise
         except (OSError, UnicodeDecodeError, csv.Error) as exc:
             raise RunError(f"{p}: unreadable ({exc})") from None
 
@@ -538,12 +379,15 @@ class RunDir:
     def write_best(self, best: Best) -> None:
         atomic_write(self.path / "best.yaml", dump_yaml(best.to_doc()))
 
+    def write_repeats(self, rep: Repeats) -> None:
+        atomic_write(self.path / "repeats.json", json.dumps(rep.to_doc(), indent=1))
+
     def write_checkpoint(self, ck: Checkpoint) -> None:
         atomic_write(self.path / "checkpoint.json", json.dumps(dataclasses.asdict(ck)))
 
     def validation(self) -> dict[str, Any] | None:
         """``validation.json`` (``None`` when the run has none)."""
-        if not (self.path / "validation.json").is_file():
+        if not regular(self.path / "validation.json"):
             return None
         doc = self._json("validation.json", "validation results")
         if not isinstance(doc, dict):
@@ -562,7 +406,7 @@ class RunDir:
         """Delete temporary files a killed writer left behind; return their names."""
         gone = []
         for p in self.path.glob(".*.tmp*"):
-            p.unlink(missing_ok=True)
+            p.unlink(missing_ok=True)  # unlink removes a link itself, never its target
             gone.append(p.name)
         return gone
 
@@ -583,7 +427,7 @@ class RunDir:
         import fcntl
 
         self.path.mkdir(parents=True, exist_ok=True)
-        fd = open_nofollow(self.path / ".lock", os.O_RDWR | os.O_CREAT)  # never truncate a link's target
+        fd = open_lock(self.path / ".lock")  # never truncate a link's target (either kind), never block on a FIFO
         try:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -597,3 +441,35 @@ class RunDir:
             yield
         finally:
             os.close(fd)
+
+
+def mark_stopped(run_dirs: list[str], wait_s: float = 5.0) -> None:
+    """Runs whose process was stopped from outside (a parallel sweep's workers, stopped with the pool): each
+    whose ``meta.json`` still says ``running`` once no process holds its lock (waiting up to ``wait_s``) is
+    marked ``interrupted``, as a run does when it is stopped itself; ``tuner sweep`` or ``tuner resume``
+    continues it."""
+    import datetime
+    import time
+
+    left, deadline = list(run_dirs), time.monotonic() + wait_s
+    while left:
+        busy = []
+        for d in left:
+            try:
+                rd = RunDir(d)
+                if not rd.is_run() or rd.meta().status != "running":
+                    continue
+                with rd.lock():  # a RunError while a worker still holds it
+                    meta = rd.meta()
+                    if meta.status == "running":
+                        now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+                        rd.write_meta(meta.replace(status="interrupted", interrupted=now))
+            except RunError as exc:
+                if "in use by pid" in str(exc):
+                    busy.append(d)
+            except (OSError, ValueError):
+                pass
+        if not busy or time.monotonic() > deadline:
+            return
+        left = busy
+        time.sleep(0.1)

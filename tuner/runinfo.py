@@ -1,4 +1,5 @@
-"""What a run tuned and how it validated, for ``tuner show``, ``tuner compare`` and the run report.
+"""What a run tuned and how it validated, for ``tuner show``, ``tuner compare``, ``tuner list runs`` and the
+run report.
 
 :func:`run_summary` gathers status, best fitness, parameters and counts from ``meta.json`` and
 ``best.yaml`` (here rather than in :mod:`tuner.report`, so ``tuner show`` imports neither pandas nor
@@ -20,7 +21,7 @@ from typing import Any
 
 from tuner.rundir import RunDir
 
-__all__ = ["run_summary", "tuned_system", "scores", "SCORE_KEYS"]
+__all__ = ["run_summary", "tuned_system", "scores", "SCORE_KEYS", "list_runs", "unreadable"]
 
 #: the numbers of ``best.yaml``'s ``evaluation`` that show and compare print, in order
 SCORE_KEYS = ("train_fitness", "test_fitness", "tuning_score", "cv_fitness", "cv_gap", "defaults_fitness",
@@ -90,3 +91,42 @@ def fmt(v: Any) -> str:
     if isinstance(v, float):
         return "-" if math.isnan(v) else f"{v:.6g}"
     return str(v)
+
+
+def list_runs(runs_dir: Path) -> str:
+    """A table of the run directories under ``runs_dir`` (recursively): status, best fitness, age; a run that
+    cannot be read is listed as ``unreadable``, with the reason on a line after the table."""
+    import datetime as _dt
+
+    import pandas as pd
+
+    from tuner.records import RunError
+
+    rows, why = [], []
+    now = _dt.datetime.now(_dt.UTC)
+    for meta_p in sorted(Path(runs_dir).rglob("meta.json")):
+        name = str(meta_p.parent.relative_to(runs_dir))
+        try:
+            rd = RunDir(meta_p.parent)
+            meta = rd.meta()
+            best = rd.best() if rd.has_best() else None
+            age = ""
+            if meta.created:
+                dt = now - _dt.datetime.strptime(meta.created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
+                age = str(dt).split(".")[0]
+        except (RunError, OSError, ValueError) as exc:  # one damaged run is listed as such, the others as usual
+            rows.append({"run": name, "status": "unreadable", "optimizer": "", "evals": None, "best_fitness": None,
+                         "age": ""})
+            why.append(f"unreadable: {name}: {unreadable(exc)}")
+            continue
+        rows.append({"run": name, "status": meta.status, "optimizer": meta.optimizer,
+                     "evals": meta.n_evals, "best_fitness": best.fitness if best else None, "age": age})
+    if not rows:
+        return f"no runs under {runs_dir}"
+    return "\n".join([pd.DataFrame(rows).to_string(index=False), *why])
+
+
+def unreadable(exc: BaseException) -> str:
+    """Why a run directory of a listing could not be read: the first line of the error, short."""
+    text = f"{exc.filename}: {exc.strerror}" if isinstance(exc, OSError) and exc.filename else str(exc)
+    return (text.splitlines() or [type(exc).__name__])[0][:160]

@@ -15,7 +15,8 @@ from typing import Any
 
 from tuner.config import ConfigError, RunConfig, SelectConfig
 from tuner.objective import as_evaluation, hook
-from tuner.rundir import FIXED_COLUMNS, RESULT_COLUMNS, Best, RunDir, parse_cell, plain
+from tuner.records import Best, HistoryRow, plain
+from tuner.rundir import RunDir
 
 __all__ = ["selection_split", "tuning_objective", "select_best", "inner_split", "defaults_candidate",
            "tune_and_select", "plain_score", "scored", "FALLBACK_FRACTION"]
@@ -61,26 +62,15 @@ def tuning_objective(cfg: RunConfig, objective: Any) -> Any:
 
 def _candidates(rd: RunDir, names: list[str], top_k: int) -> list[tuple[dict[str, Any], float, dict[str, Any], dict]]:
     """The ``top_k`` best distinct successful rows of the history: (params, fitness, metrics, found)."""
-    rows = []
-    for r in rd.history_rows():
-        if r.get("status") != "ok":
-            continue
-        fit = parse_cell(r.get("fitness", ""))
-        if not isinstance(fit, (int, float)) or not math.isfinite(fit):
-            continue
-        rows.append((float(fit), int(r["eval"]), r))
-    rows.sort(key=lambda t: (t[0], t[1]))
+    rows = [HistoryRow.parse(r, names, rd.file("history.csv")) for r in rd.history_rows() if r.get("status") == "ok"]
+    rows = sorted((r for r in rows if math.isfinite(r.fitness)), key=lambda r: (r.fitness, r.eval))
     seen, out = set(), []
-    skip = set(FIXED_COLUMNS) | set(RESULT_COLUMNS) | set(names)
-    for fit, _, r in rows:
-        params = {n: parse_cell(r[n]) for n in names}
-        key = tuple(repr(params[n]) for n in names)
+    for r in rows:
+        key = tuple(repr(r.params[n]) for n in names)
         if key in seen:
             continue
         seen.add(key)
-        metrics = {k: parse_cell(v) for k, v in r.items() if k not in skip and v not in ("", None)}
-        found = {"stage": int(r["stage"]), "generation": int(r["generation"]), "eval": int(r["eval"])}
-        out.append((params, fit, metrics, found))
+        out.append((r.params, r.fitness, r.metrics, {"stage": r.stage, "generation": r.generation, "eval": r.eval}))
         if len(out) == top_k:
             break
     return out
@@ -142,10 +132,12 @@ def select_best(cfg: RunConfig, rd: RunDir, best: Best, names: list[str],
     that fails on the held-out fold scores inf.
     """
     from tuner.registry import build_objective
+    from tuner.trust import code_outside
 
     sel = cfg.validation.select
     assert sel is not None
-    full = build_objective(dict(cfg.objective), cfg.base_dir)
+    with code_outside(cfg.origin):  # a resumed run: no code from inside its directory (tuner.trust)
+        full = build_objective(dict(cfg.objective), cfg.base_dir)
     fold, tune, test = selection_split(cfg, full)
     cands = _candidates(rd, names, sel.top_k)
     table = []

@@ -10,6 +10,7 @@ local pools, the CPU count).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 from collections.abc import Callable
@@ -25,8 +26,8 @@ from tuner.optimizers import OptionError, get_optimizer
 from tuner.rundir import RunDir
 from tuner.space import Space
 
-__all__ = ["run_config", "run_objective", "build_objective", "build", "new_optimizer", "start_point", "population",
-           "worker_count", "LiveMap"]
+__all__ = ["run_config", "run_origin", "run_objective", "build_objective", "build", "new_optimizer", "start_point",
+           "population", "worker_count", "LiveMap"]
 
 
 def run_config(rd: RunDir, raw: dict[str, Any] | None = None) -> RunConfig:
@@ -36,7 +37,21 @@ def run_config(rd: RunDir, raw: dict[str, Any] | None = None) -> RunConfig:
     directory the config was loaded from (recorded as ``base_dir``), else the run directory."""
     raw = dict(rd.config() if raw is None else raw)
     source, base_dir = raw.pop("source", str(rd.file("config.yaml"))), Path(raw.pop("base_dir", rd.path))
-    return config_from_dict(raw, source=source, base_dir=base_dir)
+    cfg = config_from_dict(raw, source=source, base_dir=base_dir)
+    return dataclasses.replace(cfg, origin=run_origin(rd.path))
+
+
+def run_origin(run_dir: Path) -> Path:
+    """The directory whose content a command handed ``run_dir`` must not load code from: the run directory, for
+    a sweep's job (``SWEEP/jobs/JOB``) the whole sweep directory, for a repeat (``RUN/repeats/seed-<s>``) its
+    parent's origin."""
+    run_dir = Path(run_dir).resolve()
+    if run_dir.parent.name == "repeats" and os.path.lexists(run_dir.parent.parent / "config.yaml"):
+        return run_origin(run_dir.parent.parent)  # a repeat of a repeated run: its parent's origin
+    sweep = run_dir.parent.parent
+    if run_dir.parent.name == "jobs" and os.path.lexists(sweep / "sweep.yaml"):
+        return sweep
+    return run_dir
 
 
 def run_objective(rd: RunDir) -> tuple[RunConfig, Any, Space]:
@@ -49,9 +64,11 @@ def run_objective(rd: RunDir) -> tuple[RunConfig, Any, Space]:
 def build_objective(cfg: RunConfig) -> Any:
     """The objective of ``cfg`` as registered (no preflight); a refused one is a :class:`ConfigError`."""
     from tuner.registry import build_objective as _from_registry
+    from tuner.trust import code_outside
 
     try:
-        return _from_registry(dict(cfg.objective), cfg.base_dir)
+        with code_outside(cfg.origin):  # a config read from a run directory: none of its code from there
+            return _from_registry(dict(cfg.objective), cfg.base_dir)
     except FileNotFoundError as exc:
         raise ConfigError(cfg.source, "objective", f"file not found: {exc.filename or exc}") from None
     except ValueError as exc:

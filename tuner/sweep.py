@@ -27,6 +27,7 @@ import datetime as _dt
 import hashlib
 import itertools
 import json
+import shlex
 import sys
 from pathlib import Path
 from typing import Any
@@ -35,13 +36,16 @@ import yaml
 
 from tuner import safe_yaml
 from tuner.config import ConfigError, apply_overrides, config_from_dict, read_yaml
-from tuner.rundir import RunDir, atomic_write
-from tuner.safe_io import check_not_link, read_text, refuse_links
+from tuner.records import load_json
+from tuner.rundir import RunDir, atomic_write, mark_stopped
+from tuner.safe_io import check_not_link, read_bytes, read_text, refuse_links, regular, write_atomic
 
-__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "list_runs", "is_sweep_file", "ranked_by",
+__all__ = ["load_sweep", "run_sweep", "write_sweep_report", "show_sweep", "is_sweep_file", "ranked_by",
            "RANKED_BY", "DEFAULTS_OF"]
 
 JOBS_FILE = "jobs.json"
+#: a job's ``meta.json`` status once it has ended: run again, it is skipped ("failed": every evaluation failed)
+ENDED = ("finished", "failed")
 
 
 def _plain_name(s: str) -> bool:
@@ -68,8 +72,9 @@ def _slug(v: Any) -> str:
     return "".join(c if c.isalnum() or c in "-_." else "_" for c in s)[:40]
 
 
-def load_sweep(path: str | Path) -> dict[str, Any]:
-    """Read and expand a sweep file into ``{"name", "jobs": [{id, method, seed, overrides, raw}], ...}``."""
+def load_sweep(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
+    """Read and expand a sweep file into ``{"name", "jobs": [{id, method, seed, overrides, raw}], ...}``;
+    ``overrides`` (``--set key.path=value``) apply to every job, after its variant and grid values."""
     path = Path(path)
     doc = read_yaml(path)
     if not isinstance(doc, dict) or "sweep" not in doc or not isinstance(doc["sweep"], dict):
@@ -129,6 +134,7 @@ def load_sweep(path: str | Path) -> dict[str, Any]:
             for seed in seeds or [base_raw.get("seed", 0)]:
                 over = {**vover, **dict(zip(keys, combo)), "seed": seed}
                 raw = apply_overrides(base_raw, _overrides(over), path)
+                raw = apply_overrides(raw, list(overrides or []), "--set")  # the command line's, over the file's
                 raw["output"] = "."  # unused: the sweep names each run directory
                 parts = ([_slug(vname)] if vname else []) + [f"{k.split('.')[-1]}-{_slug(v)}"
                                                              for k, v in zip(keys, combo)]
@@ -156,7 +162,7 @@ def _stamp(path: Path) -> str | None:
     """A job stamp's text, or None when absent or not whole (written by an older tuner and torn)."""
     try:
         text = read_text(path)
-        json.loads(text)
+        load_json(text)
     except FileNotFoundError:
         return None
     except (ValueError, UnicodeDecodeError):
@@ -198,9 +204,9 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool, repor
     status = _job_status(run_dir)
     label = job["id"]
     printer = None if quiet else (lambda m: print(f"[{label}] {m}", file=sys.stderr, flush=True))
-    if status == "finished":
-        return {"id": job["id"], "status": "finished", "action": "skipped"}
-    if status != "new" or (run_dir / "config.yaml").exists():  # killed or interrupted: resume holds the lock,
+    if status in ENDED:
+        return {"id": job["id"], "status": status, "action": "skipped"}
+    if status != "new" or regular(run_dir / "config.yaml"):  # killed or interrupted: resume holds the lock,
         res = resume(run_dir, progress=printer, quiet=quiet, report=report)  # replays the history, goes on
         return {"id": job["id"], "status": res.status, "action": "resumed"}
     cfg = config_from_dict(raw, source=f"{job['id']}", base_dir=Path(job["base_dir"]))
@@ -210,11 +216,13 @@ def _run_job(job: dict[str, Any], run_dir: str, serial: bool, quiet: bool, repor
 
 
 def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int | None = None,
-              quiet: bool = False, report: bool = True) -> dict[str, Any]:
+              quiet: bool = False, report: bool = True, overrides: list[str] | None = None) -> dict[str, Any]:
     """Run (or continue) every job of a sweep, then write its report. ``report=False`` writes no report, the
     jobs' nor the sweep's (``results.csv`` and ``summary.csv`` are written; ``tuner report SWEEP_DIR`` writes
-    the reports later)."""
-    sw = load_sweep(path)
+    the reports later). ``overrides`` (``--set key.path=value``) apply to every job; a sweep directory run
+    with other overrides is refused (its jobs' configurations differ)."""
+    overrides = list(overrides or [])
+    sw = load_sweep(path, overrides)
     out = Path(sweep_dir) if sweep_dir else Path(sw["output"]) / sw["name"]
     n_par, n_cap = sweep_jobs(sw["parallel_jobs"] if jobs is None else jobs, len(sw["jobs"]))
     check_not_link(out / "jobs")
@@ -223,17 +231,18 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
     (out / "jobs").mkdir(exist_ok=True)
     spec_text = yaml.safe_dump(sw["doc"], sort_keys=False)
     old = out / "sweep.yaml"
-    if old.exists() and read_text(old) != spec_text:
+    if regular(old) and read_text(old) != spec_text:
         raise ConfigError(path, "sweep", f"{out} holds a different sweep; choose another --dir or delete it")
     atomic_write(old, spec_text)
-    atomic_write(out / "command.txt", " ".join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
-                                                                              if sweep_dir else [])) + "\n")
+    atomic_write(out / "command.txt", shlex.join(["tuner", "sweep", str(path)] + (["--dir", str(sweep_dir)]
+                                                                                if sweep_dir else [])
+                                                 + [a for o in overrides for a in ("--set", o)]) + "\n")
     atomic_write(out / JOBS_FILE, json.dumps(_job_list(sw), indent=1, default=str))  # show/report read this
     if n_cap and not quiet:
         print(f"note: {n_cap}", file=sys.stderr, flush=True)
     todo = [(j, str(out / "jobs" / j["id"])) for j in sw["jobs"]]
     if not quiet:
-        done = sum(_job_status(Path(d)) == "finished" for _, d in todo)
+        done = sum(_job_status(Path(d)) in ENDED for _, d in todo)
         print(f"sweep {sw['name']}: {len(todo)} jobs ({done} already finished), {n_par} at a time -> {out}",
               file=sys.stderr, flush=True)
     if n_par > 1:
@@ -245,6 +254,7 @@ def run_sweep(path: str | Path, sweep_dir: str | Path | None = None, jobs: int |
             results = Parallel(n_jobs=n_par, backend="loky")(
                 delayed(_run_job)(j, str(Path(d).absolute()), True, True, report) for j, d in todo)
         except KeyboardInterrupt:
+            mark_stopped([d for _, d in todo])  # the pool's workers were stopped with it
             return {"dir": out, "report": None, "ok": False, "results": [], "interrupted": True}
     else:
         from tuner.report import throttled
@@ -286,7 +296,7 @@ def collect(sweep_dir: Path) -> Any:
         row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
                                "status": _job_status(d)}
         rd = RunDir(d)
-        if row["status"] == "finished" and not rd.has_best():  # nothing to rank: say why
+        if row["status"] in ENDED and not rd.has_best():  # nothing to rank: say why
             row["status"] = "all failed"
             row["n_failed"] = rd.meta().n_failed
         if rd.has_best():
@@ -325,9 +335,9 @@ def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
     is rebuilt, nothing imported); a sweep directory of an older tuner is re-expanded from its sweep file."""
     sweep_dir = Path(sweep_dir)
     refuse_links(sweep_dir)
-    if (sweep_dir / JOBS_FILE).is_file():
+    if regular(sweep_dir / JOBS_FILE):
         try:
-            doc = json.loads(read_text(sweep_dir / JOBS_FILE))
+            doc = load_json(read_text(sweep_dir / JOBS_FILE))
             if not isinstance(doc, dict) or not isinstance(doc.get("jobs"), list) or \
                     not all(isinstance(j, dict) and isinstance(j.get("id"), str) and _plain_name(j["id"])
                             for j in doc["jobs"]):
@@ -335,7 +345,10 @@ def load_sweep_from_dir(sweep_dir: Path) -> dict[str, Any]:
         except (ValueError, UnicodeDecodeError) as exc:
             raise ConfigError(sweep_dir / JOBS_FILE, "", f"unreadable: {exc}") from None
         return {"description": "", **doc, "name": str(doc.get("name", sweep_dir.name))}
-    cmd = (sweep_dir / "command.txt").read_text().split() if (sweep_dir / "command.txt").exists() else []
+    try:
+        cmd = shlex.split(read_text(sweep_dir / "command.txt")) if regular(sweep_dir / "command.txt") else []
+    except ValueError:  # not a command line
+        cmd = []
     src = Path(cmd[2]) if len(cmd) > 2 else sweep_dir / "sweep.yaml"
     if not src.exists():
         src = sweep_dir / "sweep.yaml"
@@ -362,8 +375,9 @@ def ranked_by(df: Any) -> tuple[str, str]:
 
 
 def summarize(df: Any) -> Any:
-    """Mean, median, std, min over seeds for each method and numeric metric, plus each method's defaults
-    row (its defaults scored as the ranked score); ranked by the median of :func:`ranked_by`'s score.
+    """Mean, median, std, min and max (the spread) over seeds for each method and numeric metric, plus each
+    method's defaults row (its defaults scored as the ranked score); ranked by the median of :func:`ranked_by`'s
+    score.
 
     Columns ``("kind", "")`` (``tuned`` or ``defaults``) and ``("ranked_by", "")`` say what each row is and
     which score ranks; a defaults row is named ``<method> (defaults)`` and fills the ranked score only.
@@ -378,7 +392,7 @@ def summarize(df: Any) -> Any:
     g = df[df["status"] == "finished"].groupby("method")
     parts = {}
     for m in metrics:
-        agg = g[m].agg(["mean", "median", "std", "min"])
+        agg = g[m].agg(["mean", "median", "std", "min", "max"])
         for stat in agg.columns:
             parts[(m, stat)] = agg[stat]
     out = pd.DataFrame(parts)
@@ -386,7 +400,7 @@ def summarize(df: Any) -> Any:
     out.insert(0, ("kind", ""), "tuned")
     dcol = DEFAULTS_OF[key_col]
     if dcol in df:
-        d = g[dcol].agg(["mean", "median", "std", "min"]).dropna(how="all")
+        d = g[dcol].agg(["mean", "median", "std", "min", "max"]).dropna(how="all")
         rows = pd.DataFrame({(key_col, stat): d[stat] for stat in d.columns})
         rows.insert(0, ("runs", "n"), g.size().loc[d.index])
         rows.insert(0, ("kind", ""), "defaults")
@@ -400,7 +414,7 @@ def summarize(df: Any) -> Any:
 
 
 def _hash(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()[:16]
+    return hashlib.sha256(read_bytes(path)).hexdigest()[:16]
 
 
 def write_sweep_tables(sweep_dir: str | Path) -> tuple[Any, Any, Any]:
@@ -409,11 +423,11 @@ def write_sweep_tables(sweep_dir: str | Path) -> tuple[Any, Any, Any]:
     form."""
     sweep_dir = Path(sweep_dir)
     df = collect(sweep_dir)
-    df.to_csv(sweep_dir / "results.csv", index=False, float_format="%.17g")
+    write_atomic(sweep_dir / "results.csv", df.to_csv(index=False, float_format="%.17g"), fsync=False)
     summ = summarize(df)
     flat = summ.copy()
     flat.columns = [f"{a}.{b}" if b else a for a, b in flat.columns]
-    flat.to_csv(sweep_dir / "summary.csv", float_format="%.17g")
+    write_atomic(sweep_dir / "summary.csv", flat.to_csv(float_format="%.17g"), fsync=False)
     return df, summ, flat
 
 
@@ -424,7 +438,7 @@ def write_missing_job_reports(sweep_dir: str | Path) -> int:
     n = 0
     for job in load_sweep_from_dir(Path(sweep_dir))["jobs"]:
         rd = RunDir(Path(sweep_dir) / "jobs" / job["id"])
-        if rd.is_run() and not rd.file("report.md").exists():
+        if rd.is_run() and not regular(rd.file("report.md")):
             write_run_report(rd.path)
             n += 1
     return n
@@ -435,13 +449,17 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
 
     ``live``: the sweep is still going; the HTML page reloads itself until every job has finished.
     """
+    from tuner import interactive
+    from tuner.plots import SWEEP_PLOTS, draw, figures_md
+    from tuner.plots.context import SweepContext
     from tuner.render import md_escape
-    from tuner.report import LIVE_REFRESH_S, sweep_figures, sweep_warnings_md, write_html
+    from tuner.report import LIVE_REFRESH_S, sweep_warnings_md, write_html
 
     sweep_dir = Path(sweep_dir)
     sw = load_sweep_from_dir(sweep_dir)
     df, summ, flat = write_sweep_tables(sweep_dir)
-    figs = sweep_figures(sweep_dir, df)
+    check_not_link(sweep_dir / "figures")
+    drawn = draw(SWEEP_PLOTS, SweepContext(sweep_dir, df), sweep_dir / "figures")
     jobs_dir = sweep_dir / "jobs"
     versions = {}
     hashes = []
@@ -453,30 +471,30 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
             hashes.append((job["id"], meta.config_hash[:16] or _hash(d / "config.yaml"), job["seed"]))
             if not versions:
                 versions = {**meta.versions, "git_commit": meta.git_commit}
-    command = read_text(sweep_dir / "command.txt").strip() if (sweep_dir / "command.txt").exists() else ""
+    command = read_text(sweep_dir / "command.txt").strip() if regular(sweep_dir / "command.txt") else ""
     key_col, what = summ.attrs.get("ranked_by", ranked_by(df)) if len(df) else RANKED_BY[-1]
     fit_cols = tuple(dict.fromkeys((key_col, *(("train_fitness", "test_fitness") if "train_fitness.median"
                                                 in flat.columns else ("best_fitness",)))))
     show_cols = [c for c in ["rank", "kind", "runs"] if c in flat.columns] + \
-        [c for c in flat.columns if c.endswith((".median", ".mean", ".std")) and c.split(".")[0] in fit_cols]
+        [c for c in flat.columns if c.endswith((".median", ".min", ".max")) and c.split(".")[0] in fit_cols]
     ranking = flat[show_cols].reset_index().rename(columns={"index": "method"}) if len(flat) else flat
     if len(ranking):
         ranking = ranking[["rank", "method"] + [c for c in ranking.columns if c not in ("rank", "method")]]
     main_cols = [c for c in ["job", "method", "seed", "status", "best_fitness", "train_fitness", "test_fitness",
                              "cv_fitness", "cv_gap", "cv_gap_large", DEFAULTS_OF[key_col], "n_evals", "wall_s"]
                  if c in df.columns]
-    running = live and not (len(df) and (df["status"] == "finished").all())
+    running = live and not (len(df) and df["status"].isin(["finished", "all failed"]).all())
     md = [f"# Sweep {md_escape(sw['name'])}", "", md_escape(sw.get("description") or ""), "",
           f"{len(df)} jobs, {int((df['status'] == 'finished').sum()) if len(df) else 0} finished. "
           f"Written {_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}.", "",
           "## Ranking (over seeds)", "",
-          f"Ranked by the median {what} (`{key_col}`). Each method's defaults row holds its defaults (the "
-          "config's fixed values with the searched parameters at the objective's defaults) scored the same "
-          "way.", "", _md(ranking), "",
+          f"Ranked by the median {what} (`{key_col}`); min and max are the spread over the seeds (the best and "
+          "the worst seed). Each method's defaults row holds its defaults (the config's fixed values with the "
+          "searched parameters at the objective's defaults) scored the same way.", "", _md(ranking), "",
           "## Every job", "", _md(df[main_cols]), "",
           *sweep_warnings_md(jobs_dir, [j["id"] for j in sw["jobs"]]),
           "Full tables: [results.csv](results.csv) (one row per job, all metrics and parameters), "
-          "[summary.csv](summary.csv) (mean, median, std, min over seeds).", ""]
+          "[summary.csv](summary.csv) (mean, median, std, min, max over seeds).", ""]
     test_cols = [c for c in df.columns if c.startswith("test.")]
     if test_cols:
         md += ["## Held-out recordings (mean over test recordings)", "",
@@ -484,27 +502,26 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     elif any(c.startswith("train.") for c in df.columns):  # e.g. closed loop: F, peaks, rise times
         md += ["## Scores of the best parameters (objective's evaluation)", "",
                _md(df[["job"] + [c for c in df.columns if c.startswith("train.")]]), ""]
-    md += ["## Figures", ""]
-    for title, p in figs:
-        md += [f"### {title}", "", f"![{title}]({p.relative_to(sweep_dir).as_posix()})", ""]
+    at_figures = len(md)
+    md += ["## Figures", ""] + figures_md(drawn, sweep_dir)
+    after_figures = len(md)
     per_run = [(j["id"], jobs_dir / j["id"] / "report.md") for j in sw["jobs"]]
-    md += ["## Runs", ""] + [f"- [{i}](jobs/{i}/report.md)" for i, p in per_run if p.exists()] + [""]
+    md += ["## Runs", ""] + [f"- [{i}](jobs/{i}/report.md)" for i, p in per_run if regular(p)] + [""]
     md += ["## Reproduce", "", "```", command or f"tuner sweep {sw['source']}", "```", "",
            "Versions: " + ", ".join(f"{k} {v}" for k, v in versions.items()), "",
            "| job | config sha256 (16) | seed |", "|---|---|---|"] + \
           [f"| {i} | `{h}` | {s} |" for i, h, s in hashes] + [""]
     text = "\n".join(md)
     atomic_write(sweep_dir / "report.md", text)
-    if running:
-        text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
-    from tuner import interactive
-
     scripts, data = (), None
-    if interactive.available():  # sortable tables and a zoomable convergence plot (tuner.interactive)
-        fig_md, data = interactive.sweep_figures(sweep_dir, [j["id"] for j in sw["jobs"]])
-        text = text.replace("## Figures\n", "\n".join(fig_md) + "\n## Figures\n", 1)
+    if interactive.available():  # sortable tables and the plots with a slot zoomable (tuner.interactive)
+        data = interactive.page_data(drawn)
+        text = "\n".join(md[:at_figures] + ["## Figures", ""] + figures_md(drawn, sweep_dir, interactive=True)
+                         + md[after_figures:])
         interactive.install_assets(sweep_dir)
         scripts = interactive.SCRIPTS
+    if running:
+        text = f"> Live view: the sweep is still going; the page reloads every {LIVE_REFRESH_S:g} s.\n\n" + text
     write_html(sweep_dir / "report.html", text, sweep_dir, title=f"Sweep {sw['name']}",
                refresh_s=LIVE_REFRESH_S if running else None, scripts=scripts, data=data)
     return sweep_dir / "report.md"
@@ -533,29 +550,9 @@ def ranking_lines(df: Any) -> list[str]:
     key_col, what = summ.attrs["ranked_by"]
     return [f"ranking by the median {what}, with each method's defaults scored the same way:",
             *(f"  {int(r[('rank', '')])}. {name}: {key_col} {r[(key_col, 'median')]:.4g}"
+              + (f" (seeds {r[(key_col, 'min')]:.4g} .. {r[(key_col, 'max')]:.4g}, {int(r[('runs', 'n')])} runs)"
+                 if int(r[("runs", "n")]) > 1 else "")
               for name, r in summ.iterrows())]
-
-
-def list_runs(runs_dir: Path) -> str:
-    """A table of the run directories under ``runs_dir`` (recursively): status, best fitness, age."""
-    import pandas as pd
-
-    rows = []
-    now = _dt.datetime.now(_dt.UTC)
-    for meta_p in sorted(Path(runs_dir).rglob("meta.json")):
-        rd = RunDir(meta_p.parent)
-        d, meta = rd.path, rd.meta()  # RunError naming the file if one is corrupt
-        best = rd.best() if rd.has_best() else None
-        created = meta.created
-        age = ""
-        if created:
-            dt = now - _dt.datetime.strptime(created, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=_dt.UTC)
-            age = str(dt).split(".")[0]
-        rows.append({"run": str(d.relative_to(runs_dir)), "status": meta.status, "optimizer": meta.optimizer,
-                     "evals": meta.n_evals, "best_fitness": best.fitness if best else None, "age": age})
-    if not rows:
-        return f"no runs under {runs_dir}"
-    return pd.DataFrame(rows).to_string(index=False)
 
 
 def summary_text(df: Any, sweep_dir: Path) -> str:

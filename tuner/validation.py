@@ -51,7 +51,8 @@ from typing import Any
 from tuner.config import ConfigError, RunConfig
 from tuner.cv import cross_validate, cv_texts
 from tuner.objective import hook
-from tuner.rundir import Best, RunDir, RunError, plain
+from tuner.records import Best, RunError, plain
+from tuner.rundir import RunDir
 from tuner.selection import (  # re-exported: the selection procedure's home is tuner.selection
     FALLBACK_FRACTION,
     defaults_candidate,

@@ -15,7 +15,8 @@ A filter class names the population kernel that runs it in its own ``batch_kerne
 filter's :meth:`~objectives.attitude.filters.base.AttitudeFilter.kernel_setup`, as its serial run does.
 Batched: Madgwick and Mahony (any options), EKF / FAEKF and QUKF / QRAUKF without the robust blocks and the
 thesis 1-D KF (``kf1d``, the only one with ``mse_1d``: its angle is kept per pair), on recordings that all
-have truth. For any other configuration :func:`evaluate_batch` returns None and the engine evaluates
+have truth, without ``heading_offset: remove`` (its truth depends on each candidate's output). For any other
+configuration :func:`evaluate_batch` returns None and the engine evaluates
 serially.
 
 The population kernels call kernels of other modules and are cached on disk under rule 3 of
@@ -245,6 +246,8 @@ def batchable(obj: Any) -> bool:
     """True when :func:`evaluate_batch` can evaluate this objective's configuration (module docstring)."""
     kernel = _kernel(obj)
     if kernel is None or (obj.metric == "mse_1d" and not kernel.mse_1d):
+        return False
+    if obj.metric_options.get("heading_offset") == "remove":  # the truth depends on each candidate's output
         return False
     if not kernel.robust:
         try:

@@ -13,7 +13,8 @@ from typing import Any
 __all__ = ["METRICS", "METRIC_DOCS", "data_sources", "explain", "metric_names"]
 
 #: the metrics ``objective.metric`` may name
-METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse")
+METRICS = ("euler_mse_geomean", "euler_rmse_mean", "mse_1d", "broad_mean_rmse", "broad_total_rmse",
+           "heading_rmse_mean", "inclination_rmse_mean")
 
 #: metric name -> (unit, definition, equation) for ``objective.metric`` (lower is better)
 METRIC_DOCS: dict[str, tuple[str, str, str]] = {
@@ -26,11 +27,21 @@ METRIC_DOCS: dict[str, tuple[str, str, str]] = {
                         "of BROAD's trial-agnostic good parameters)", "Laidig et al. 2021, BROAD"),
     "broad_total_rmse": ("deg", "BROAD's total RMSE pooled over the motion samples of all recordings",
                          "Laidig et al. 2021, BROAD"),
+    "heading_rmse_mean": ("deg", "mean over recordings of the RMSE of the heading error (the error quaternion's "
+                          "turn about the vertical): the same at any mounting, unlike the Euler yaw",
+                          "Laidig et al. 2021, BROAD"),
+    "inclination_rmse_mean": ("deg", "mean over recordings of the RMSE of the inclination error (the error "
+                              "quaternion's tilt of the vertical): the same at any mounting, unlike roll and pitch",
+                              "Laidig et al. 2021, BROAD"),
 }
 _METRIC_OPTIONS = {"weights": "(3,) per-axis exponents of euler_mse_geomean (default [1, 1, 1])",
                    "normalize": "euler_mse_geomean: geometric mean of all MSEs instead of the cube root "
                                 "(default false)"}
-_CUT = {"start_s": "first second kept (optional)", "stop_s": "last second kept (optional)"}
+_HEADING_OPTION = {"heading_offset": "none (default) or remove: per recording, the truth is first turned about "
+                                     "the vertical by the constant heading offset that fits the estimate best "
+                                     "(closed-form least squares, objectives.attitude.metrics.heading_offset)"}
+_CUT = {"start_s": "first second kept (optional); a window is named file@start-stop (e.g. imu@10s-70s)",
+        "stop_s": "last second kept (optional)"}
 
 
 def metric_names() -> list[str]:
@@ -116,10 +127,11 @@ def explain(name: str) -> dict[str, Any] | None:
         return {"section": "filters", **get_filter(name).describe()}
     if name in METRIC_DOCS:
         unit, doc, eq = METRIC_DOCS[name]
-        params = [{"name": k, "default": None, "unit": "", "doc": d, "eq": ""} for k, d in _METRIC_OPTIONS.items()]
+        opts = {**(_METRIC_OPTIONS if name == "euler_mse_geomean" else {}),
+                **(_HEADING_OPTION if name != "mse_1d" else {})}
+        params = [{"name": k, "default": None, "unit": "", "doc": d, "eq": ""} for k, d in opts.items()]
         return {"section": "metrics", "name": name, "summary": doc, "unit": unit, "eq": eq,
-                "usage": f"objective: {{kind: filter, metric: {name}}}",
-                "params": params if name == "euler_mse_geomean" else []}
+                "usage": f"objective: {{kind: filter, metric: {name}}}", "params": params}
     sources = data_sources()
     if name in sources:
         s = sources[name]

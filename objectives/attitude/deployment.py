@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from tuner.deployment import Deployment, build_deployment
+
 __all__ = ["filter_deployment", "filter_build", "deployed_values", "LIVE_START_NOTE"]
 
 #: what the exports say about the start of the deployed filter when the run was scored from truth
@@ -46,32 +48,28 @@ def deployed_values(obj: Any, params: Mapping[str, Any]) -> tuple[dict[str, Any]
     return dict(values), scoring
 
 
-def filter_deployment(obj: Any, params: Mapping[str, Any]) -> dict[str, Any]:
-    """The deployment document of ``params`` (see :class:`tuner.deployment.Deployment`)."""
-    from tuner.deployment import param_annotations
-    from tuner.rundir import plain
-
+def filter_deployment(obj: Any, params: Mapping[str, Any]) -> Deployment:
+    """The deployment of ``params`` (:func:`tuner.deployment.build_deployment`)."""
     cls = obj._cls
     values, start = deployed_values(obj, params)
-    sources = {k: ("searched" if k in params else "fixed" if k in obj.fixed else "default") for k in values}
-    units, docs, choices = param_annotations(cls.decl)
-    if "init" in choices:  # what a deployed filter can do without ground truth
-        choices["init"] = [c for c in choices["init"] if c not in ("truth", "auto")]
     desc = obj.describe()
     scoring = {"metric": obj.metric, "metric_options": dict(obj.metric_options), "warmup_s": obj.warmup_s,
                "q0": obj.q0 if isinstance(obj.q0, str) else [float(x) for x in obj.q0], **start,
                "data": desc.get("data")}
     if obj.prior:
         scoring["prior"] = dict(obj.prior)
-    notes = []
-    if sources.get("init") == "default" and values.get("init") != "accmag":  # objective.q0 chose the start
-        sources["init"] = "fixed"
+    notes, sources = [], {}
+    if "init" in values and "init" not in params and "init" not in obj.fixed and values["init"] != "accmag":
+        sources["init"] = "fixed"  # objective.q0 chose the start
     if start:
         sources["init"] = "fixed"
         notes.append(LIVE_START_NOTE.format(start=start["init"]))
+    choices = {}
+    if "init" in cls.decl.names() and cls.decl["init"].choices:  # what a deployed filter can do without truth
+        choices["init"] = [c for c in cls.decl["init"].choices if c not in ("truth", "auto")]
     rate, _ = obj.sample_rate()
-    return plain({"kind": "filter", "name": obj.filter, "values": values, "sources": sources, "units": units,
-                  "docs": docs, "choices": choices, "scoring": scoring, "sample_rate_hz": rate, "notes": notes})
+    return build_deployment("filter", obj.filter, values, searched=params, fixed=obj.fixed, decl=cls.decl,
+                            scoring=scoring, sample_rate_hz=rate, notes=notes, sources=sources, choices=choices)
 
 
 def filter_build(obj: Any, params: Mapping[str, Any]) -> Any:

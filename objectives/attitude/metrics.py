@@ -7,6 +7,13 @@ count as the maximal error (pi rad, 180 deg) and are never dropped, so diverging
 Units: the Euler metrics of the FAEKF paper (Table 2, eq. 35) are computed from errors in rad;
 :class:`EulerStats` reports them in deg / deg^2 (names carry the unit), :func:`euler_mse_geomean`
 in rad^2 as the paper's Table 2 does.
+
+Mounting: the BROAD error angles (total, heading, inclination; :func:`broad_error_angles`) come from the error
+quaternion and mean the same at any orientation; Euler angles lose roll and yaw near pitch +-90 deg (an IMU
+mounted x-up), where their errors mean nothing. :func:`gimbal_share` measures how much of a recording is there
+and :func:`euler_lock_warning` says so for the Euler metrics. A truth whose earth frame differs from the filter's
+by a constant heading (a motion-capture frame, a truth relative to its start pose after tilt alignment) is
+compared after :func:`remove_heading_offset` (metric option ``heading_offset: remove``).
 """
 
 from __future__ import annotations
@@ -21,8 +28,16 @@ from objectives.attitude.quaternion import qconj_batch, qmul_batch
 
 __all__ = [
     "BroadErrors", "broad_errors", "BroadErrorAngles", "broad_error_angles", "wrap_angle", "euler_errors", "EulerStats",
-    "euler_stats", "euler_mse_geomean", "mse_1d",
+    "euler_stats", "euler_mse_geomean", "mse_1d", "heading_offset", "remove_heading_offset", "gimbal_share",
+    "euler_lock_warning", "EULER_METRICS", "GIMBAL_WITHIN_DEG", "GIMBAL_SHARE",
 ]
+
+#: the metrics computed from Euler angles (meaningless near pitch +-90 deg)
+EULER_METRICS = ("euler_mse_geomean", "euler_rmse_mean")
+#: a truth sample within this many degrees of pitch +-90 deg is in (or near) gimbal lock
+GIMBAL_WITHIN_DEG = 10.0
+#: share of a recording's scored samples near gimbal lock above which the Euler metrics warn
+GIMBAL_SHARE = 0.05
 
 
 @dataclass(frozen=True)
@@ -314,3 +329,81 @@ def mse_1d(angle_est: np.ndarray, angle_true: np.ndarray, mask: np.ndarray | Non
         e = wrap_angle(true[valid] - est[valid])
     e = np.where(np.isfinite(est[valid]), e, np.pi)
     return float(np.mean(e * e))
+
+
+# ------------------------------------------------------------------------------------------------
+# mounting: a constant heading offset of the truth frame, gimbal lock of the Euler angles
+# ------------------------------------------------------------------------------------------------
+
+def _z_turn(q: np.ndarray) -> np.ndarray:
+    """``e_z * q`` row by row for (N, 4) quaternions, ``e_z = (0, 0, 0, 1)``: ``(-z, -y, x, w)``."""
+    return np.stack([-q[:, 3], -q[:, 2], q[:, 1], q[:, 0]], axis=1)
+
+
+def heading_offset(q_est: np.ndarray, q_true: np.ndarray, mask: np.ndarray | None = None) -> float:
+    """The constant heading offset (rad) of the truth's earth frame from the estimate's.
+
+    The turn ``r = (cos(psi/2), 0, 0, sin(psi/2))`` about the earth's z axis that brings ``r * q_true`` closest
+    to ``q_est``: it maximises ``sum_k (q_est,k . r q_true,k)^2`` (the sum of squared chordal quaternion
+    distances is minimal; squared, so ``q`` and ``-q`` count alike). With ``a_k = q_true,k . q_est,k`` and
+    ``b_k = (e_z q_true,k) . q_est,k`` the sum is ``v^T M v`` for ``v = (cos(psi/2), sin(psi/2))`` and
+    ``M = [[sum a^2, sum ab], [sum ab, sum b^2]]``: ``v`` is its principal eigenvector, in closed form.
+
+    Parameters
+    ----------
+    q_est, q_true : ndarray (N, 4)
+        Sensor-to-earth quaternions; rows where either is not finite (or outside ``mask``) are left out.
+    mask : ndarray (N,) bool, optional
+
+    Returns
+    -------
+    float
+        ``psi`` in ``[-pi, pi)``, counter-clockwise about the earth's z axis; 0 when no row is valid.
+    """
+    q_est = _quat_rows(q_est, "q_est")
+    q_true = _quat_rows(q_true, "q_true")
+    ok = _valid_mask(q_true.shape[0], np.isfinite(q_true).all(axis=1) & np.isfinite(q_est).all(axis=1), mask)
+    if not ok.any():
+        return 0.0
+    e, t = q_est[ok], q_true[ok]
+    a = np.sum(t * e, axis=1)
+    b = np.sum(_z_turn(t) * e, axis=1)
+    m = np.array([[a @ a, a @ b], [a @ b, b @ b]])
+    w, v = np.linalg.eigh(m)
+    c, s = v[:, int(np.argmax(w))]
+    return wrap_angle(2.0 * np.arctan2(s, c))
+
+
+def remove_heading_offset(q_est: np.ndarray, q_true: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """``q_true`` (N, 4) turned about the earth's z axis by its :func:`heading_offset` from ``q_est``: the truth
+    the metrics compare with under ``heading_offset: remove``."""
+    psi = heading_offset(q_est, q_true, mask)
+    q_true = np.asarray(q_true, dtype=float)
+    return np.cos(psi / 2.0) * q_true + np.sin(psi / 2.0) * _z_turn(q_true)
+
+
+def gimbal_share(q_true: np.ndarray, mask: np.ndarray | None = None, within_deg: float = GIMBAL_WITHIN_DEG) -> float:
+    """Share of the samples (finite truth, inside ``mask``) whose true pitch is within ``within_deg`` of +-90 deg
+    (0 when there is none)."""
+    from objectives.attitude.quaternion import euler_zyx
+
+    q = _quat_rows(q_true, "q_true")
+    ok = _valid_mask(q.shape[0], np.isfinite(q).all(axis=1), mask)
+    if not ok.any():
+        return 0.0
+    pitch = euler_zyx(np.ascontiguousarray(q[ok]))[:, 1]
+    return float(np.mean(np.abs(pitch) > np.radians(90.0 - within_deg)))
+
+
+def euler_lock_warning(name: str, metric: str, q_true: np.ndarray | None, mask: np.ndarray | None = None) -> list[str]:
+    """One line when ``metric`` is an Euler metric and more than :data:`GIMBAL_SHARE` of the recording's scored
+    samples are within :data:`GIMBAL_WITHIN_DEG` of pitch +-90 deg, naming the quaternion metrics."""
+    if metric not in EULER_METRICS or q_true is None:
+        return []
+    share = gimbal_share(q_true, mask)
+    if share <= GIMBAL_SHARE:
+        return []
+    return [f"{name}: {100 * share:.3g} % of the scored samples are within {GIMBAL_WITHIN_DEG:g} deg of pitch +-90 "
+            f"deg, where roll and yaw are not defined and {metric} means little; score it with "
+            "inclination_rmse_mean, heading_rmse_mean or broad_mean_rmse (from quaternions, the same at any "
+            "mounting)"]

@@ -33,6 +33,12 @@ Metrics (lower is better):
 ``broad_mean_rmse``    mean over recordings of BROAD's total RMSE (deg) on motion samples: the
                        criterion of BROAD's trial-agnostic good parameters (TAGP).
 ``broad_total_rmse``   BROAD's total RMSE (deg) pooled over the motion samples of all recordings.
+``heading_rmse_mean``, ``inclination_rmse_mean``
+                       mean over recordings of BROAD's heading / inclination RMSE (deg): from the error
+                       quaternion, the same at any mounting (the Euler metrics warn near pitch +-90 deg).
+
+``metric_options.heading_offset: remove`` compares each recording with its truth turned by the constant heading
+offset that fits the estimate best (:func:`objectives.attitude.metrics.heading_offset`).
 
 A filter whose output is not finite, or whose error grows without bound (:mod:`objectives.attitude.divergence`)
 is a failed evaluation naming the recording. Each split's recordings load once per worker, on first use,
@@ -61,18 +67,25 @@ from objectives.attitude.data_specs import check_specs as _check_specs
 from objectives.attitude.data_specs import split_data as _split_data
 from objectives.attitude.divergence import recording_failure, unbounded_growth
 from objectives.attitude.fused_errors import error_sums
+from objectives.attitude.metrics import euler_lock_warning, remove_heading_offset
 from objectives.attitude.objective_options import (
     AGG_KEYS,
+    ERROR_KEYS,
+    RECORDING_KEYS,
     aggregate_scores,
     check_metric_options,
     check_prior,
+    ungrouped_if_missing,
 )
 from objectives.attitude.prepared import DataSplit, Prepared, Split, check_split, prepare
+from tuner.deployment import Deployment
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
 __all__ = ["FilterObjective", "METRICS", "unit_warnings"]
 
+#: the metrics of BROAD's total, heading and inclination error angles, mean over recordings (that order)
+_BROAD_ANGLES = ("broad_mean_rmse", "heading_rmse_mean", "inclination_rmse_mean")
 _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior", "q0", "warmup_s", "report")
 
 
@@ -102,10 +115,10 @@ class FilterObjective:
         if unknown:
             raise ValueError(f"objective.fixed.{unknown[0]}: not a parameter of {self.filter}; "
                              f"known: {sorted(self._cls.defaults)}")
-        bad = sorted(set(self.metric_options) - {"weights", "normalize", *AGG_KEYS})
+        bad = sorted(set(self.metric_options) - {"weights", "normalize", *AGG_KEYS, *ERROR_KEYS})
         if bad:
             raise ValueError(f"objective.metric_options.{bad[0]}: unknown; allowed: weights, normalize, "
-                             + ", ".join(AGG_KEYS))
+                             + ", ".join((*AGG_KEYS, *ERROR_KEYS)))
         check_metric_options(self.metric, self.metric_options)
         self.prior = check_prior(self.prior, list(self._cls.defaults))
         w = self.metric_options.get("weights", (1.0, 1.0, 1.0))
@@ -120,6 +133,7 @@ class FilterObjective:
             raise ValueError(f"objective.warmup_s: must be >= 0, got {self.warmup_s}")
         self._data = DataSplit()
         self._prepared: dict[Split, Prepared] = {}
+        self._notes: list[str] = []  # what with_data found about its data (the preflight's first warnings)
 
     # --- construction -------------------------------------------------------------------------
     @classmethod
@@ -186,8 +200,11 @@ class FilterObjective:
         train, test = _split_data(data)
         specs = train + test
         _check_specs(specs, Path(self.base_dir), "data")
-        return FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
-                               self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
+        out = FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
+                              self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
+        if self.metric_options.get("group_balanced"):  # recordings without the run's groups score ungrouped
+            out.metric_options, out._notes = ungrouped_if_missing(out.metric_options, out.recordings("train"))
+        return out
 
     def with_recordings(self, *, train: Iterable[Recording] | None = None,
                         test: Iterable[Recording] | None = None) -> FilterObjective:
@@ -267,7 +284,7 @@ class FilterObjective:
 
     def preflight(self) -> list[str]:
         """Load every recording once (kept for the run), check ``warmup_s`` against each, warn on units."""
-        warnings: list[str] = []
+        warnings: list[str] = list(self._notes)
         for split, specs in (("train", self.train_specs), ("test", self.test_specs)):
             key = "objective.data" + (f".{split}" if self.test_specs else "")
             loaded = self._data.get(split)
@@ -280,15 +297,18 @@ class FilterObjective:
                     raise ValueError(f"{where}: {exc}") from None
                 except (OSError, KeyError, IndexError) as exc:  # unreadable or truncated files
                     raise ValueError(f"{where}: cannot load ({type(exc).__name__}: {exc})") from None
+            if split == "train" and not recs:  # an empty list, or a selection that keeps no recording
+                raise ValueError(f"{key}: no recordings to score; give at least one data spec")
             for rec in recs:
                 if self.warmup_s >= rec.duration_s:
                     raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "
                                      f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
-                warnings += unit_warnings(rec)
-                warnings += self._start_warning(rec)
+                warnings += unit_warnings(rec) + list(rec.meta.get("warnings", []))  # units, what reading found
+                warnings += self._start_warning(rec) + euler_lock_warning(rec.name, self.metric, rec.quat,
+                                                                          self._mask(rec))
             if loaded is None:
                 self._data = self._data.with_split(split, recs)
-        return warnings
+        return list(dict.fromkeys(warnings))  # windows of one file read it once each: one line per finding
 
     def start_init(self) -> Any:
         """The start the filter uses: its fixed ``init`` option unless ``auto``, else ``q0``."""
@@ -401,8 +421,10 @@ class FilterObjective:
             mask = self._mask(rec)
             m: dict[str, float] = {}
             if rec.quat is not None:
-                es = error_sums(q, rec.quat, mask)
-                failed = recording_failure(rec.name, es, failed, partial(unbounded_growth, q, rec.quat, mask))
+                truth = remove_heading_offset(q, rec.quat, mask) if self.metric_options.get("heading_offset") == \
+                    "remove" else rec.quat
+                es = error_sums(q, truth, mask)
+                failed = recording_failure(rec.name, es, failed, partial(unbounded_growth, q, truth, mask))
                 m.update(es.as_dict())
                 sums.append(es)
             elif not np.isfinite(q).all() and not failed:
@@ -435,7 +457,7 @@ class FilterObjective:
         """The configured metric from the per-recording sums (definitions in the module docstring)."""
         opts = self.metric_options
         if opts.get("aggregate", "mean") != "mean" or opts.get("group_balanced", False):
-            key = {"broad_mean_rmse": "total_rmse_deg", "mse_1d": "mse_1d"}.get(self.metric)
+            key = RECORDING_KEYS.get(self.metric)
             names = list(per) if names is None else names
             scores = ([per[n][key] for n in names] if key else [float(np.mean(s.rmse_deg)) for s in sums])
             groups = self.prepare(split).group_map() if opts.get("group_balanced", False) else None
@@ -452,8 +474,8 @@ class FilterObjective:
             return float(np.exp(log_sum / root))
         if self.metric == "euler_rmse_mean":
             return float(np.mean([np.mean(s.rmse_deg) for s in sums]))
-        if self.metric == "broad_mean_rmse":
-            return float(np.mean([s.broad_rmse_deg[0] for s in sums]))
+        if self.metric in _BROAD_ANGLES:  # broad_mean_rmse, heading_rmse_mean, inclination_rmse_mean
+            return float(np.mean([s.broad_rmse_deg[_BROAD_ANGLES.index(self.metric)] for s in sums]))
         total = sum(s.broad_ms_rad2[0] * s.n for s in sums) / sum(s.n for s in sums)
         return float(np.degrees(np.sqrt(total)))
 
@@ -512,12 +534,11 @@ class FilterObjective:
         the engine scores it with ``score`` (no prior).
         """
         from objectives.attitude.objective_options import recording_groups
-        from objectives.attitude.trials import kfold_folds, logo_folds
+        from objectives.attitude.trials import check_unique_names, kfold_folds, logo_folds
 
         recs = list(self.recordings("train"))
         names = [r.name for r in recs]
-        if len(set(names)) != len(names):
-            raise ValueError("objective.data: recording names repeat; cross-validation needs unique names")
+        check_unique_names(recs, "objective.data")
         if len(recs) < 2:
             raise ValueError(f"objective.data{'.train' if self.test_specs else ''}: cross-validation needs >= 2 "
                              f"tuning recordings, got {len(recs)} (test recordings are never pooled into folds)")
@@ -547,7 +568,7 @@ class FilterObjective:
             out.append((fname, sides[0], sides[1]))
         return out
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned filter: every value, scoring-only settings apart (objectives.attitude.deployment)."""
         return _deployment.filter_deployment(self, params)
 
@@ -555,8 +576,8 @@ class FilterObjective:
         """The deployed filter instance of ``params`` (``.run(gyr, acc, mag, rate_hz=...)``, ``.stream()``)."""
         return _deployment.filter_build(self, params)
 
-    export_c_filter = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-filter)
-    verify_c_filter = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
+    export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
+    verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
 
     # --- after the run ------------------------------------------------------------------------
     def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:

@@ -9,6 +9,7 @@ YAML (``objective:``)::
       alpha: 0.5               # cvar: tail mass in (0, 1]
       group_balanced: true     # every group of recordings counts equally (weights of mean/median/cvar)
       groups: broad            # broad (BROAD's trials.json beside each trial, the default) or {recording: group}
+      heading_offset: remove   # none (default) | remove: each recording's truth turned by its constant heading offset
     prior:
       strength: 3.0            # fitness units (deg for BROAD's metrics) per squared RMS unit-cube distance
       center: defaults         # the filter's defaults (with `fixed`), or {name: value, ...}
@@ -32,11 +33,16 @@ import numpy as np
 
 from objectives.attitude.aggregate import AGGREGATIONS, aggregate, group_weights
 
-__all__ = ["fitness_label", "AGG_KEYS", "PER_RECORDING_METRICS", "check_metric_options", "check_prior",
-           "aggregate_scores", "recording_groups"]
+__all__ = ["fitness_label", "AGG_KEYS", "ERROR_KEYS", "PER_RECORDING_METRICS", "RECORDING_KEYS",
+           "check_metric_options", "check_prior", "aggregate_scores", "recording_groups", "ungrouped_if_missing"]
 
 AGG_KEYS = ("aggregate", "k", "alpha", "group_balanced", "groups")
-PER_RECORDING_METRICS = ("broad_mean_rmse", "euler_rmse_mean", "mse_1d")
+#: metric options that change the errors themselves (kept on held-out sides, unlike the aggregation)
+ERROR_KEYS = ("heading_offset",)
+PER_RECORDING_METRICS = ("broad_mean_rmse", "euler_rmse_mean", "mse_1d", "heading_rmse_mean", "inclination_rmse_mean")
+#: per-recording metric -> its key in a recording's error metrics (``ErrorSums.as_dict``)
+RECORDING_KEYS = {"broad_mean_rmse": "total_rmse_deg", "mse_1d": "mse_1d", "heading_rmse_mean": "heading_rmse_deg",
+                  "inclination_rmse_mean": "inclination_rmse_deg"}
 
 
 def fitness_label(metric: str, opts: Mapping[str, Any], prior: Mapping[str, Any] | None = None) -> str:
@@ -82,6 +88,10 @@ def check_metric_options(metric: str, opts: Mapping[str, Any]) -> None:
         raise ValueError(f"{where}.groups: expected broad or a mapping recording -> group name, got {groups!r}")
     if "groups" in opts and not opts.get("group_balanced", False):
         raise ValueError(f"{where}.groups: only used with group_balanced: true")
+    if opts.get("heading_offset", "none") not in ("none", "remove"):
+        raise ValueError(f"{where}.heading_offset: expected none or remove, got {opts['heading_offset']!r}")
+    if opts.get("heading_offset", "none") == "remove" and metric == "mse_1d":
+        raise ValueError(f"{where}.heading_offset: mse_1d compares one tilt angle, no heading")
 
 
 def check_prior(prior: Any, names: Sequence[str]) -> dict[str, Any]:
@@ -107,7 +117,8 @@ def check_prior(prior: Any, names: Sequence[str]) -> dict[str, Any]:
 
 
 def recording_groups(recs: Sequence[Any], groups: Any) -> dict[str, str]:
-    """Recording name -> group: the given mapping, or BROAD's (``trials.json`` beside each trial file)."""
+    """Recording name -> group: the given mapping, or BROAD's (``trials.json`` beside each trial file, the group
+    of the trial file a recording or window was read from)."""
     names = [r.name for r in recs]
     if groups != "broad":
         missing = [n for n in names if n not in groups]
@@ -122,7 +133,8 @@ def recording_groups(recs: Sequence[Any], groups: Any) -> dict[str, str]:
         if d is None or not (d / "trials.json").exists():
             raise ValueError(f"objective.metric_options.groups: broad, but recording {r.name!r} has no BROAD "
                              f"trials.json beside it ({r.source or 'no source'}); give groups as a mapping")
-        out.update(broad_trial_groups(d, [r.name]))
+        trial = Path(r.source).stem  # a window of a trial (its own name) is in the trial's group
+        out[r.name] = broad_trial_groups(d, [trial])[trial]
     return out
 
 
@@ -135,3 +147,18 @@ def aggregate_scores(scores: Sequence[float], names: Sequence[str], opts: Mappin
     method = opts.get("aggregate", "mean")
     k = min(int(opts["k"]), s.size) if method == "worst_k" else None
     return aggregate(s, method, weights=w, k=k, alpha=opts.get("alpha"))
+
+
+def ungrouped_if_missing(opts: Mapping[str, Any], recs: Sequence[Any]) -> tuple[dict[str, Any], list[str]]:
+    """``opts`` for scoring ``recs`` and a note: a group-balanced metric whose groups ``recs`` lack (recordings
+    without BROAD's ``trials.json``, names missing from a ``groups`` mapping) scores them ungrouped, with one
+    line saying so; otherwise ``opts`` unchanged and no note."""
+    if not opts.get("group_balanced", False):
+        return dict(opts), []
+    try:
+        recording_groups(recs, opts.get("groups", "broad"))
+    except ValueError as exc:
+        out = {k: v for k, v in opts.items() if k not in ("group_balanced", "groups")}
+        return out, [f"these recordings lack the run's grouping ({exc}); scored ungrouped (every recording "
+                     "weighs the same)"]
+    return dict(opts), []

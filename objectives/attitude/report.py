@@ -22,6 +22,7 @@ import numpy as np
 from objectives.attitude.objective_options import fitness_label
 from objectives.attitude.prepared import Split
 from tuner.figures import pyplot
+from tuner.safe_io import write_atomic
 
 __all__ = ["filter_report", "summary_table"]
 
@@ -88,7 +89,7 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
     out["summary_table"] = table
     rows = _rows(train, "train") + (_rows(test, "test") if test else [])
     df = pd.DataFrame(rows)
-    df.to_csv(run_dir / "scores.csv", index=False)
+    write_atomic(run_dir / "scores.csv", df.to_csv(index=False), fsync=False)
     md = ["Train and test scores of the best parameters (RMSE in degrees; test recordings were not used "
           "for tuning).", "", "```", table, "```", "", md_table(df, ".4g")]
     if obj.report.get("per_trial_optimum"):
@@ -111,7 +112,7 @@ def filter_report(obj: Any, run_dir: Path, best: dict[str, Any]) -> dict[str, An
         if "K" in res.diagnostics:
             _plot_adaptation(rec, res, figs, rec.name)
         doc = traces_doc(items, obj.metric, [f"euler_{_safe(rec.name)}.png", f"errors_{_safe(rec.name)}.png"])
-        (run_dir / "traces.json").write_text(json.dumps(doc, separators=(",", ":"), allow_nan=False))
+        write_atomic(run_dir / "traces.json", json.dumps(doc, separators=(",", ":"), allow_nan=False), fsync=False)
     fs = getattr(obj.make_filter(best), "membership_table", None)
     if callable(fs):
         try:
@@ -146,7 +147,7 @@ def _plot_traces(rec, res, figs: Path, name: str) -> None:
     axes[0].set_title(f"{name}: truth vs estimate ({rec.frame})", fontsize=9)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
-    fig.savefig(figs / f"euler_{_safe(name)}.png")
+    write_atomic(figs / f"euler_{_safe(name)}.png", lambda fh: fig.savefig(fh, format="png"), fsync=False)
     plt.close(fig)
     if rec.quat is None:
         return
@@ -160,7 +161,7 @@ def _plot_traces(rec, res, figs: Path, name: str) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(figs / f"errors_{_safe(name)}.png")
+    write_atomic(figs / f"errors_{_safe(name)}.png", lambda fh: fig.savefig(fh, format="png"), fsync=False)
     plt.close(fig)
 
 
@@ -182,7 +183,7 @@ def _plot_adaptation(rec, res, figs: Path, name: str) -> None:
     axes[0].set_title(f"{name}: disturbance measures and fuzzy scaling", fontsize=9)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
-    fig.savefig(figs / f"adaptation_{_safe(name)}.png")
+    write_atomic(figs / f"adaptation_{_safe(name)}.png", lambda fh: fig.savefig(fh, format="png"), fsync=False)
     plt.close(fig)
 
 
@@ -204,7 +205,7 @@ def _plot_fuzzy_surface(flt, path: Path) -> None:
     ax.set_zlabel("K_R")
     ax.set_title("tuned fuzzy scaling of R (no magnetic perturbation)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png"), fsync=False)
     plt.close(fig)
 
 

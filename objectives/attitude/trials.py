@@ -36,8 +36,8 @@ import numpy as np
 
 from tuner.space import Real, Space
 
-__all__ = ["Fold", "broad_trial_groups", "logo_folds", "kfold_folds", "search_space", "filter_class",
-           "load_trial", "score_trials"]
+__all__ = ["Fold", "broad_trial_groups", "logo_folds", "kfold_folds", "check_unique_names", "search_space",
+           "filter_class", "load_trial", "score_trials"]
 
 
 @dataclass(frozen=True)
@@ -106,6 +106,20 @@ def kfold_folds(names: Sequence[str], k: int) -> list[Fold]:
         raise ValueError(f"cv: need 2 <= k <= {len(names)} (recordings), got k={k!r}")
     return [Fold(f, f"fold-{f}", tuple(n for i, n in enumerate(names) if i % k != f),
                  tuple(n for i, n in enumerate(names) if i % k == f)) for f in range(int(k))]
+
+
+def check_unique_names(recordings: Sequence[Any], where: str) -> None:
+    """ValueError naming every repeated recording name, where each comes from, and the fix (``name:``): folds,
+    groups and per-recording scores are keyed by name."""
+    by_name: dict[str, list[str]] = {}
+    for r in recordings:
+        by_name.setdefault(r.name, []).append(r.source or "no source")
+    rep = {n: s for n, s in by_name.items() if len(s) > 1}
+    if rep:
+        listed = "; ".join(f"{n!r} {len(s)} times ({', '.join(sorted(set(s)))})" for n, s in rep.items())
+        raise ValueError(f"{where}: recording names repeat: {listed}; cross-validation and per-recording scores "
+                         "need unique names: give each data spec its own `name:` (csv), or cut windows with "
+                         "start_s/stop_s, which are named file@start-stop")
 
 
 def filter_class(name: str):

@@ -7,7 +7,8 @@ protocol (:class:`Controller`):
 - ``name``: the YAML name; ``kind``: its number in the one kind space (:mod:`objectives.control.kinds`);
 - ``family``: the loop it runs in, the ``family`` of the plant kinds it accepts
   (:mod:`objectives.control.plants`): ``"siso"`` for the generic single-loop kernels (any LTI model,
-  Python dynamics or FMU), ``"wmp"`` for the wheeled mobile pendulum's own loop;
+  Python dynamics or FMU), ``"wmp"`` for the wheeled mobile pendulum's own loop, ``"mujoco"`` for MuJoCo
+  models (several inputs and outputs at once);
 - ``declaration_for(plant)``: its one :class:`~objectives.params.ParamSet` on that plant (a state feedback
   has one weight per state); ``describe()`` (``tuner describe``).
 
@@ -28,6 +29,7 @@ __all__ = ["CONTROLLERS", "Controller", "get_controller", "register_controller",
 
 _WMP = "objectives.control.plants.wmp.controllers"
 _SISO = "objectives.control.plants.controllers"
+_MJ = "objectives.control.plants.mujoco.controllers"
 
 CONTROLLERS: dict[str, str] = {
     # the generic loop: any plant from YAML (tf, zpk, ss, python, fmu)
@@ -43,6 +45,9 @@ CONTROLLERS: dict[str, str] = {
     "flc": f"{_WMP}.fuzzy:FLC",
     "protective_fuzzy": f"{_WMP}.fuzzy:ProtectiveFuzzy",
     "lut": f"{_WMP}.fuzzy:LUTFuzzy",
+    # MuJoCo models (plant: {mujoco: model.xml}): several inputs and outputs
+    "joint_pid": f"{_MJ}:JointPID",
+    "lqr_fd": f"{_MJ}:LinearizedLQR",
 }
 
 

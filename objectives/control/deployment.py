@@ -12,17 +12,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from tuner.deployment import Deployment, build_deployment
+
 __all__ = ["controller_deployment"]
 
 
-def controller_deployment(obj: Any, params: Mapping[str, Any]) -> dict[str, Any]:
-    """The deployment document of ``params`` (see :class:`tuner.deployment.Deployment`)."""
-    from tuner.deployment import param_annotations
-    from tuner.rundir import plain
-
-    values = obj.values(params)
-    sources = {k: ("searched" if k in params else "fixed" if k in obj.fixed else "default") for k in values}
-    units, docs, choices = param_annotations(obj.decl)
-    return plain({"kind": "closed_loop", "name": obj.controller, "values": values, "sources": sources,
-                  "units": units, "docs": docs, "choices": choices, "scoring": obj.loop.scoring(),
-                  "sample_rate_hz": 1.0 / float(obj.loop.period_s), "notes": obj.loop.notes()})
+def controller_deployment(obj: Any, params: Mapping[str, Any]) -> Deployment:
+    """The deployment of ``params`` (:func:`tuner.deployment.build_deployment`)."""
+    return build_deployment("closed_loop", obj.controller, obj.values(params), searched=params, fixed=obj.fixed,
+                            decl=obj.decl, scoring=obj.loop.scoring(), sample_rate_hz=1.0 / float(obj.loop.period_s),
+                            notes=obj.loop.notes())

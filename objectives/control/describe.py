@@ -1,5 +1,7 @@
-"""``tuner describe NAME`` for the closed-loop objective: a controller, the plants, the eq. 2.39 cost or a
-pendulum reference profile, all read from their registries and declarations."""
+"""``tuner describe NAME`` for the closed-loop objective: a controller, the plants, the generic loop's
+settings (requirements, scenario, actuator, sensor, cost, aggregate, uncertainty:
+:mod:`objectives.control.settings_doc`), the eq. 2.39 cost or a pendulum reference profile, all read from
+their registries and declarations."""
 
 from __future__ import annotations
 
@@ -28,14 +30,18 @@ def _plants() -> dict[str, Any]:
 def explain(name: str) -> dict[str, Any] | None:
     """The description of ``name`` (``tuner describe``), or None when it is none of the closed loop's."""
     from objectives.control.controllers import CONTROLLERS, get_controller
+    from objectives.control.settings_doc import SETTINGS, describe_setting
 
     if name == "plant":
         return _plants()
+    if name in SETTINGS:
+        return describe_setting(name)
     if name in CONTROLLERS:
         cls = get_controller(name)
         d = {"section": "controllers", **cls.describe()}
         if cls.family != "wmp":
-            d["usage"] = f"objective: {{kind: closed_loop, plant: {{tf: ...}}, controller: {name}}}"
+            plant = "{mujoco: robot.xml, keyframe: ...}" if cls.family == "mujoco" else "{tf: ...}"
+            d["usage"] = f"objective: {{kind: closed_loop, plant: {plant}, controller: {name}}}"
         return d
     if name == "mae_weighted_cost":
         from objectives.control.plants.wmp.metrics import DEFAULT_COST_WEIGHTS, mae_weighted_cost

@@ -9,6 +9,8 @@ from __future__ import annotations
 import pathlib
 from typing import Any
 
+from tuner.safe_io import write_atomic
+
 __all__ = ["new_figure", "save_figure"]
 
 
@@ -22,10 +24,13 @@ def new_figure(figsize: tuple[float, float]) -> Any:
     return fig
 
 
-def save_figure(fig: Any, path: str | pathlib.Path, dpi: int = 110) -> pathlib.Path:
-    """Lay out ``fig`` and write it as a PNG at ``dpi`` (creating the folder)."""
-    fig.tight_layout()
+def save_figure(fig: Any, path: str | pathlib.Path, dpi: int = 110,
+                rect: tuple[float, float, float, float] | None = None) -> pathlib.Path:
+    """Lay out ``fig`` (its axes inside ``rect``, figure fractions (left, bottom, right, top), if given:
+    room for a legend outside them) and write it as a PNG at ``dpi`` (creating the folder), through
+    :func:`tuner.safe_io.write_atomic`: never through a link or into a hard-linked file of a run directory."""
+    fig.tight_layout(rect=rect)
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi), fsync=False)
     return path

@@ -27,6 +27,7 @@ import numpy as np
 
 from objectives.control.controllers import get_controller
 from objectives.control.plants import loop_class, plant_kind
+from tuner.deployment import Deployment
 from tuner.objective import Evaluation
 from tuner.space import Real, Space
 
@@ -140,7 +141,7 @@ class ClosedLoopObjective:
         """Every declared value of ``params`` with ``fixed`` and the defaults, validated."""
         return self.decl.validate({**self.fixed, **params})
 
-    def deployment(self, params: Mapping[str, Any]) -> dict[str, Any]:
+    def deployment(self, params: Mapping[str, Any]) -> Deployment:
         """The complete tuned controller, scoring-only settings apart (:mod:`objectives.control.deployment`)."""
         from objectives.control.deployment import controller_deployment
 
@@ -166,10 +167,9 @@ class ClosedLoopObjective:
 
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
         try:
-            sim = self.loop.simulate(params)
+            return self.loop.evaluate(params)
         except ValueError as exc:  # a design that cannot be built (e.g. Riccati without solution)
             return Evaluation.failed(f"controller design failed: {exc}")
-        return self.loop.evaluation(sim, params)
 
     def evaluate_batch(self, params_list: list[Mapping[str, Any]], n_threads: int) -> list[Any] | None:
         """A population in one kernel on ``n_threads`` threads, equal to ``[self(p) for p in params_list]``
@@ -187,16 +187,20 @@ class ClosedLoopObjective:
     # --- engine catalog (tuner list / describe) -------------------------------------------------
     @classmethod
     def catalog(cls) -> dict[str, list[str]]:
-        """Names ``objective.controller``, the eq. 2.39 cost and the pendulum's profiles (``tuner list``)."""
+        """Names ``objective.controller``, the eq. 2.39 cost, the pendulum's profiles and the generic loop's
+        settings (``tuner list``)."""
         from objectives.control.controllers import CONTROLLERS
         from objectives.control.plants.wmp.profiles import PROFILES
+        from objectives.control.settings_doc import SETTINGS
 
         return {"controllers": sorted(n for n in CONTROLLERS if n != "open_loop"),  # open_loop tunes nothing
-                "metrics": ["mae_weighted_cost"], "data": sorted(PROFILES), "plants": ["plant"]}
+                "metrics": ["mae_weighted_cost"], "data": sorted(PROFILES), "plants": ["plant"],
+                "settings": list(SETTINGS)}
 
     @classmethod
     def explain(cls, name: str) -> dict[str, Any] | None:
-        """``tuner describe NAME``: a controller, the plants, the eq. 2.39 cost or a profile, else None."""
+        """``tuner describe NAME``: a controller, the plants, a setting of the generic loop, the eq. 2.39 cost or
+        a profile, else None."""
         from objectives.control.describe import explain
 
         return explain(name)

@@ -127,7 +127,7 @@ def test_objects_use_only_sqrt_exp_asin_atan2_and_no_writable_globals(case, prec
         (tmp_path / name).write_text(text)
     obj = tmp_path / "nm.o"
     # float: no arithmetic silently promoted to double (an MCU without a double FPU would emulate it)
-    res = subprocess.run([find_compiler(), *STRICT_FLAGS, "-Wdouble-promotion", "-Wconversion", "-O2", "-c",
+    res = subprocess.run([*find_compiler(), *STRICT_FLAGS, "-Wdouble-promotion", "-Wconversion", "-O2", "-c",
                           str(tmp_path / "nm.c"), "-o", str(obj)], capture_output=True, text=True)
     assert res.returncode == 0 and not res.stderr, res.stderr
     syms = subprocess.run(["nm", str(obj)], capture_output=True, text=True, check=True).stdout.split("\n")
@@ -223,7 +223,7 @@ def test_sine_and_cosine_without_libm(tmp_path):
     (tmp_path / "s.c").write_text("#include <math.h>\ntypedef double real;\n" + src[a:b]
                                   + "\nvoid sc(double a, double *s, double *c);\n"
                                   + "void sc(double a, double *s, double *c) { sincos_(a, s, c); }\n")
-    subprocess.run([find_compiler(), *STRICT_FLAGS, "-O2", "-shared", "-fPIC", "-o", str(tmp_path / "s.so"),
+    subprocess.run([*find_compiler(), *STRICT_FLAGS, "-O2", "-shared", "-fPIC", "-o", str(tmp_path / "s.so"),
                     str(tmp_path / "s.c"), "-lm"], check=True)
     lib = ctypes.CDLL(str(tmp_path / "s.so"))
     s, c = ctypes.c_double(), ctypes.c_double()

@@ -68,7 +68,7 @@ def test_export_compiles_with_the_readme_example(bench_run, tmp_path):
         assert key in header  # the fixed values
     (tmp_path / "main.c").write_text(_firmware_example())
     exe = tmp_path / "main"
-    res = subprocess.run([find_compiler(), *STRICT_FLAGS, "-O2", "-o", str(exe), str(tmp_path / "main.c"),
+    res = subprocess.run([*find_compiler(), *STRICT_FLAGS, "-O2", "-o", str(exe), str(tmp_path / "main.c"),
                           str(tmp_path / "ekf1.c"), "-lm"], capture_output=True, text=True)
     assert res.returncode == 0 and not res.stderr, res.stderr
     q = [float(x) for x in subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.split()]
@@ -79,7 +79,7 @@ def test_export_compiles_with_the_readme_example(bench_run, tmp_path):
 
 def _verify(run_dir, *extra):
     out = _tuner("verify-c", run_dir, *extra)
-    m = re.search(r"fitness (\S+) / (\S+) \(difference (\S+)\)", out.stdout)
+    m = re.search(r"fitness model (\S+), C (\S+) \(C - model (\S+)\)", out.stdout)
     assert m, out.stdout
     return float(m.group(1)), float(m.group(2)), out.stdout
 
@@ -123,6 +123,50 @@ def test_verify_c_without_a_compiler_is_one_error_line(bench_run, tmp_path):
     assert out.returncode == 2
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and "compiler" in lines[0], out.stderr
+
+
+def _one_error(out, *fragments):
+    assert out.returncode == 2 and "Traceback" not in out.stderr, (out.returncode, out.stderr)
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), out.stderr
+    for f in fragments:
+        assert f in lines[0], (f, lines[0])
+
+
+@needs_cc
+def test_verify_c_with_a_failing_or_chattering_compiler_is_one_error_line(bench_run, tmp_path, monkeypatch):
+    """CC=/bin/false fails without a word; a compiler that writes only to stderr (exit 0) is refused too: the
+    generated C must compile without a warning. Each is one error line naming the compiler, not a traceback."""
+    chatty = tmp_path / "chatty-cc"
+    chatty.write_text("#!/bin/sh\necho 'warning: something odd' >&2\nexit 0\n")
+    chatty.chmod(0o755)
+    for cc, what in (("/bin/false", "/bin/false failed (exit status 1)"), (str(chatty), "wrote to stderr")):
+        monkeypatch.setenv("CC", cc)
+        _one_error(_tuner("verify-c", bench_run, check=False), "C compiler", what)
+
+
+@needs_cc
+def test_verify_c_parses_cc_as_make_does_and_names_the_compiler(bench_run, monkeypatch):
+    """CC with flags keeps them (it was replaced by cc); a CC that is not found is an error naming it; the
+    output says which compiler ran."""
+    cc = find_compiler()[0]
+    monkeypatch.setenv("CC", f"{cc} -DTUNER_VERIFY_FLAG=1")
+    out = _tuner("verify-c", bench_run)
+    assert f"compiled with {cc} -DTUNER_VERIFY_FLAG=1 " in out.stdout, out.stdout
+    monkeypatch.setenv("CC", "no-such-compiler-xyz -O1")
+    _one_error(_tuner("verify-c", bench_run, check=False), "CC='no-such-compiler-xyz -O1'", "not found")
+    monkeypatch.setenv("CC", "")  # set but empty: ignored, as make ignores it
+    assert "fitness model " in _tuner("verify-c", bench_run).stdout
+
+
+@needs_cc
+def test_verify_c_labels_both_numbers_and_refuses_data_without_recordings(bench_run, tmp_path):
+    out = _tuner("verify-c", bench_run)
+    assert re.search(r"fitness model \S+, C \S+ \(C - model \S+\)", out.stdout), out.stdout
+    assert re.search(r"model \S+ C \S+ \(", out.stdout.splitlines()[1]), out.stdout  # per recording, labelled
+    (tmp_path / "none.yaml").write_text("data: []\n")
+    _one_error(_tuner("verify-c", bench_run, "--data", tmp_path / "none.yaml", check=False),
+               "none.yaml", "no recordings")
 
 
 def test_export_refuses_a_filter_without_a_c_port(tmp_path):

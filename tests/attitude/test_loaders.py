@@ -144,7 +144,8 @@ COLS = {"time": "t", "gyr": ["gx", "gy", "gz"], "acc": ["ax", "ay", "az"], "mag"
 
 def _csv(path, n=40, dt_ms=5.0, edit=None):
     rng = np.random.default_rng(2)
-    q = rng.normal(size=(n, 4))
+    q = rng.normal(size=(n, 4))  # a truth turning at 0.4 rad/s at most: plausible against the 36 deg/s gyro
+    q = q[0] + 1e-3 * np.cumsum(q, axis=0)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     rows = []
     for i in range(n):
@@ -199,18 +200,30 @@ def test_csv_errors_name_file_and_column(tmp_path):
     with pytest.raises(RecordingError, match=r"text\.csv: column 'ay' row 5: 'oops' is not a number"):
         load_csv(p3, COLS, time_unit="ms")
 
-    def back(rows):
-        rows[10][0] = rows[9][0]
+    def twice(rows):
+        rows.insert(10, list(rows[9]))  # a logger glitch: row 10 written twice
 
-    p4, _ = _csv(tmp_path / "time.csv", edit=back)
-    with pytest.raises(RecordingError, match=r"time\.csv: 'time' must increase strictly; sample 10"):
-        load_csv(p4, COLS, time_unit="ms")
+    p4, _ = _csv(tmp_path / "time.csv", edit=twice)
+    rec = load_csv(p4, COLS, time_unit="ms")  # the repeated stamp's row dropped, with one warning
+    assert rec.n == 40 and rec.meta["read"].dropped_stamps == 1
+    assert rec.meta["warnings"] == [f"{p4}: dropped 1 of 41 rows (2.44 %) whose stamp is not after the one before "
+                                    "them (first at row 11: 0.045 s after 0.045 s)"]
+    with pytest.raises(RecordingError, match=r"time\.csv: time: 1 of 41 rows .* more than max_dropped_share \(0\)"):
+        load_csv(p4, COLS, time_unit="ms", max_dropped_share=0)
+
+    def back(rows):
+        rows[10][0] = rows[9][0]  # one stamp repeated, its row's own time lost: a gap of 2 dt after dropping it
+
+    p5, _ = _csv(tmp_path / "gap.csv", edit=back)
+    with pytest.raises(RecordingError, match=r"gap\.csv: 'time' is not uniformly sampled: interval 9 -> 10 is "
+                                             r"0\.01 s.*; set resample_hz or raise jitter_tol"):
+        load_csv(p5, COLS, time_unit="ms")
 
     def nan_truth(rows):
         rows[3][10] = "nan"
 
-    p5, _ = _csv(tmp_path / "truth.csv", edit=nan_truth)
-    rec = load_csv(p5, COLS, time_unit="ms")  # NaN truth is allowed: metrics skip it
+    p6, _ = _csv(tmp_path / "truth.csv", edit=nan_truth)
+    rec = load_csv(p6, COLS, time_unit="ms")  # NaN truth is allowed: metrics skip it
     assert np.isnan(rec.quat[3, 0]) and np.isfinite(rec.quat[4]).all()
 
 
@@ -235,9 +248,11 @@ def test_load_recording_csv_with_yaml_map(tmp_path):
 def test_load_recording_broad_and_bad_specs(tmp_path, broad_dir):
     spec = {"broad": {"dir": str(broad_dir), "trial": FIRST, "start_s": 1.0, "stop_s": 3.0}}
     rec = loaders.load_recording(spec)
-    assert rec.n == round(2.0 / 0.0035) and rec.name == FIRST
+    assert rec.n == round(2.0 / 0.0035) and rec.name == f"{FIRST}@1s-3s"  # a window is named by its bounds
     recs = loaders.load_recordings({"broad": {"dir": str(broad_dir), "trials": [FIRST, FIRST], "stop_s": 1}})
-    assert [r.n for r in recs] == [round(1 / 0.0035)] * 2
+    assert [r.n for r in recs] == [round(1 / 0.0035)] * 2 and recs[0].name == f"{FIRST}@0s-1s"
+    assert loaders.load_recording({"broad": {"dir": str(broad_dir), "trial": FIRST, "start_s": 60}}).name == \
+        f"{FIRST}@60s-end"
     with pytest.raises(RecordingError, match="trial 'nope' not found"):
         loaders.load_recording({"broad": {"dir": str(broad_dir), "trial": "nope"}})
     with pytest.raises(RecordingError, match="unknown kind 'matlab'"):

@@ -62,11 +62,12 @@ def test_sweep_table_has_every_controllers_tuned_and_initial_scores(sweep):
 
 @pytest.mark.slow
 def test_responses_figure_overlays_each_controllers_best_tuned_loop(sweep):
-    from tuner.figures import responses_figure
+    from tuner.plots import responses
+    from tuner.plots.context import SweepContext
 
     assert (sweep / "figures" / "responses.png").read_bytes()[:4] == b"\x89PNG"
     df = pd.read_csv(sweep / "results.csv")
-    fig = responses_figure(sweep, df[df["status"] == "finished"])
+    fig = responses.figure(responses.data(SweepContext(sweep, df)))
     axes = fig.axes
     assert [a.get_ylabel() for a in axes] == ["speed (m/s)", "yaw rate (deg/s)", "IB angle theta3 (deg)",
                                              "avg. current (A)"]

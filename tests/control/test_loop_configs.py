@@ -74,7 +74,8 @@ BAD = {
     "load after the end": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}},
                             "scenario": {"duration_s": 1.0, "load": [{"t": 1.5, "value": 1.0}]}},
                            "objective.scenario.load[0].t: 1.5 s is after the end of the scenario"),
-    "plant a list": ({"plant": [1, 2]}, "objective.plant: 'wmp' or a mapping (tf, zpk, ss, python, fmu), got [1, 2]"),
+    "plant a list": ({"plant": [1, 2]},
+                     "objective.plant: 'wmp' or a mapping (tf, zpk, ss, python, fmu, mujoco), got [1, 2]"),
     # each plant type's own key set (checked before the builder opens anything: no fmpy needed)
     "lti unknown key": ({"plant": {"tf": {"num": [1.0], "den": [1.0, 1.0]}, "n_sub": 4}},
                         "objective.plant.n_sub: unknown key; allowed: ['delay_s', 'dt', 'inner_output', 'method', "

@@ -95,3 +95,27 @@ def test_bad_fmu_spec_is_one_error_line(fmu_dir, capsys, plant, expected):
     assert main(["run", str(p)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and expected in err[0], err
+
+
+def test_fmu_parameters_under_uncertainty_are_the_transfer_function_models(fmu_dir):
+    """parameters.K and parameters.T of the FMU drawn like tf.num[0] and tf.den[0] of K / (T s + 1): every
+    model of both tuning sets gives the same statistics (one FMU instance per model, reset each run; the
+    mean |state| apart: an FMU's state is its output, a transfer function's its realisation's)."""
+    from objectives.control.objective import ClosedLoopObjective
+
+    common = {"kind": "closed_loop", "controller": "pid2dof", "period_s": 0.01, "fixed": {"K": 2.0, "Ti_s": 0.3},
+              "scenario": {"duration_s": 1.0, "reference": [{"t": 0.1, "value": 1.0}]}}
+    tune = {"corners": True, "samples": 2, "seed": 3}
+    fmu = {"fmu": "first_order.fmu", "inputs": ["u"], "outputs": ["y"], "parameters": {"K": 2.0, "T": 0.5}}
+    a = ClosedLoopObjective.from_config({**common, "plant": fmu,
+                                         "uncertainty": {"parameters": {"parameters.K": {"rel": 0.3},
+                                                                        "parameters.T": [0.3, 0.8]}, "tune": tune}},
+                                        fmu_dir)
+    b = ClosedLoopObjective.from_config({**common, "plant": {"tf": {"num": [2.0], "den": [0.5, 1.0]}},
+                                         "uncertainty": {"parameters": {"tf.num[0]": {"rel": 0.3},
+                                                                        "tf.den[0]": [0.3, 0.8]}, "tune": tune}},
+                                        fmu_dir)
+    assert [p.parameters for p in a.loop.models.plants[1:3]] == [{"K": 1.4, "T": 0.3}, {"K": 1.4, "T": 0.8}]
+    sa, sb = a.loop._runner.run(a.coeffs({})), b.loop._runner.run(b.coeffs({}))
+    assert sa.shape == sb.shape == (1, 7, 1, sa.shape[-1])
+    assert np.allclose(sa[..., :-1], sb[..., :-1], rtol=1e-8, atol=1e-10, equal_nan=True)

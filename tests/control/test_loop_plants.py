@@ -265,20 +265,25 @@ def test_closed_loop_poles_of_state_feedback_and_cascade():
 
 
 def test_cost_terms_of_a_decaying_error_are_the_integrals():
-    """e = exp(-t): IAE = 1, ISE = 1/2, ITAE = 1, ITSE = 1/4; mae_product is prod mean|s|^w."""
-    from objectives.control.plants.scenario import loop_cost
+    """e = exp(-t): IAE = 1, ISE = 1/2, ITAE = 1, ITSE = 1/4; mae_product is prod mean|s|^w (the loop's
+    statistics kernel on a response written by hand, its cost from those statistics)."""
+    from objectives.control.plants.cost import cost_of_stats
+    from objectives.control.plants.metrics import _item_stats, row_metrics, stat_size, windows
 
     h = 1e-4
     t = np.arange(0, 30, h)
     e = np.exp(-t)
-    u = 2.0 * np.ones_like(t)
-    y = np.column_stack([1 - e, e])
-    f, terms = loop_cost({"iae": 2.0, "ise": 1.0}, t, e, u, y, y, h)
+    r = np.ones_like(t)
+    y = np.column_stack([r - e, e])
+    u = 2.0 * np.ones((t.size, 1))
+    row = np.zeros(stat_size(2, 2))
+    _item_stats(y, u, y, r, 0, h, windows(r, np.zeros_like(t)), t.size, 0.0, float(t.size), row)
+    terms, means, _ = row_metrics(row, 2, 2)
     assert terms["iae"] == pytest.approx(1.0, rel=1e-3) and terms["ise"] == pytest.approx(0.5, rel=1e-3)
     assert terms["itae"] == pytest.approx(1.0, rel=1e-3) and terms["itse"] == pytest.approx(0.25, rel=1e-3)
     assert terms["effort"] == pytest.approx(4.0 * 30, rel=1e-3) and terms["tv"] == 0.0
-    assert f == pytest.approx(2.0 * terms["iae"] + terms["ise"])
-    g, _ = loop_cost({"mae_product": {"e": 1.4, "u": 0.4, "y1": 1.0}}, t, e, u, y, y, h)
+    assert cost_of_stats({"iae": 2.0, "ise": 1.0}, terms, means) == pytest.approx(2.0 * terms["iae"] + terms["ise"])
+    g = cost_of_stats({"mae_product": {"e": 1.4, "u": 0.4, "y1": 1.0}}, terms, means)
     assert g == pytest.approx(np.mean(e) ** 1.4 * 2.0**0.4 * np.mean(e))
 
 

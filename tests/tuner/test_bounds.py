@@ -42,3 +42,22 @@ def test_failure_warning_names_the_most_frequent_errors():
     assert w.kind == "failed" and w.value == 3 and w.distance == 0.25
     assert w.message.startswith("3 of 12 evaluations failed (25.0%)")
     assert w.message.index("fell at t=1 (x2)") < w.message.index("diverged (x1)")
+
+
+def test_failure_reasons_are_grouped_by_what_failed_not_by_their_numbers():
+    """139 overshoot failures with different values and 61 identical settling failures: counted by exact text
+    the settling one looked the most frequent; grouped with the numbers masked, overshoot is, and an error
+    that names two reasons counts for both."""
+    from tuner.failures import failure_groups, reason_key
+
+    over = [f"requirement violated: overshoot {10 + i * 0.1:.4g} % > 5 % (max_overshoot_pct)" for i in range(139)]
+    settle = ["requirement violated: 2 % settling time inf s > 1.5 s (max_settling_time_s)"] * 61
+    both = [over[0] + "; " + settle[0]]
+    groups = failure_groups(over + settle + both + ["", "closed loop diverged at t=0.31 s"])
+    assert [(g.key.split(":")[1].split()[0], g.count) for g in groups[:2]] == [("overshoot", 140), ("#", 62)]
+    assert groups[0].example == over[0] and groups[1].example == settle[0]
+    assert groups[2].key == "closed loop diverged at t=# s" and groups[2].count == 1
+    assert reason_key("Ms inf > 1.4 (max_ms) on 3 of 9 models") == "Ms # > # (max_ms) on # of # models"
+    assert reason_key("x1e-3 in step2 and tf.num[0]") == "x1e-3 in step2 and tf.num[#]"  # digits in names stay
+    (w,) = failure_warnings(200, 200, over + settle)
+    assert w.message.index("overshoot") < w.message.index("settling") and "(x139)" in w.message

@@ -88,3 +88,15 @@ def test_set_overrides_and_outputs(tmp_path):
 def test_progress_lines(tmp_path):
     out = tuner("run", str(write(tmp_path, merged(output=str(tmp_path / "runs")))), "--no-report")
     assert "gen 1/2  best" in out.stderr and "eval/s" in out.stderr and "ETA" in out.stderr
+
+
+def test_a_max_evals_budget_shows_evaluations_done_of_total_with_an_eta(tmp_path):
+    """Without generations the budget is max_evals: the progress line counts evaluations against it and gives
+    an ETA (it said gen 27/? and none)."""
+    cfg = merged(output=str(tmp_path / "runs"))
+    cfg["optimizer"] = {"method": "pso", "population": 4, "max_evals": 12}
+    out = tuner("run", str(write(tmp_path, cfg)), "--no-report")
+    lines = [x for x in out.stderr.splitlines() if x.startswith("gen ")]
+    assert [x.split("  ")[1] for x in lines] == ["evals 4/12", "evals 8/12", "evals 12/12"], lines
+    assert all("ETA" in x and "/?" not in x for x in lines)
+    assert lines[-1].split("ETA ")[1].startswith("0:00:00")

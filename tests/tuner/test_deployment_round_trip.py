@@ -375,8 +375,46 @@ def test_objective_q0_start_is_deployed_and_a_truth_q0_is_scoring_only():
 
     section = {"kind": "filter", "filter": "madgwick", "data": [_data("madgwick")]}
     broad = FilterObjective.from_config({**section, "q0": "broad"}).deployment({"beta": 0.2})
-    assert broad["values"]["init"] == "broad" and broad["sources"]["init"] == "fixed" and "init" not in broad["scoring"]
+    assert broad.values["init"] == "broad" and broad.sources["init"] == "fixed" and "init" not in broad.scoring
     truth = FilterObjective.from_config({**section, "q0": "truth"})
     dep = truth.deployment({"beta": 0.2})
-    assert dep["values"]["init"] == "accmag" and dep["scoring"]["init"] == "truth" and dep["notes"]
-    assert truth.build({"beta": 0.2}).values == dep["values"]
+    assert dep.values["init"] == "accmag" and dep.scoring["init"] == "truth" and dep.notes
+    assert truth.build({"beta": 0.2}).values == dep.values
+
+
+def test_the_builder_derives_sources_and_annotations_from_the_declaration():
+    from tuner.deployment import build_deployment
+    from tuner.params import Param, ParamSet
+
+    decl = ParamSet("toy", (Param("gain", 1.0, (0.1, 10.0), unit="1/s", doc="loop gain"),
+                            Param("mode", "fast", choices=("fast", "slow", "truth")),
+                            Param("taps", 3, doc="filter length")))
+    dep = build_deployment("toy_kind", "toy", {"gain": np.float64(2.5), "mode": "slow", "taps": np.int64(3)},
+                           searched={"gain"}, fixed={"mode"}, decl=decl, scoring={"data": [np.float32(0.5)]},
+                           sample_rate_hz=np.float64(100.0), notes=["starts at rest"], sources={"taps": "fixed"},
+                           choices={"mode": ["fast", "slow"]})
+    assert dep == Deployment("toy_kind", "toy", {"gain": 2.5, "mode": "slow", "taps": 3}, units={"gain": "1/s"},
+                             docs={"gain": "loop gain", "taps": "filter length"},
+                             sources={"gain": "searched", "mode": "fixed", "taps": "fixed"},
+                             choices={"mode": ["fast", "slow"]}, scoring={"data": [0.5]}, sample_rate_hz=100.0,
+                             notes=("starts at rest",))
+    assert type(dep.values["gain"]) is float and type(dep.values["taps"]) is int  # YAML-native, as best.yaml holds it
+    assert Deployment.from_doc(dep.to_doc()) == dep
+    with pytest.raises(ValueError, match=r"deployment.values.mode: 'truth' is not one of its choices"):
+        build_deployment("toy_kind", "toy", {"mode": "truth"}, decl=decl, choices={"mode": ["fast", "slow"]})
+
+
+@pytest.mark.parametrize("section", [
+    {"kind": "filter", "filter": "mahony", "data": [{"synthetic": {"generator": "bench6dof", "duration_s": 4,
+                                                                   "seed": 1}}]},
+    {"kind": "closed_loop", "controller": "pid"},
+    {"kind": "function", "function": "sphere", "dim": 2},
+    {"kind": "python", "callable": "json:dumps"},
+])
+def test_every_producer_returns_the_typed_deployment(section):
+    obj = REGISTRY.build(section)
+    params = {k: v for k, v in (obj.default_params() if hasattr(obj, "default_params") else {"x0": 0.5,
+                                                                                           "x1": 1.0}).items()}
+    dep = obj.deployment(params)
+    assert isinstance(dep, Deployment) and dep.kind == section["kind"] and dep.values
+    assert set(dep.sources) == set(dep.values) and Deployment.from_doc(dep.to_doc()) == dep

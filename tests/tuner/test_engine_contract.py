@@ -13,7 +13,8 @@ import pytest
 import yaml
 
 from tuner.objective import HOOKS, Score, TunableObjective, hook
-from tuner.registry import REGISTRY, PythonObjective, Registry, RegistryError
+from tuner.python_objective import PythonObjective
+from tuner.registry import REGISTRY, Registry, RegistryError
 
 TUNER = Path(__file__).resolve().parents[2] / "tuner"
 

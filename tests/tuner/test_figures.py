@@ -1,12 +1,18 @@
-"""Report figures (log axes, bounds, best marked, unit-cube coordinates) and the recording x metric pivot."""
+"""Report plots (log axes, bounds, best marked, unit-cube coordinates; one data rule drawn as PNG and as the
+interactive slot), the recording x metric pivot, and figures that leave matplotlib's global state alone."""
 
 import math
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from tuner.figures import fitness_vs_params_figure, parallel_coordinates_figure
+from tuner.plots import RUN_PLOTS, convergence, parcoords, slices
+from tuner.plots.context import RunContext
 from tuner.report import pivot_metrics
 from tuner.space import Real, Space
 
@@ -24,9 +30,15 @@ def _hist(n=40, seed=0):
                          "beta": beta, "kp": kp, "variant": "paper", "fitness": fit, "status": status})
 
 
-def test_fitness_vs_params_axes_scales_bounds_and_best():
-    import matplotlib.pyplot as plt
+def _ctx(hist, best=None):
+    return RunContext(Path("run"), hist, SPACE, dict(best or {}))
 
+
+def fitness_vs_params_figure(hist, space, best=None):
+    return slices.figure(slices.data(_ctx(hist, best)))
+
+
+def test_fitness_vs_params_axes_scales_bounds_and_best():
     hist = _hist()
     ok = hist[hist["status"] == "ok"]
     best_row = ok.loc[ok["fitness"].idxmin()]
@@ -46,25 +58,35 @@ def test_fitness_vs_params_axes_scales_bounds_and_best():
     star = axes[0].collections[-1].get_offsets()[0]
     assert star[0] == best_row["beta"] and star[1] == ok["fitness"].min()
     assert "4 failed not shown" in fig._suptitle.get_text()
-    plt.close(fig)
 
 
 def test_parallel_coordinates_in_unit_cube_with_best_on_top():
-    import matplotlib.pyplot as plt
-
     hist = _hist()
-    fig = parallel_coordinates_figure(hist, SPACE, n_best=10)
+    d = parcoords.data(_ctx(hist))
+    fig = parcoords.figure(d)
     ax = fig.axes[0]
     lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == 2 and ln.get_label() != "_nolegend_"]
     best_line = next(ln for ln in lines if ln.get_label().startswith("best"))
     ok = hist[hist["status"] == "ok"].sort_values("fitness")
     b = ok.iloc[0]
-    np.testing.assert_allclose(best_line.get_ydata(), [(math.log10(b["beta"]) + 3) / 3, b["kp"] / 10])
+    np.testing.assert_allclose(best_line.get_ydata(), [(math.log10(b["beta"]) + 3) / 3, b["kp"] / 10], atol=1e-5)
     candidate_lines = [ln for ln in ax.get_lines() if len(np.unique(ln.get_xdata())) == 2 and ln.get_linestyle() == "-"]
     ys = np.concatenate([ln.get_ydata() for ln in candidate_lines])
-    assert ys.min() >= 0 and ys.max() <= 1 and len(candidate_lines) == 11  # 10 best + the highlighted best
+    k = parcoords.n_best(len(ok))  # 35 successes: at least 20
+    assert k == 20 and ys.min() >= 0 and ys.max() <= 1 and len(candidate_lines) == k + 1  # and the best again
+    assert ax.get_lines()[len(candidate_lines) - 1] is best_line  # drawn last, on top
     assert [t.get_text().split("\n")[0] for t in ax.get_xticklabels()] == ["beta", "kp"]
-    plt.close(fig)
+    # the interactive slot draws exactly these candidates, best first
+    slot = parcoords.slot(d)
+    assert slot["fitness"] == ok["fitness"].head(k).tolist() and len(slot["u"]) == k
+    drawn = sorted(tuple(np.round(ln.get_ydata(), 5)) for ln in candidate_lines[:-1])
+    assert drawn == sorted(tuple(u) for u in slot["u"])
+
+
+@pytest.mark.parametrize("n_ok, k", [(0, 0), (7, 7), (20, 20), (150, 20), (210, 21), (1000, 100), (1991, 200),
+                                     (50_000, 200)])
+def test_parallel_coordinates_draw_the_best_tenth_between_20_and_200(n_ok, k):
+    assert parcoords.n_best(n_ok) == k
 
 
 def test_pivot_of_flattened_metric_keys():
@@ -76,14 +98,14 @@ def test_pivot_of_flattened_metric_keys():
     assert "note" not in df.columns and "flag" not in df.columns
 
 
-@pytest.mark.parametrize("fn", [fitness_vs_params_figure, parallel_coordinates_figure])
-def test_figures_with_only_failures_do_not_raise(fn):
-    import matplotlib.pyplot as plt
-
+@pytest.mark.parametrize("plot", RUN_PLOTS, ids=lambda p: p.NAME)
+def test_plots_with_only_failures_draw_nothing_but_the_convergence(plot):
     hist = _hist()
     hist["status"] = "failed"
-    fig = fn(hist, SPACE) if fn is parallel_coordinates_figure else fn(hist, SPACE, None)
-    plt.close(fig)
+    d = plot.data(_ctx(hist))
+    assert (d is None) == (plot is not convergence)
+    if d is not None:
+        plot.figure(d)
 
 
 @pytest.mark.slow
@@ -109,14 +131,38 @@ def test_closed_loop_sweep_compares_responses_on_one_figure(tmp_path):
     assert "responses.png" in (tmp_path / "sw" / "report.md").read_text()
 
 
-def test_pyplot_is_headless_and_silences_font_cache_noise():
-    import logging
-
-    import matplotlib
-
-    from tuner.figures import pyplot
-
-    pyplot()
-    assert matplotlib.get_backend().lower() == "agg"
-    # "findfont: Font family ... not found" is logged at WARNING while a fresh environment builds its font cache
-    assert not logging.getLogger("matplotlib.font_manager").isEnabledFor(logging.WARNING)
+@pytest.mark.slow
+def test_a_run_with_its_report_leaves_the_backend_and_rc_params_as_they_were(tmp_path):
+    """A notebook's inline backend and its settings survive ``tuner.tune()``: the engine's figures are Figure
+    objects on their own canvas (a fresh interpreter: the backend is chosen once per process)."""
+    prog = textwrap.dedent("""
+        import sys
+        import matplotlib
+        try:
+            import matplotlib_inline.backend_inline  # noqa: F401 - a notebook's backend, where installed
+            backend = "module://matplotlib_inline.backend_inline"
+        except ImportError:
+            backend = "svg"  # any backend that is not Agg
+        matplotlib.use(backend)
+        matplotlib.rcParams["font.size"] = 13.0
+        before = (matplotlib.get_backend(), dict(matplotlib.rcParams))
+        import tuner
+        job = {"name": "nb", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 3},
+               "optimizer": {"method": "pso", "population": 8, "generations": 3},
+               "parallel": {"backend": "serial"}, "output": sys.argv[1]}
+        res = tuner.tune(job)
+        assert (res.run_dir / "report.html").exists() and (res.run_dir / "figures" / "contour.png").exists()
+        from tuner.figures import pyplot
+        fig, ax = pyplot().subplots(2, 1, figsize=(4, 3), sharex=True)  # what the domain's figure code calls
+        fig.savefig(sys.argv[1] + "/domain.png")
+        after = (matplotlib.get_backend(), dict(matplotlib.rcParams))
+        assert after[0] == before[0], after[0]
+        changed = {k for k in before[1] if before[1][k] != after[1][k]}
+        assert not changed, changed
+        import matplotlib.pyplot as plt
+        assert plt.get_fignums() == []  # no figure registered with pyplot (a notebook would show it)
+        print("unchanged", backend)
+    """)
+    out = subprocess.run([sys.executable, "-c", prog, str(tmp_path)], capture_output=True, text=True, timeout=600,
+                         cwd=tmp_path)
+    assert out.returncode == 0 and "unchanged" in out.stdout, out.stderr[-3000:]

@@ -77,11 +77,14 @@ def test_the_chain_is_the_same_for_serial_and_parallel_rows_and_ignores_seconds(
     assert tuner("show", a.run_dir).returncode == 0
 
 
-def test_resumed_history_continues_the_chain_and_an_old_history_stays_readable(tmp_path):
+def test_resumed_history_continues_the_chain_and_a_history_without_its_chain_is_refused(tmp_path, monkeypatch):
+    monkeypatch.delenv("TUNER_CHAIN_KEY", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "no-config"))  # no chain key of the user's
     d = _interrupted(tmp_path)
     assert resume(d, quiet=True, report=False).status == "finished"
     out = tuner("show", d)
     assert out.returncode == 0 and "note:" not in out.stdout, out.stderr
-    (d / "history.chain").unlink()  # as written by an older tuner
-    out = tuner("show", d)
-    assert out.returncode == 0 and "no history.chain" in out.stdout
+    (d / "history.chain").unlink()  # the chain removed beside an edited history: nothing vouches for it
+    for cmd in ("show", "report"):
+        out = tuner(cmd, d)
+        assert out.returncode == 2 and "history.chain: missing beside history.csv" in out.stderr, out.stderr

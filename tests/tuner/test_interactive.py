@@ -39,6 +39,11 @@ def test_assets_written_once_and_replaced_when_changed(tmp_path):
     interactive.install_assets(tmp_path)
     js, plotly = tmp_path / "tuner_report.js", tmp_path / "plotly.min.js"
     assert plotly.stat().st_size > 1_000_000 and "tuner-data" in js.read_text()
+    from importlib import resources
+
+    with resources.as_file(resources.files("tuner").joinpath("static/tuner_report.js")) as src:
+        # never a hard link to the installed files: writing "tampered" below would change the package itself
+        assert not plotly.samefile(interactive._plotly_js()) and not js.samefile(src)
     mtime = plotly.stat().st_mtime_ns
     js.write_text("tampered")
     interactive.install_assets(tmp_path)
@@ -46,10 +51,10 @@ def test_assets_written_once_and_replaced_when_changed(tmp_path):
 
 
 def test_parallel_coordinate_bands_cover_every_rank_once():
-    from tuner.interactive import _bands
+    from tuner.plots.parcoords import bands
 
     for k in (1, 3, 12, 30, 200):
-        b = _bands(k)
+        b = bands(k)
         assert len(b["band"]) == k and b["band"][0] == 4 and b["band"] == sorted(b["band"], reverse=True)
         labels = [lab for lab in b["band_labels"] if lab]
         assert labels[-1].startswith("rank 1") and labels[0].endswith(str(k))

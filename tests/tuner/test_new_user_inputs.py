@@ -62,8 +62,10 @@ def test_time_going_back_names_plain_seconds(tmp_path):
     lines = rec.read_text().splitlines()
     lines[2], lines[3] = lines[3], lines[2]
     rec.write_text("\n".join(lines) + "\n")
-    line = one_error_line(tuner("run", str(filter_job(tmp_path))), "'time' must increase strictly",
-                          "sample 2 at 0.01 s follows 0.02 s")
+    # the row whose stamp goes back is dropped; the gap it leaves is the error, which says so
+    line = one_error_line(tuner("run", str(filter_job(tmp_path))), "not uniformly sampled", "set resample_hz",
+                          "dropped 1 of", "whose stamp is not after the one before them (first at row 3: 0.01 s "
+                          "after 0.02 s)")
     assert "np.float64" not in line
 
 

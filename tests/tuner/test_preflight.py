@@ -135,7 +135,8 @@ def test_run_where_every_evaluation_failed_exits_nonzero_and_says_why(tmp_path):
                          cwd=tmp_path, timeout=120, env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"})
     assert out.returncode == 1, out.stderr
     assert "warning: the default parameters score as failed (non-finite fitness nan)" in out.stderr
-    assert "every one of 8 evaluations failed; most common reason (8x): non-finite fitness nan" in out.stderr
+    assert "every one of 8 evaluations failed; most common reasons: non-finite fitness nan (8 of 8 evaluations)" \
+        in out.stderr
 
 
 def closed_loop_job(tmp_path, controller, parameters):
@@ -163,7 +164,7 @@ def test_closed_loop_misspelled_parameter(tmp_path):
 def test_dask_worker_check_reports_a_callable_missing_there(tmp_path):
     pytest.importorskip("distributed")
     from tuner.preflight import _worker_preflight
-    from tuner.registry import PythonObjective
+    from tuner.python_objective import PythonObjective
 
     assert _worker_preflight(PythonObjective("json:dumps")) == ""
     msg = _worker_preflight(PythonObjective("no_such_mod_q:f"))

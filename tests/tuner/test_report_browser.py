@@ -159,10 +159,13 @@ def test_interactive_run_page_holds_its_data_and_assets(evil_run):
     assert all((evil_run / s).is_file() for s in SCRIPTS)
     slots = re.findall(r'data-plot="([a-z]+)"', page)
     assert slots == ["convergence", "importance", "slices", "parcoords", "contour"]
-    assert [p["name"] for p in data["params"]] == ["x", "y"] and data["params"][0]["unit"] == "rad/s"
+    assert list(data) == slots  # one slot of data per plot: the data its PNG is drawn from
+    params = data["slices"]["params"]
+    assert [p["name"] for p in params] == ["x", "y"] and params[0]["unit"] == "rad/s"
     hist = __import__("pandas").read_csv(evil_run / "history.csv")
     ok = hist[hist["status"] == "ok"]
-    assert len(data["points"]["fitness"]) == len(ok) and min(data["points"]["fitness"]) == ok["fitness"].min()
+    points = data["slices"]["points"]
+    assert len(points["fitness"]) == len(ok) and min(points["fitness"]) == ok["fitness"].min()
     # x is the parameter that matters (its log10 distance to 2.9 dominates the fitness)
     assert data["importance"]["names"][0] == "x" and sum(data["importance"]["share"]) == pytest.approx(1.0)
     assert "functional ANOVA" in page and "matters most" in page
@@ -320,9 +323,10 @@ def test_filter_report_shows_the_worst_recording_first(filter_run):
     traces = read_traces(filter_run)
     assert [it["name"] for it in traces["items"]] == worst  # every recording, worst first
     assert {p["title"] for p in traces["items"][0]["panels"]} >= {"heading error", "inclination error"}
-    assert (filter_run / "figures" / f"errors_{worst[0]}.png").exists()
+    figure = f"errors_{worst[0].replace('@', '_')}.png"  # a 60 s window's name (trial@0s-60s) as a file name
+    assert (filter_run / "figures" / figure).exists()
     md = (filter_run / "report.md").read_text()
-    assert f"(figures/errors_{worst[0]}.png)" in md and "summary table" not in md  # the terminal table is not repeated
+    assert f"(figures/{figure})" in md and "summary table" not in md  # the terminal table is not repeated
     assert "| train fitness |" not in md and "| best fitness |" in md  # the best fitness is the train fitness
     assert "| beta | " in md and "rad/s |" in md  # units in the best-parameters table
 
@@ -492,3 +496,111 @@ def test_report_with_cross_validation_in_a_browser(browser, tmp_path):
     res = measure(page, browser, 390)
     assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
     assert res["broken"] == [] and res["errors"] == [], res
+
+
+LONG = "a_variant_whose_name_says_everything_about_it"  # job ids of 90+ characters with the grid
+
+
+@pytest.fixture(scope="module")
+def long_names_dir(tmp_path_factory):
+    """A folder of runs holding a sweep whose job names are long (variant and three grid values)."""
+    def build(tmp):
+        base = {"name": "l", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
+                "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
+        doc = {"sweep": {"name": "long_names_of_jobs", "base": base, "variants": {LONG: {}, "pso": {}},
+                         "grid": {"optimizer.population": [4], "optimizer.generations": [2], "objective.dim": [2]},
+                         "seeds": [1, 2]}}
+        (tmp / "sweep.yaml").write_text(yaml.safe_dump(doc))
+        out = run_tuner("sweep", tmp / "sweep.yaml", "--dir", tmp / "runs" / "sweeps" / "long", "-q")
+        assert out.returncode == 0, out.stderr
+        assert run_tuner("dashboard", tmp / "runs").returncode == 0
+
+    return _built_once(tmp_path_factory, "long-names", build) / "runs"
+
+
+#: the right edge (px) of every cell under a header named in HEADS, and the viewport width
+_EDGES = """(function () {
+  var HEADS = %s, out = {width: window.innerWidth, cells: []};
+  [].forEach.call(document.querySelectorAll('table'), function (t) {
+    var heads = [].map.call(t.querySelectorAll('thead th'), function (h) { return h.textContent.trim(); });
+    heads.forEach(function (h, i) {
+      if (HEADS.indexOf(h) < 0) { return; }
+      [].forEach.call(t.querySelectorAll('tbody tr'), function (r) {
+        var c = r.cells[i];
+        if (c) { out.cells.push({head: h, text: c.textContent, right: Math.round(c.getBoundingClientRect().right)}); }
+      });
+    });
+  });
+  return out;
+})()"""
+
+
+@needs_chromium
+@pytest.mark.parametrize("page, heads", [("index.html", ["status", "best"]),
+                                         ("sweeps/long/report.html", ["status", "best_fitness"])])
+def test_long_job_names_keep_status_and_best_on_screen_at_1200_px(long_names_dir, browser, page, heads):
+    """Long sweep job names pushed the status and best columns off-screen (into the table's horizontal
+    scroll) at 1200 px: the name cells wrap instead."""
+    path = long_names_dir / page
+    assert LONG[:40] in path.read_text()  # (a job id keeps 40 characters of each part)
+    with browser.open(path.resolve().as_uri(), 1200, 900, 4000) as p:
+        res = p.evaluate(_EDGES % json.dumps(heads))
+    cells = [c for c in res["cells"] if c["head"] in heads]
+    assert len(cells) >= 8, res
+    off = [c for c in cells if c["right"] > res["width"]]
+    assert not off, off
+
+
+@pytest.fixture(scope="module")
+def loop_run(tmp_path_factory):
+    """The saturation trap (configs/examples/dc_motor_saturation.yaml) at a short budget: a closed loop whose
+    report leads with the gains and the requirements table."""
+    raw = yaml.safe_load((Path(__file__).resolve().parents[2] / "configs" / "examples" /
+                          "dc_motor_saturation.yaml").read_text())
+    raw["optimizer"] = {"method": "pso", "population": 10, "generations": 6}
+
+    def build(tmp):
+        run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True)
+
+    return _built_once(tmp_path_factory, "loop", build) / "run"
+
+
+def test_loop_report_leads_with_gains_and_requirements_in_words(loop_run):
+    md = (loop_run / "report.md").read_text()
+    lead = md.index("## Tuned controller")
+    assert lead < md.index("## Requirements") < md.index("## Summary")
+    assert "| K | " in md[lead:md.index("## Requirements")] and "u/y |" in md
+    assert "[requirements.md](requirements.md)" in md and "- [requirements.md](requirements.md)" in md
+    assert "| maximum sensitivity Ms | ms |" in md and "| phase margin (deg) | pm_deg |" in md  # words, then key
+    assert "1e+12" not in md and "initial fitness | failed: requirement violated" in md  # the defaults fail
+    assert md.count("```") == 0  # no code block repeats the lead or the terminal table
+
+
+@needs_chromium
+@pytest.mark.parametrize("width", [1200, 390])
+def test_loop_report_first_view_in_a_browser(loop_run, browser, width):
+    """At 390 px the first screen (900 px high) shows the gains' table and the requirements table's first row
+    with its verdict in view; nothing overflows the page."""
+    page = loop_run / "report.html"
+    res = measure(page, browser, width)
+    assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
+    assert res["broken"] == [] and res["errors"] == [], res
+    js = """(function () {
+      var hs = Array.from(document.querySelectorAll('h2'));
+      function top(text) { var h = hs.find(function (x) { return x.textContent.trim() === text; });
+                           return h ? h.getBoundingClientRect().top : -1; }
+      var tables = Array.from(document.querySelectorAll('table'));
+      var req = tables[1] ? tables[1].querySelector('tbody tr') : null;
+      var met = req ? req.cells[1].getBoundingClientRect() : null;
+      return JSON.stringify({gains: top('Tuned controller'), reqs: top('Requirements'), summary: top('Summary'),
+                             firstRow: req ? req.getBoundingClientRect().bottom : -1,
+                             firstCell: req ? req.cells[0].textContent : '', met: req ? req.cells[1].textContent : '',
+                             metRight: met ? met.right : 1e9, small: req ? req.cells[4].textContent : ''});
+    })()"""
+    with browser.open(page.resolve().as_uri(), width, 900, 8000) as p:
+        pos = json.loads(p.evaluate(js))
+    assert 0 <= pos["gains"] < pos["reqs"] < pos["summary"], pos
+    assert 0 < pos["firstRow"] <= 900 and pos["firstCell"] == "overshoot (%)", pos
+    assert pos["met"] == "yes" and pos["metRight"] <= width, pos  # the verdict is on screen, not scrolled off
+    assert "NO: met only through saturation" in pos["small"], pos
+    screenshot(page, _output_dir() / f"loop_{width}.png", browser, width, 1800)

@@ -19,6 +19,7 @@ import tuner.run as run_mod
 from tests.conftest import run_tuner
 from tests.tuner.jobs import rastrigin_job
 from tuner.config import ConfigError
+from tuner.digest import row_digest
 from tuner.loop import evaluation_seed, minimize
 from tuner.objective import Evaluation
 from tuner.optimizers import get_optimizer
@@ -97,7 +98,16 @@ def test_resume_replays_history_and_refuses_an_edited_one(tmp_path):
     h.to_csv(e / "history.csv", index=False)
     with pytest.raises(RunError, match=r"history.csv: row eval=2: does not match its digest.*edited"):
         resume(e, quiet=True)
-    (e / "history.chain").unlink()  # a history of an older tuner: the replay itself still finds the edit
+    (e / "history.chain").unlink()  # a history without its chain is not used
+    with pytest.raises(RunError, match=r"history.chain: missing beside history.csv"):
+        resume(e, quiet=True)
+    # the unkeyed chain recomputed over the edit, as anyone can: the replay itself still finds the edit
+    rows, lines = pd.read_csv(e / "history.csv", keep_default_na=False, dtype=str), []
+    prev = json.loads((e / "meta.json").read_text())["config_hash"]
+    for r in rows.to_dict("records"):
+        prev = row_digest(prev, r)
+        lines.append(f"{r['eval']},{prev}\n")
+    (e / "history.chain").write_text("".join(lines))
     with pytest.raises(RunError, match=r"history.csv: row eval=2: x1 is '0.5'.*edited"):
         resume(e, quiet=True)
 
@@ -180,6 +190,10 @@ def test_corrupt_run_files_are_one_error_line(tmp_path, name, text, expect):
         commands = [["compare", d], ["export", d], ["resume", d]]
     for cmd in commands:
         out = tuner_cli(*map(str, cmd))
+        if cmd[0] == "list":  # one damaged run is listed as unreadable, with the reason; the others as usual
+            assert out.returncode == 0 and "Traceback" not in out.stderr, (cmd, out.stderr)
+            assert f"unreadable: r: {d}" in out.stdout and expect in out.stdout, out.stdout
+            continue
         assert out.returncode == 2, (cmd, out.stdout, out.stderr)
         assert "Traceback" not in out.stderr and out.stderr.startswith("error: "), (cmd, out.stderr)
         assert expect in out.stderr or (cmd[0] == "export" and "no best.yaml" in out.stderr), (cmd, out.stderr)

@@ -92,9 +92,10 @@ def test_linked_entries_are_never_read_or_written_through(tmp_path, victim, fini
         target.unlink()
         target.symlink_to(victim)
     before = sorted(p.name for p in tmp_path.iterdir())
-    for cmd in (["show", h], ["report", h], ["export", h], ["compare", h, h], ["list", "runs", "--dir", h.parent],
-                ["evaluate", h]):
+    for cmd in (["show", h], ["report", h], ["export", h], ["compare", h, h], ["evaluate", h]):
         one_error(tuner(*cmd), "symbolic link", entry.split("/")[0])
+    listed = tuner("list", "runs", "--dir", h.parent)  # the damaged run is listed as unreadable, saying why
+    assert listed.returncode == 0 and "unreadable" in listed.stdout and "symbolic link" in listed.stdout
     assert victim.read_text() == "the user's own file\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 

@@ -86,16 +86,20 @@
     });
   }
 
-  /* --- run report plots ----------------------------------------------------------------------- */
-  function convergence(div, d) {
-    var c = d.convergence;
+  /* --- the report's plots: PLOTS[NAME](div, slot), slot = the page data's NAME entry, the data the PNG of
+     the same plot is drawn from (tuner/plots/NAME.py) ------------------------------------------------------ */
+  function convergence(div, c) {
     var tr = [{x: c.n_evals, y: c.best, name: 'best so far', mode: 'lines', line: {width: 2}},
               {x: c.n_evals, y: c.gen_median, name: 'generation median', mode: 'lines', opacity: 0.7}];
-    if (c.runs) {  /* dashboard / sweep overlay: one line per run */
+    if (c.runs) {  /* a sweep, or runs compared on the dashboard: one line per run */
       tr = c.runs.map(function (r) { return {x: r.x, y: r.y, name: esc(r.name), mode: 'lines'}; });
     }
-    return plot(div, tr, baseLayout({xaxis: {title: {text: 'evaluations'}},
-                                     yaxis: {title: {text: 'fitness'}, type: d.log_fitness ? 'log' : 'linear'},
+    var shapes = (c.stage_starts || []).map(function (x) {  /* where a refinement stage starts */
+      return {type: 'line', xref: 'x', yref: 'paper', x0: x, x1: x, y0: 0, y1: 1,
+              line: {color: '#999', dash: 'dot', width: 1}};
+    });
+    return plot(div, tr, baseLayout({xaxis: {title: {text: 'evaluations'}}, shapes: shapes,
+                                     yaxis: {title: {text: 'fitness'}, type: c.log ? 'log' : 'linear'},
                                      height: 360}));
   }
 
@@ -119,7 +123,7 @@
                  marker: {size: 13, symbol: 'star', color: '#d62728'}});
       }
       var lay = baseLayout({xaxis: paramAxis(p), yaxis: {title: {text: 'fitness'},
-                            type: d.log_fitness ? 'log' : 'linear'}, showlegend: false, height: 300,
+                            type: d.log ? 'log' : 'linear'}, showlegend: false, height: 300,
                             shapes: [p.low, p.high].map(function (v) {
                               return {type: 'line', xref: 'x', yref: 'paper', x0: v, x1: v, y0: 0, y1: 1,
                                       line: {color: '#999', dash: 'dot', width: 1}};
@@ -129,10 +133,10 @@
     return Promise.all(jobs).then(function () { div.setAttribute('data-rendered', '1'); });
   }
 
-  function parcoords(div, d) {
+  function parcoords(div, pc) {
     /* SVG lines (no WebGL): one line per candidate over the parameters' positions in their bounds,
-       coloured in five bands by fitness rank, best band drawn last and darkest */
-    var pc = d.parcoords, names = pc.names, n = pc.u.length, bands = 5, tr = [];
+       coloured in five bands by fitness rank, best band drawn last and darkest, the best in red */
+    var names = pc.names, n = pc.u.length, bands = 5, tr = [];
     var colors = ['#d9d9d9', '#b4c7e7', '#7fa6d6', '#3f73b8', '#08306b'];
     for (var b = 0; b < bands; b++) {
       var xs = [], ys = [], txt = [];
@@ -148,14 +152,17 @@
       tr.push({x: xs, y: ys, text: txt, hoverinfo: 'text', mode: 'lines+markers', name: pc.band_labels[b],
                line: {color: colors[b], width: b === bands - 1 ? 2 : 1}, marker: {size: 4, color: colors[b]}});
     }
+    tr.push({x: names.map(function (_, j) { return j; }), y: pc.u[0], mode: 'lines+markers',
+             name: 'best (fitness ' + fmt(pc.fitness[0]) + ')', hoverinfo: 'text',
+             text: names.map(function (nm, j) { return esc(nm) + ' = ' + fmt(pc.values[0][j]); }),
+             line: {color: '#d62728', width: 2.5}, marker: {size: 7, color: '#d62728'}});
     return plot(div, tr, baseLayout({height: 380,
       xaxis: {tickmode: 'array', tickvals: names.map(function (_, j) { return j; }),
               ticktext: names.map(esc), range: [-0.2, names.length - 0.8]},
       yaxis: {title: {text: 'position in bounds (0 = low, 1 = high)'}, range: [-0.03, 1.03]}}));
   }
 
-  function importance(div, d) {
-    var im = d.importance;
+  function importance(div, im) {
     return plot(div, [{type: 'bar', orientation: 'h', x: im.share.slice().reverse(),
                        y: im.names.slice().reverse().map(esc),
                        hovertemplate: '%{y}: %{x:.1%}<extra></extra>'}],
@@ -163,8 +170,7 @@
                             tickformat: '.0%', range: [0, 1]}, margin: {l: 120, r: 20, t: 35, b: 50}}));
   }
 
-  function contour(div, d) {
-    var c = d.contour;
+  function contour(div, c) {
     var tr = [{type: 'contour', x: c.gx, y: c.gy, z: c.z, colorscale: 'Viridis', reversescale: true,
                connectgaps: false, contours: {coloring: 'heatmap'},
                colorbar: {title: {text: c.log ? 'log10 fitness' : 'fitness'}}, hoverongaps: false},
@@ -175,8 +181,8 @@
     return plot(div, tr, baseLayout({height: 420, showlegend: false, xaxis: paramAxis(c.xp), yaxis: paramAxis(c.yp)}));
   }
 
-  function timeseries(div, d) {
-    var ts = d.traces, items = ts.items;
+  function timeseries(div, ts) {
+    var items = ts.items;
     var bar = el('div', {'class': 'controls'});
     var lab = el('label', {}, (ts.select_label || 'recording') + ': ');
     var sel = el('select', {'aria-label': ts.select_label || 'recording'});
@@ -271,7 +277,7 @@
         } else {
           cell.textContent = fmt(r[c[0]]);
         }
-        if (typeof r[c[0]] !== 'number') { cell.className = 'txt'; }
+        if (typeof r[c[0]] !== 'number') { cell.className = c[0] === 'name' ? 'txt name' : 'txt'; }
         if (c[0] === 'date') { cell.textContent = String(r.date || '-').replace('T', ' ').slice(0, 16); }
         tr.appendChild(cell);
       });
@@ -333,8 +339,8 @@
       cmp.appendChild(el('h3', {}, 'Convergence'));
       var box = el('div', {'class': 'tuner-plot', 'data-plot': 'compare-convergence'});
       cmp.appendChild(box);
-      var conv = {convergence: {runs: sel.filter(function (r) { return r.conv; }).map(function (r) {
-        return {name: r.name, x: r.conv.x, y: r.conv.y}; })}, log_fitness: d.log_fitness};
+      var conv = {runs: sel.filter(function (r) { return r.conv; }).map(function (r) {
+        return {name: r.name, x: r.conv.x, y: r.conv.y}; }), log: d.log};
       return convergence(box, conv);
     }
     compare();
@@ -348,14 +354,15 @@
     var node = document.getElementById('tuner-data');
     var data = node ? JSON.parse(node.textContent) : {};
     [].forEach.call(document.querySelectorAll('div.tuner-plot[data-plot]'), function (div) {
-      var name = div.getAttribute('data-plot'), fn = PLOTS[name];
+      var name = div.getAttribute('data-plot'), fn = PLOTS[name], slot = data[name];
       if (!fn) { console.error('tuner: no plot named ' + name); return; }
+      if (slot === undefined) { console.error('tuner: plot ' + name + ': no data'); return; }
       if (typeof Plotly === 'undefined') {
         console.error('tuner: plotly.min.js did not load');
         return;
       }
       try {
-        Promise.resolve(fn(div, data)).catch(function (e) { console.error('tuner: plot ' + name + ': ' + e); });
+        Promise.resolve(fn(div, slot)).catch(function (e) { console.error('tuner: plot ' + name + ': ' + e); });
       } catch (e) {
         console.error('tuner: plot ' + name + ': ' + e);
       }

@@ -9,11 +9,15 @@ from __future__ import annotations
 
 import ctypes
 import os
+import shlex
 import shutil
 import subprocess
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+
+from tuner.objective import ToolError
 
 __all__ = ["find_compiler", "compile_shared", "CFilter", "STRICT_FLAGS", "CompileError"]
 
@@ -21,30 +25,42 @@ __all__ = ["find_compiler", "compile_shared", "CFilter", "STRICT_FLAGS", "Compil
 STRICT_FLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic")
 
 
-class CompileError(RuntimeError):
-    """The compiler rejected the source (its output is the message)."""
+class CompileError(ToolError):
+    """The compiler is missing, rejected the source or failed (the message names it and says why)."""
 
 
-def find_compiler() -> str | None:
-    """The C compiler: ``$CC`` if set and found, else ``cc``, ``gcc`` or ``clang`` on the PATH; None if none."""
-    env = os.environ.get("CC")
-    for name in ([env] if env else []) + ["cc", "gcc", "clang"]:
+def find_compiler() -> list[str] | None:
+    """The C compiler's command line: ``$CC`` split as a shell (and make) splits it, flags kept
+    (``CC="gcc -m32"``), its program looked up on the PATH; else ``cc``, ``gcc`` or ``clang``; None without any.
+    A ``$CC`` that is set but empty is ignored as make does; one whose program is not found is a
+    :class:`CompileError` naming it (never silently replaced by another compiler)."""
+    env = os.environ.get("CC", "")
+    try:
+        words = shlex.split(env)
+    except ValueError as exc:
+        raise CompileError(f"CC={env!r}: cannot be split into a command line ({exc})") from None
+    if words:
+        path = shutil.which(words[0])
+        if path is None:
+            raise CompileError(f"CC={env!r}: the compiler {words[0]!r} is not found (not on PATH, or not executable)")
+        return [path, *words[1:]]
+    for name in ("cc", "gcc", "clang"):
         path = shutil.which(name)
         if path:
-            return path
+            return [path]
     return None
 
 
 def compile_shared(files: dict[str, str], out_dir: str | Path, opt: tuple[str, ...] = ("-O2",),
-                   compiler: str | None = None) -> Path:
+                   compiler: str | Sequence[str] | None = None) -> Path:
     """Write ``files`` into ``out_dir`` and link the ``.c`` among them into ``lib<stem>.so``.
 
-    Raises :class:`CompileError` with the compiler's output when it fails, ``FileNotFoundError`` when there
-    is no compiler.
+    ``compiler``: a program or a command line (default :func:`find_compiler`). Raises :class:`CompileError`
+    naming the compiler when there is none, when it fails or when it writes anything to stderr.
     """
-    cc = compiler or find_compiler()
+    cc = ([compiler] if isinstance(compiler, str) else list(compiler)) if compiler else find_compiler()
     if cc is None:
-        raise FileNotFoundError("no C compiler found (set CC or install cc/gcc/clang)")
+        raise CompileError("no C compiler found (set CC, or install cc, gcc or clang)")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     for name, text in files.items():
@@ -56,15 +72,25 @@ def compile_shared(files: dict[str, str], out_dir: str | Path, opt: tuple[str, .
     # (here: Python itself, for every later computation). The optimisation flags belong to the compile step.
     objs = [s.with_suffix(".o") for s in src]
     for s, o in zip(src, objs):
-        _run_compiler([cc, *STRICT_FLAGS, *opt, "-fPIC", "-c", "-o", str(o), str(s)])
-    _run_compiler([cc, "-shared", "-o", str(lib), *map(str, objs), "-lm"])
+        _run_compiler([*cc, *STRICT_FLAGS, *opt, "-fPIC", "-c", "-o", str(o), str(s)], len(cc))
+    _run_compiler([*cc, "-shared", "-o", str(lib), *map(str, objs), "-lm"], len(cc))
+    if not lib.is_file():
+        raise CompileError(f"the C compiler {shlex.join(cc)} exited 0 but wrote no library {lib.name}")
     return lib
 
 
-def _run_compiler(cmd: list[str]) -> None:
-    res = subprocess.run(cmd, capture_output=True, text=True)
+def _run_compiler(cmd: list[str], n_cc: int) -> None:
+    """Run the compiler; :class:`CompileError` (one line: the compiler, its exit status, its first message)
+    when it fails or warns (the generated C must compile without a warning)."""
+    try:
+        res = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
+    except OSError as exc:
+        raise CompileError(f"the C compiler {shlex.join(cmd[:n_cc])} cannot be run: {exc.strerror or exc}") from None
     if res.returncode != 0 or res.stderr.strip():
-        raise CompileError(f"{' '.join(cmd)}\n{res.stderr}")
+        said = next((ln.strip() for ln in (res.stderr + res.stdout).splitlines() if ln.strip()), "no message")
+        raise CompileError(f"the C compiler {shlex.join(cmd[:n_cc])} "
+                           + (f"failed (exit status {res.returncode})" if res.returncode else "wrote to stderr")
+                           + f": {said[:300]}")
 
 
 class CFilter:

@@ -10,6 +10,7 @@ model of the same deployed filter.
 from __future__ import annotations
 
 import math
+import shlex
 import tempfile
 import time
 from collections.abc import Mapping
@@ -133,20 +134,22 @@ def verify_c_filter(obj: Any, params: Mapping[str, Any], precision: str = "doubl
                     opt: tuple[str, ...] = ("-O2",), split: Split = "train") -> dict[str, Any]:
     """Build the deployed filter's C, run it on the objective's ``split`` recordings, score both.
 
-    Returns ``{"filter", "precision", "flags", "python": Score, "c": Score, "max_angle_rad": {recording:
-    float}, "seconds": {"python", "c"}}``; ``FileNotFoundError`` when there is no C compiler.
+    Returns ``{"filter", "precision", "flags", "compiler", "python": Score, "c": Score, "max_angle_rad":
+    {recording: float}, "seconds": {"python", "c"}}``; a :class:`~objectives.attitude.cexport.build.CompileError`
+    (a :class:`tuner.objective.ToolError`) when the compiler is missing or fails.
     """
-    from objectives.attitude.cexport.build import CFilter, compile_shared, find_compiler
+    from objectives.attitude.cexport.build import CFilter, CompileError, compile_shared, find_compiler
 
-    if find_compiler() is None:
-        raise FileNotFoundError("no C compiler found (set CC or install cc, gcc or clang)")
+    cc = find_compiler()
+    if cc is None:
+        raise CompileError("no C compiler found (set CC, or install cc, gcc or clang)")
     flt, init = _deployed(obj, params)
     rate, _ = obj.sample_rate()
     frame = _frame(obj, flt)
     files = render_c_filter(flt, rate_hz=rate or 100.0, g=G_SI, init=init, precision=precision, prefix="TVC",
                             frame=frame)
     with tempfile.TemporaryDirectory() as tmp:
-        model = _CModel(CFilter(compile_shared(files, tmp, tuple(opt)), "TVC", precision), flt, frame)
+        model = _CModel(CFilter(compile_shared(files, tmp, tuple(opt), cc), "TVC", precision), flt, frame)
         t = time.perf_counter()
         py = obj.score(params, split, keep_outputs=True, filter_override=flt)
         t_py = time.perf_counter() - t
@@ -155,5 +158,6 @@ def verify_c_filter(obj: Any, params: Mapping[str, Any], precision: str = "doubl
     for name, res in py.outputs.items():
         e = _angle(res.quat, c.outputs[name].quat)
         diff[name] = float(np.nanmax(e)) if np.isfinite(e).any() else math.nan
-    return {"filter": flt.name, "precision": precision, "flags": list(opt), "python": py, "c": c,
+    return {"filter": flt.name, "precision": precision, "flags": list(opt), "compiler": shlex.join(cc), "python": py,
+            "c": c,
             "max_angle_rad": diff, "seconds": {"python": t_py, "c": model.seconds}}

@@ -149,7 +149,9 @@ def _check_duration(duration_s: float, rate_hz: float) -> tuple[int, float]:
         raise ValueError(f"duration_s must be a positive number of seconds, got {duration_s!r}")
     if not (np.isfinite(rate_hz) and rate_hz > 0):
         raise ValueError(f"rate_hz must be a positive number, got {rate_hz!r}")
-    n = int(round(duration_s * rate_hz))
+    from tuner.sizes import check_samples
+
+    n = check_samples("duration_s", round(duration_s * rate_hz), "the recording (duration_s x rate_hz)")
     if n < 16:
         raise ValueError(f"duration_s * rate_hz gives {n} samples; need at least 16")
     return n, 1.0 / rate_hz

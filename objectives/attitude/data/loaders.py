@@ -9,7 +9,9 @@ A data spec is a one-key mapping (the YAML ``data:`` list holds such items)::
     {synthetic: {generator: bench6dof, duration_s: 160, rate_hz: 1000, seed: 1}}
 
 ``broad`` and ``csv`` also take ``start_s`` / ``stop_s`` (seconds from the first sample) to cut the
-recording. Relative paths are resolved against ``base_dir`` (the directory of the config file).
+recording; a window is named after its file and its bounds (``imu@10s-70s``, :func:`window_name`) unless
+the spec states a ``name``, so windows of one file have distinct names. Relative paths are resolved
+against ``base_dir`` (the directory of the config file).
 Errors are :class:`RecordingError` naming the spec item and the key.
 """
 
@@ -21,7 +23,7 @@ from typing import Any
 
 from objectives.attitude.data.recording import Recording, RecordingError
 
-__all__ = ["load_recording", "load_recordings", "KINDS"]
+__all__ = ["load_recording", "load_recordings", "window_name", "KINDS"]
 
 KINDS = ("broad", "csv", "synthetic")
 _CUT = ("start_s", "stop_s")
@@ -51,7 +53,17 @@ def _check_keys(kind: str, opts: Mapping, allowed: tuple[str, ...]) -> None:
         raise RecordingError(f"data spec {kind!r}: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
 
 
-def _cut(rec: Recording, kind: str, opts: Mapping) -> Recording:
+def window_name(name: str, start_s: Any, stop_s: Any) -> str:
+    """The default name of a window of recording ``name``: ``name@10s-70s`` (``@0s-30s``, ``@60s-end``)."""
+    def fmt(v: Any) -> str:
+        return f"{float(v):g}s"
+
+    return f"{name}@{fmt(start_s or 0)}-{'end' if stop_s is None else fmt(stop_s)}"
+
+
+def _cut(rec: Recording, kind: str, opts: Mapping, rename: bool = True) -> Recording:
+    """``rec`` cut to ``opts``' ``start_s``/``stop_s``; a window is named :func:`window_name` unless
+    ``rename`` is False (a ``name`` the spec states)."""
     start_s, stop_s = opts.get("start_s"), opts.get("stop_s")
     if start_s is None and stop_s is None:
         return rec
@@ -65,7 +77,7 @@ def _cut(rec: Recording, kind: str, opts: Mapping) -> Recording:
             f"data spec {kind!r}: start_s={start_s!r}, stop_s={stop_s!r} select samples {i0}:{i1} of "
             f"{rec.n} ({rec.duration_s:.6g} s) in {rec.name!r}"
         )
-    return rec.slice(i0, i1)
+    return rec.slice(i0, i1, name=window_name(rec.name, start_s, stop_s) if rename else None)
 
 
 def _broad_path(directory: Path, trial: str) -> Path:
@@ -124,7 +136,7 @@ def _load_csv(opts: dict, base_dir: Path) -> Recording:
     if columns is None:
         raise RecordingError("data spec 'csv': needs 'columns' (a mapping or a YAML file)")
     rec = load_csv(_resolve(opts["path"], base_dir), columns, **options)
-    return _cut(rec, "csv", opts)
+    return _cut(rec, "csv", opts, rename="name" not in options)
 
 
 def load_recording(spec: Mapping[str, Any], base_dir: str | Path = ".") -> Recording:

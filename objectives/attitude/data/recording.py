@@ -10,6 +10,10 @@ Conventions (shared by every filter, metric and loader of the project)
   earth's *up* axis expressed in the sensor frame), ``mag`` in any unit (filters normalise it).
 - ``quat`` (truth) may hold NaN rows where the reference was lost; metrics skip them.
 - ``motion`` marks the samples that metrics use (BROAD's ``movement``); all True by default.
+- ``meta`` holds what a loader found and estimated while reading (not per-sample data): ``"read"`` (a
+  :class:`objectives.attitude.data.timebase.ReadInfo`: dropped stamps, the IMU's own rate, truth samples
+  set to NaN), ``"alignment"`` (an :class:`objectives.attitude.data.alignment.Alignment`: lag, body
+  rotation, heading offset, gyro scale) and ``"warnings"`` (lines the preflight prints).
 """
 
 from __future__ import annotations
@@ -84,6 +88,8 @@ class Recording:
         Where the data came from (file path or generator spec), for error messages.
     extra : dict
         Optional named signals of length N (e.g. ``{"true_ext_acc": (N, 3)}`` from a generator).
+    meta : dict
+        What the loader found and estimated (module docstring): ``read``, ``alignment``, ``warnings``.
     """
 
     name: str
@@ -97,6 +103,7 @@ class Recording:
     units: Mapping[str, str] = field(default_factory=lambda: {"gyr": "rad/s", "acc": "m/s^2", "mag": "1"})
     source: str = ""
     extra: Mapping[str, np.ndarray] = field(default_factory=dict)
+    meta: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         src = self.source or self.name or "recording"
@@ -153,6 +160,7 @@ class Recording:
         jitter_tol: float = 0.05,
         rate_hz: float | None = None,
         rate_tol: float = 0.01,
+        meta: Mapping[str, Any] | None = None,
     ) -> Recording:
         """A recording from sample time stamps instead of ``dt``: checks them and derives ``dt``.
 
@@ -215,7 +223,7 @@ class Recording:
             kwargs["units"] = dict(units)
         return cls(
             name=name, gyr=gyr, acc=acc, mag=mag, dt=dt, quat=quat, motion=motion, frame=frame,
-            source=source, extra=dict(extra or {}), **kwargs,
+            source=source, extra=dict(extra or {}), meta=dict(meta or {}), **kwargs,
         )
 
     @property

@@ -34,12 +34,14 @@ PLANTS: dict[str, Any] = {
     "ss": f"{_P}.lti:SS",
     "python": f"{_P}.nonlinear:PYTHON",
     "fmu": f"{_P}.fmu:FMU",
+    "mujoco": f"{_P}.mujoco.plant:MUJOCO",
 }
 
 #: loop family -> the loop class the objective runs a plant of that family in
 LOOPS: dict[str, Any] = {
     "siso": f"{_P}.loop:SISOLoop",
     "wmp": f"{_P}.wmp.loop:WMPLoop",
+    "mujoco": f"{_P}.mujoco.loop:MujocoLoop",
 }
 
 

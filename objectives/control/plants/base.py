@@ -24,9 +24,10 @@ What a plant must provide (the objective, the loop and the reports read nothing 
 - ``design_model()``: ``(Ad, Bd)`` of the linearisation at the operating point, discretised at the
   period, for model-based designs (state feedback); ``ValueError`` when the plant has none;
   ``tracked_row()``: the state combination the controlled output is (a state feedback's pre-filter);
-- ``named_parameters()``: the plant's named physical parameters (``{name: value}``), the ones an
-  uncertainty block may perturb: a later plant set is built by calling the kind's builder again on a
-  spec whose parameters are perturbed, one plant per model, and the objective aggregates per model;
+- ``named_parameters()``: the plant's named physical parameters (``{name: value}``). What an
+  ``uncertainty:`` block may perturb is the kind's to declare (:attr:`PlantKind.uncertain`, by name, with
+  the nominal values of a spec); a model set is built by calling the kind's builder again on each
+  perturbed spec (:attr:`PlantKind.perturb`), one plant per model, and the loop aggregates per model;
 - linear plants only: ``frequency_response(w)`` / ``state_frequency_response(w)`` for the loop's
   margins (:mod:`objectives.control.plants.analysis`).
 
@@ -217,6 +218,13 @@ class PlantKind:
         One line for ``tuner describe plant``.
     named : bool
         Given by name alone (``plant: wmp``), its settings at the objective's top level.
+    uncertain : callable, optional
+        ``uncertain(spec) -> {name: nominal value}``: the parameters of a plant spec an ``uncertainty:``
+        block may perturb (:mod:`objectives.control.plants.uncertainty`), by the names the block uses
+        (``tf.den[1]``, ``params.m``, ``delay_s``, or any name the kind chooses); None: none.
+    perturb : callable, optional
+        ``perturb(spec, {name: value}) -> spec``: a copy of ``spec`` with those parameters set, which
+        ``build`` then builds; None: the names are paths into the spec (``a.b[i][j]``) and are set there.
     """
 
     key: str
@@ -225,3 +233,5 @@ class PlantKind:
     family: str = "siso"
     doc: str = ""
     named: bool = False
+    uncertain: Any = None
+    perturb: Any = None

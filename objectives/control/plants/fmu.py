@@ -17,6 +17,11 @@ state is what it outputs (state feedback on an FMU feeds back its outputs). The 
 (one library call per period), so it is slower than the compiled plants. fmpy is an optional extra
 (``pip install -e '.[fmu]'``). Checked before any tuning: the file opens and validates, it is FMI 2.0
 co-simulation, every named input, output and parameter exists with that causality, and one step runs.
+
+An FMU is code (its native library runs in this process): it is loaded only by the commands that run code,
+never from inside a handed-over run directory (:func:`tuner.trust.check_code`), and the file is opened as
+untrusted data first (:mod:`.fmu_archive`: a zip of bounded size and entries, ``modelDescription.xml`` without
+entities, an extraction folder removed with the plant, at exit and on Ctrl-C).
 """
 
 from __future__ import annotations
@@ -58,16 +63,18 @@ class FMUPlant(SteppedPlant):
     n_sub: int = 1
 
     def __post_init__(self) -> None:
-        from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
-        self._md = read_model_description(self.path)
+        from objectives.control.plants.fmu_archive import attach_cleanup, extract, read_description
+
+        self._md = read_description(self.path, "objective.plant.fmu")
         byname = {v.name: v for v in self._md.modelVariables}
         self._vr_in = [byname[n].valueReference for n in self.inputs]
         self._vr_out = [byname[n].valueReference for n in self.outputs_names]
         self._vr_par = [byname[n].valueReference for n in self.parameters]
-        self._dir = extract(self.path)
-        self._fmu = FMU2Slave(guid=self._md.guid, unzipDirectory=self._dir,
+        self._dir = extract(self.path, "objective.plant.fmu")
+        attach_cleanup(self, self._dir)  # the folder goes with this plant (and at exit, also after a Ctrl-C)
+        self._fmu = FMU2Slave(guid=self._md.guid, unzipDirectory=str(self._dir),
                               modelIdentifier=self._md.coSimulation.modelIdentifier, instanceName="plant")
         self._fmu.instantiate()
         self._started = False
@@ -134,20 +141,23 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
                   key: str = "objective.plant") -> FMUPlant:
     """Open, validate and instantiate the FMU of ``spec`` (its keys among :data:`FMU_KEYS`, checked by
     :func:`~objectives.control.plants.plant_kind`); ``ValueError`` naming the key otherwise."""
+    from objectives.control.plants.fmu_archive import read_description
+    from tuner.sizes import check_samples
+    from tuner.trust import check_code
+
     try:
-        from fmpy import read_model_description
-        from fmpy.model_description import ValidationError
+        import fmpy  # noqa: F401
     except ImportError:
         raise ValueError(f"{key}.fmu: FMU plants need fmpy (pip install -e '.[fmu]')") from None
-    path = pathlib.Path(str(spec["fmu"]))
+    if not isinstance(spec["fmu"], str) or not spec["fmu"] or "\x00" in spec["fmu"]:
+        raise ValueError(f"{key}.fmu: expected the path of an .fmu file, got {spec['fmu']!r}")
+    path = pathlib.Path(spec["fmu"])
     if not path.is_absolute() and base_dir is not None:
         path = pathlib.Path(base_dir) / path
+    check_code(path, f"{key}.fmu", "the FMU")  # a native library: only where this command may load code
     if not path.is_file():
         raise ValueError(f"{key}.fmu: no such file {str(path)!r}")
-    try:
-        md = read_model_description(str(path))
-    except (ValidationError, OSError, ValueError, KeyError) as exc:
-        raise ValueError(f"{key}.fmu: {path.name} is not a valid FMU ({str(exc).strip().splitlines()[-1]})") from None
+    md = read_description(path, f"{key}.fmu")
     if md.fmiVersion != "2.0" or md.coSimulation is None:
         raise ValueError(f"{key}.fmu: {path.name} must be FMI 2.0 co-simulation, got FMI {md.fmiVersion}"
                          f"{'' if md.coSimulation else ' without co-simulation'}")
@@ -167,8 +177,10 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ValueError(f"{key}.parameters.{n}: must be a finite number, got {v!r}")
     delay = spec.get("delay_s", 0.0)
-    if not (isinstance(delay, (int, float)) and delay >= 0) or abs(delay / period_s - round(delay / period_s)) > 1e-6:
+    if not (isinstance(delay, (int, float)) and math.isfinite(delay) and delay >= 0) \
+            or abs(delay / period_s - round(delay / period_s)) > 1e-6:
         raise ValueError(f"{key}.delay_s: a whole number of controller periods ({period_s} s) >= 0, got {delay!r}")
+    check_samples(f"{key}.delay_s", round(delay / period_s), "the input delay line")
     out_i, inner = spec.get("output", 0), spec.get("inner_output", -1)
     for name, v, lo in (("output", out_i, 0), ("inner_output", inner, -1)):
         if isinstance(v, bool) or not isinstance(v, int) or not lo <= v < len(outputs):
@@ -185,6 +197,13 @@ def fmu_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
     return plant
 
 
+def fmu_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb: the ``parameters.<name>`` the spec sets and
+    ``delay_s``."""
+    params = spec.get("parameters") or {}
+    return {**{f"parameters.{k}": float(v) for k, v in params.items()}, "delay_s": float(spec.get("delay_s", 0.0))}
+
+
 #: the registered kind (objectives.control.plants.PLANTS)
 FMU = PlantKind("fmu", frozenset(FMU_KEYS), fmu_from_spec, "siso",
-                "path.fmu (FMI 2.0 co-simulation, extra fmu); inputs, outputs, parameters")
+                "path.fmu (FMI 2.0 co-simulation, extra fmu); inputs, outputs, parameters", uncertain=fmu_uncertain)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from objectives.control.plants.base import DiscreteLTI, PlantKind
+from tuner.sizes import MAX_LOOP_STATES, MAX_MODEL_ORDER, check_count
 
 __all__ = ["LTIPlant", "lti_from_spec", "LTI_KEYS", "TF", "ZPK", "SS"]
 
@@ -123,6 +124,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
                              f"{den.size - 1}); a physical plant needs deg num <= deg den")
         if num.size == 0:
             raise ValueError(f"{where}.num: the numerator is zero (the plant has no effect)")
+        check_count(f"{where}.den", den.size - 1, MAX_MODEL_ORDER, "the model's order")
         return kind, control.ss(control.tf(num, den, cdt))
     if kind == "zpk":
         if not {"p", "k"} <= set(body) <= {"z", "p", "k"}:
@@ -131,6 +133,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
         poles = _vector(f"{where}.p", body["p"], allow_empty=True)
         if zeros.size > poles.size:
             raise ValueError(f"{where}: not proper ({zeros.size} zeros > {poles.size} poles)")
+        check_count(f"{where}.p", poles.size, MAX_MODEL_ORDER, "the model's order (poles)")
         k = float(_vector(f"{where}.k", [body["k"]])[0])
         if k == 0:
             raise ValueError(f"{where}.k: the gain is zero (the plant has no effect)")
@@ -140,6 +143,7 @@ def _system(spec: Mapping[str, Any], key: str, dt: float | None):
         raise ValueError(f"{where}: needs keys A, B, C and optionally D, got {sorted(body)}")
     a = _matrix(f"{where}.A", body["A"])
     n = a.shape[0]
+    check_count(f"{where}.A", n, MAX_MODEL_ORDER, "the model's order (rows of A)")
     if a.shape != (n, n) or n == 0:
         raise ValueError(f"{where}.A: must be square n x n with n >= 1, got {a.shape[0]}x{a.shape[1]}")
     b = _matrix(f"{where}.B", body["B"], rows=n)
@@ -187,6 +191,10 @@ def lti_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: pathlib.Pa
         raise ValueError(f"{key}.delay_s: {delay} s is not a whole number of controller periods "
                          f"({period_s} s); choose period_s dividing the delay")
     n = ad.shape[0]
+    # the loop's linear analysis (poles at every evaluation) holds each delayed input sample as a state
+    check_count(f"{key}.delay_s", n + (round(d) + 1) * bd.shape[1], MAX_LOOP_STATES,
+                "the linear closed loop's size (plant states plus delayed input samples)",
+                f"a delay of {delay} s is {round(d):,} periods of {period_s} s")
     x0 = _vector(f"{key}.x0", spec["x0"]) if "x0" in spec else np.zeros(n)
     if x0.shape != (n,):
         raise ValueError(f"{key}.x0: needs {n} values (one per state), got {x0.size}")
@@ -204,12 +212,28 @@ def _index(spec: Mapping[str, Any], name: str, default: int, size: int, key: str
     return v
 
 
+def lti_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb, with their nominal values: every coefficient
+    of the model (``tf.num[i]``, ``tf.den[i]``, ``zpk.z[i]``, ``zpk.p[i]``, ``zpk.k``, ``ss.A[i][j]``,
+    ``ss.B[i][j]``, ``ss.C[i][j]``, ``ss.D[i][j]``) and ``delay_s``."""
+    from objectives.control.plants.uncertainty import spec_leaves
+
+    model = next(m for m in MODELS if m in spec)
+    body = spec[model]
+    out: dict[str, float] = {}
+    for part in {"tf": ("num", "den"), "zpk": ("z", "p", "k"), "ss": ("A", "B", "C", "D")}[model]:
+        if part in body:
+            out.update(spec_leaves(f"{model}.{part}", body[part]))
+    out["delay_s"] = float(spec.get("delay_s", 0.0))
+    return out
+
+
 _LTI_DOC = ("{what}; options dt (discrete model's period), method (zoh | tustin), delay_s, x0, output, "
             "inner_output")
 #: the registered kinds (objectives.control.plants.PLANTS): one builder for the three model forms
 TF = PlantKind("tf", frozenset(LTI_KEYS), lti_from_spec, "siso",
-               _LTI_DOC.format(what="{num, den}: transfer function, highest power first"))
+               _LTI_DOC.format(what="{num, den}: transfer function, highest power first"), uncertain=lti_uncertain)
 ZPK = PlantKind("zpk", frozenset(LTI_KEYS), lti_from_spec, "siso",
-                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"))
+                _LTI_DOC.format(what="{z, p, k}: zeros, poles, gain"), uncertain=lti_uncertain)
 SS = PlantKind("ss", frozenset(LTI_KEYS), lti_from_spec, "siso",
-               _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"))
+               _LTI_DOC.format(what="{A, B, C, D}: state space (MIMO for lqr_sf)"), uncertain=lti_uncertain)

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from objectives.control.plants.base import PlantKind, SteppedPlant, rk4_stepper
+from tuner.sizes import check_samples
 
 __all__ = ["NonlinearPlant", "nonlinear_from_spec", "import_relative", "NL_KEYS", "PYTHON"]
 
@@ -45,11 +46,12 @@ NL_KEYS = {"python", "x0", "params", "n_inputs", "outputs", "output", "inner_out
            "linearize_at"}
 
 
-def import_relative(spec: str, base_dir: pathlib.Path | None) -> Any:
-    """``"module:attr"`` imported with ``base_dir`` (the config's folder) searched first."""
-    from tuner.registry import resolve_callable
+def import_relative(spec: str, base_dir: pathlib.Path | None, key: str = "objective.plant.python") -> Any:
+    """``"module:attr"`` imported with ``base_dir`` (the config's folder) searched first, if the command may load
+    it (:func:`tuner.trust.import_code`: never in a read-only command, never from a handed-over run directory)."""
+    from tuner.trust import import_code
 
-    return resolve_callable(spec, base_dir)
+    return import_code(spec, base_dir, key)
 
 
 def _rk4_amp(z: complex) -> float:
@@ -134,8 +136,17 @@ def _namedtuple(params: Mapping[str, Any], key: str) -> Any:
             raise ValueError(f"{key}.params: names must be identifiers, got {k!r}")
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
             raise ValueError(f"{key}.params.{k}: must be a finite number, got {v!r}")
-    cls = collections.namedtuple("PlantParams", list(params))
+    names = tuple(params)
+    cls = _TUPLES.get(names)
+    if cls is None:  # one class per field list: a model set's plants share the compiled loop
+        cls = _TUPLES[names] = collections.namedtuple("PlantParams", list(names))
     return cls(*(float(v) for v in params.values()))
+
+
+#: the params namedtuple class of each field list, and the numba dispatcher of each dynamics function:
+#: reused, so the plants of a model set (the same dynamics, other values) compile the loop once
+_TUPLES: dict[tuple[str, ...], Any] = {}
+_JITTED: dict[Any, Any] = {}
 
 
 def _vec(key: str, v: Any, n: int | None = None) -> np.ndarray:
@@ -164,7 +175,7 @@ def nonlinear_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: path
     if not isinstance(target, str) or ":" not in target:
         raise ValueError(f"{key}.python: expected 'module:function', got {target!r}")
     try:
-        fn = import_relative(target, base_dir)
+        fn = import_relative(target, base_dir, f"{key}.python")
     except (ImportError, AttributeError) as exc:
         raise ValueError(f"{key}.python: cannot import {target!r} ({exc}); modules are searched in the "
                          "config's folder first, then on sys.path") from None
@@ -183,8 +194,10 @@ def nonlinear_from_spec(spec: Mapping[str, Any], period_s: float, base_dir: path
     inner = _int(spec, "inner_output", -1, -1, outputs.size - 1, key)
     n_sub = _int(spec, "n_sub", 10, 1, 10000, key)
     delay = spec.get("delay_s", 0.0)
-    if not (isinstance(delay, (int, float)) and delay >= 0) or abs(delay / period_s - round(delay / period_s)) > 1e-6:
+    if not (isinstance(delay, (int, float)) and math.isfinite(delay) and delay >= 0) \
+            or abs(delay / period_s - round(delay / period_s)) > 1e-6:
         raise ValueError(f"{key}.delay_s: a whole number of controller periods ({period_s} s) >= 0, got {delay!r}")
+    check_samples(f"{key}.delay_s", round(delay / period_s), "the input delay line")
     lin = spec.get("linearize_at") or {}
     if not isinstance(lin, Mapping) or set(lin) - {"x", "u"}:
         raise ValueError(f"{key}.linearize_at: expected {{x: [...], u: [...]}}, got {lin!r}")
@@ -218,7 +231,9 @@ def _compile(fn: Any, x0: np.ndarray, m: int, params: Any) -> tuple[Any, bool]:
     import numba
 
     try:
-        jf = fn if isinstance(fn, numba.core.registry.CPUDispatcher) else numba.njit(fn)
+        jf = fn if isinstance(fn, numba.core.registry.CPUDispatcher) else _JITTED.get(fn)
+        if jf is None:
+            jf = _JITTED[fn] = numba.njit(fn)
         got = jf(x0.copy(), np.zeros(m), 0.0, params)
     except Exception:  # noqa: BLE001 - numba's typing errors have many classes: fall back to Python
         return fn, False
@@ -228,7 +243,13 @@ def _compile(fn: Any, x0: np.ndarray, m: int, params: Any) -> tuple[Any, bool]:
     return jf, True
 
 
+def python_uncertain(spec: Mapping[str, Any]) -> dict[str, float]:
+    """The parameters an ``uncertainty:`` block may perturb: ``params.<name>`` of the dynamics and ``delay_s``."""
+    params = spec.get("params") or {}
+    return {**{f"params.{k}": float(v) for k, v in params.items()}, "delay_s": float(spec.get("delay_s", 0.0))}
+
+
 #: the registered kind (objectives.control.plants.PLANTS)
 PYTHON = PlantKind("python", frozenset(NL_KEYS), nonlinear_from_spec, "siso",
                    "'module:dynamics' with dynamics(x, u, t, params) -> dx; x0, params, n_inputs, outputs, "
-                   "n_sub (RK4 steps per period), linearize_at")
+                   "n_sub (RK4 steps per period), linearize_at", uncertain=python_uncertain)

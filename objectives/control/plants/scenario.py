@@ -1,65 +1,51 @@
-"""Scenario, actuator/sensor realism, costs, step metrics and requirements of the generic loop.
+"""Scenarios of the generic loop (references, loads, measurement noise), and the actuator and sensor.
 
-YAML (``objective:``)::
+YAML (``objective:``), one scenario (the original form)::
 
     scenario:
       duration_s: 5.0
       reference: [{t: 0.5, value: 1.0}, {t: 3.0, value: 0.0, ramp_s: 0.5}]  # steps, or ramps over ramp_s
       # or a profile: reference: {t: [0, 1, 2], value: [0, 1, 1]}  (piecewise linear)
       load: [{t: 2.0, value: 0.2}]          # load-disturbance steps added to plant input 0
+
+or several, each with its own weight, requirements, measurement noise and cost::
+
+    scenarios:
+      - {name: large, duration_s: 3, reference: [{t: 0.1, value: 1.0}]}
+      - {name: small, duration_s: 3, reference: [{t: 0.1, value: 0.1}], requirements: {max_overshoot_pct: 5}}
+      - {name: load, duration_s: 3, reference: [], load: [{t: 0.1, value: 0.5}], weight: 0.5}
+      - {name: noise, duration_s: 2, reference: [], sensor: {noise_std: 0.01, seed: 4}, cost: {tv: 1.0},
+         requirements: {max_u_std: 0.5}}
     actuator: {u_min: -12, u_max: 12, rate_limit: 100.0, quantum: 0.01}   # u units, u/s
     sensor: {noise_std: 0.001, quantum: 0.0, seed: 0}                      # noise per measured signal
-    cost: {iae: 1.0, effort: 0.01}          # weighted sum of terms (TERMS), or
-    cost: {mae_product: {e: 1.4, u: 0.4}}   # thesis eq. 2.39 generalised: prod mean(|s|)^w
-    requirements: {max_overshoot_pct: 5, max_settling_time_s: 1.0, max_ms: 1.4, min_phase_margin_deg: 45}
 
-Cost terms over the whole run (e = r - y of the controlled output, t from the start, h the period):
-IAE = sum |e| h, ISE = sum e^2 h, ITAE = sum t |e| h, ITSE = sum t e^2 h, ``effort`` = sum u^2 h,
-``tv`` = sum |u[k] - u[k-1]| (total variation). ``mae_product`` signals: ``e``, ``u``, ``du`` (u rate,
-1/s), ``y<i>`` (output i), ``x<i>`` (state i).
-
-Step metrics (requirements) on the first reference step (t0, r0 -> r1) up to the next change of
-the reference or of the load, or the end: overshoot in % of the step, 10-90 % rise time, 2 % settling time after t0,
-steady-state error ``|r1 - y|`` at the end of that window; ``peak_u`` = max |u| over the run.
+A scenario's name is letters, digits, ``_`` and ``-`` (its metrics are ``<name>.<metric>`` when there are
+several); its ``weight`` (default 1) enters the cost's aggregation (:mod:`.cost`); ``sensor`` sets its own
+noise (``noise_std`` and ``seed``; default: the job's ``sensor``, the seed of scenario i being the job's
+seed + i); ``cost`` replaces the job's cost terms for it; ``requirements`` hold in it in addition to the
+job's (:mod:`.requirements`). The measurement noise is drawn once per scenario from its seed, so every
+candidate and every model sees the same noise.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Scenario", "scenario_from_spec", "Realism", "realism_from_spec", "cost_from_spec", "loop_cost",
-           "step_metrics", "REQUIREMENTS", "check_requirements", "TERMS"]
+from objectives.control.plants.cost import cost_from_spec
+from objectives.control.plants.metrics import windows
+from objectives.control.plants.requirements import REQUIREMENTS, check_limit, requirements_from_spec
+from tuner.sizes import check_samples, samples
 
-TERMS = ("iae", "ise", "itae", "itse", "effort", "tv")
-#: requirement key -> (metric, "max" or "min", what)
-REQUIREMENTS = {
-    "max_overshoot_pct": ("overshoot_pct", "max", "overshoot (%)"),
-    "max_rise_time_s": ("rise_time_s", "max", "10-90 % rise time (s)"),
-    "max_settling_time_s": ("settling_time_s", "max", "2 % settling time (s)"),
-    "max_ss_error": ("ss_error", "max", "steady-state error"),
-    "max_peak_u": ("peak_u", "max", "peak |u|"),
-    "min_gain_margin_db": ("gm_db", "min", "gain margin (dB)"),
-    "min_phase_margin_deg": ("pm_deg", "min", "phase margin (deg)"),
-    "max_ms": ("ms", "max", "maximum sensitivity Ms"),
-}
-#: requirement key -> (lowest allowed value, strict, why): limits no loop can meet are errors up front
-_REQ_RANGE = {
-    "max_overshoot_pct": (0.0, False, "overshoot is >= 0 %"),
-    "max_rise_time_s": (0.0, True, "a time limit must be > 0 s"),
-    "max_settling_time_s": (0.0, True, "a time limit must be > 0 s"),
-    "max_ss_error": (0.0, False, "the error is an absolute value"),
-    "max_peak_u": (0.0, True, "peak |u| is >= 0 and 0 allows no control"),
-    "max_ms": (1.0, False, "Ms = max |S| is >= 1 for a strictly proper loop; 1.2-2.0 is usual"),
-    "min_phase_margin_deg": (-math.inf, False, ""),
-    "min_gain_margin_db": (-math.inf, False, ""),
-}
-_STEP_METRICS = ("overshoot_pct", "rise_time_s", "settling_time_s", "ss_error")
-_MARGIN_METRICS = ("gm_db", "pm_deg", "ms")
+__all__ = ["Scenario", "scenario_from_spec", "Realism", "realism_from_spec", "Case", "cases_from_config"]
+
+_NAME = re.compile(r"^[A-Za-z0-9_-]+$")
+_CASE_KEYS = ("name", "weight", "duration_s", "reference", "load", "sensor", "cost", "requirements")
 
 
 def _num(key: str, v: Any, lo: float = -math.inf, strict: bool = False) -> float:
@@ -76,23 +62,6 @@ class Scenario:
     t: np.ndarray
     r: np.ndarray
     load: np.ndarray
-
-    def first_step(self) -> tuple[int, int] | None:
-        """``(k0, k1)``: the first reference change (a step, or a ramp's start) and the end (exclusive)
-        of its window: the next change of the reference after it has stopped moving, or of the load;
-        None without a change."""
-        ch = np.flatnonzero(np.diff(self.r) != 0) + 1
-        if self.r[0] != 0:
-            ch = np.r_[0, ch]
-        if ch.size == 0:
-            return None
-        i = 0
-        while i + 1 < ch.size and ch[i + 1] == ch[i] + 1:  # a ramp: consecutive changes
-            i += 1
-        k0, k1 = int(ch[0]), int(ch[i + 1]) if i + 1 < ch.size else len(self.r)
-        dl = np.flatnonzero(np.diff(self.load) != 0) + 1
-        dl = dl[dl > k0]
-        return k0, min(k1, int(dl[0])) if dl.size else k1
 
 
 def _steps(key: str, items: Any, t: np.ndarray) -> np.ndarray:
@@ -111,7 +80,7 @@ def _steps(key: str, items: Any, t: np.ndarray) -> np.ndarray:
         last_t = t0
         if t0 > t[-1]:
             raise ValueError(f"{key}[{i}].t: {t0} s is after the end of the scenario ({t[-1]:g} s); "
-                             "raise objective.scenario.duration_s or move the step")
+                             "raise the scenario's duration_s or move the step")
         start = np.interp(t0, t, out) if t0 <= t[-1] else out[-1]
         frac = np.clip((t - t0) / ramp, 0.0, 1.0) if ramp > 0 else (t >= t0 - 1e-12).astype(float)
         out = np.where(t >= t0 - 1e-12, start + (v - start) * frac, out)
@@ -119,14 +88,13 @@ def _steps(key: str, items: Any, t: np.ndarray) -> np.ndarray:
 
 
 def scenario_from_spec(spec: Any, period_s: float, key: str = "objective.scenario") -> Scenario:
+    """The signals of one scenario mapping (``duration_s``, ``reference``, ``load``; other keys are the
+    caller's to check)."""
     spec = dict(spec or {})
-    unknown = sorted(set(spec) - {"duration_s", "reference", "load"})
-    if unknown:
-        raise ValueError(f"{key}.{unknown[0]}: unknown key; allowed: duration_s, reference, load")
     if "duration_s" not in spec:
         raise ValueError(f"{key}.duration_s: missing; the simulated time (s)")
     dur = _num(f"{key}.duration_s", spec["duration_s"], 0.0, strict=True)
-    n = int(round(dur / period_s))
+    n = samples(f"{key}.duration_s", dur, period_s, "the scenario")  # before any array of that length
     if n < 2:
         raise ValueError(f"{key}.duration_s: {dur} s is shorter than two controller periods ({period_s} s)")
     t = np.arange(n) * period_s
@@ -157,6 +125,22 @@ class Realism:
     y_quantum: float = 0.0
     seed: int = 0
 
+    @property
+    def limited(self) -> bool:
+        """Whether the actuator limits u: a finite bound or a rate limit (then requirements are also
+        checked small-signal)."""
+        return self.u_min > -1e299 or self.u_max < 1e299 or self.rate_limit > 0
+
+
+def _noise(key: str, v: Any) -> tuple[float, ...]:
+    return tuple(_num(f"{key}[{i}]", x, 0.0) for i, x in enumerate(np.atleast_1d(v).tolist()))
+
+
+def _seed(key: str, v: Any) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+        raise ValueError(f"{key}: must be an integer >= 0, got {v!r}")
+    return v
+
 
 def realism_from_spec(actuator: Any, sensor: Any) -> Realism:
     act, sen = dict(actuator or {}), dict(sensor or {})
@@ -170,116 +154,164 @@ def realism_from_spec(actuator: Any, sensor: Any) -> Realism:
     umax = _num("objective.actuator.u_max", act.get("u_max", 1e300))
     if umin >= umax:
         raise ValueError(f"objective.actuator: u_min {umin} must be below u_max {umax}")
-    noise = sen.get("noise_std", 0.0)
-    noise = tuple(_num(f"objective.sensor.noise_std[{i}]", v, 0.0) for i, v in enumerate(np.atleast_1d(noise).tolist()))
-    seed = sen.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"objective.sensor.seed: must be an integer >= 0, got {seed!r}")
     return Realism(umin, umax, _num("objective.actuator.rate_limit", act.get("rate_limit", 0.0), 0.0),
-                   _num("objective.actuator.quantum", act.get("quantum", 0.0), 0.0), noise,
-                   _num("objective.sensor.quantum", sen.get("quantum", 0.0), 0.0), seed)
+                   _num("objective.actuator.quantum", act.get("quantum", 0.0), 0.0),
+                   _noise("objective.sensor.noise_std", sen.get("noise_std", 0.0)),
+                   _num("objective.sensor.quantum", sen.get("quantum", 0.0), 0.0),
+                   _seed("objective.sensor.seed", sen.get("seed", 0)))
 
 
-def cost_from_spec(spec: Any) -> dict[str, Any]:
-    """Validated ``cost`` (default ``{iae: 1}``)."""
-    spec = dict(spec or {"iae": 1.0})
-    if "mae_product" in spec:
-        if len(spec) != 1 or not isinstance(spec["mae_product"], Mapping) or not spec["mae_product"]:
-            raise ValueError("objective.cost.mae_product: give it alone, as {signal: exponent}")
-        for s, w in spec["mae_product"].items():
-            ok = s in ("e", "u", "du") or (isinstance(s, str) and s[:1] in "xy" and s[1:].isdigit())
-            if not ok:
-                raise ValueError(f"objective.cost.mae_product.{s}: unknown signal; allowed: e, u, du, y<i>, x<i>")
-            _num(f"objective.cost.mae_product.{s}", w, 0.0)
-        return {"mae_product": dict(spec["mae_product"])}
-    for k, w in spec.items():
-        if k not in TERMS:
-            raise ValueError(f"objective.cost.{k}: unknown term; allowed: {list(TERMS)} or mae_product")
-        _num(f"objective.cost.{k}", w, 0.0)
-    return spec
+@dataclass(frozen=True)
+class Case:
+    """One scenario as the loop runs it.
+
+    Attributes
+    ----------
+    name, weight : str, float
+        Its name and its weight in the cost's aggregation.
+    signals : Scenario
+        t, r, load (N,).
+    sig : (N, 2 + n_meas) float64
+        What the loop kernel reads: r, load and the measurement noise.
+    win : (6,) float64
+        The step and load windows (:func:`objectives.control.plants.metrics.windows`).
+    cost : dict
+        Its cost terms (:func:`objectives.control.plants.cost.cost_from_spec`).
+    limits : dict
+        Requirement key -> limit in force in this scenario (the job's where defined, then its own).
+    own : frozenset of str
+        The requirement keys given in the scenario itself.
+    noise_std, seed : tuple of float, int
+        Its measurement noise (std per measured signal) and the seed it was drawn from.
+    """
+
+    name: str
+    weight: float
+    signals: Scenario
+    sig: np.ndarray
+    win: np.ndarray
+    cost: dict[str, Any]
+    limits: dict[str, float]
+    own: frozenset[str] = field(default_factory=frozenset)
+    noise_std: tuple[float, ...] = (0.0,)
+    seed: int = 0
+
+    @property
+    def has_step(self) -> bool:
+        return self.win[0] >= 0 and self.win[3] != self.win[2]
+
+    @property
+    def has_load(self) -> bool:
+        return self.win[4] >= 0
+
+    @property
+    def step_size(self) -> float:
+        return float(self.win[3] - self.win[2]) if self.has_step else math.nan
+
+    def defines(self, scope: str) -> bool:
+        """Whether this scenario defines the quantities of a requirement scope (:mod:`.requirements`)."""
+        return {"step": self.has_step, "load": self.has_load, "signal": True, "margin": False}[scope]
+
+    def effective_limit(self, key: str) -> float:
+        """The limit a check compares with: ``max_ss_error: 0`` is the tolerance times the step."""
+        from objectives.control.plants.requirements import SS_TOLERANCE
+
+        lim = self.limits[key]
+        if key == "max_ss_error" and lim == 0.0:
+            return SS_TOLERANCE * abs(self.step_size)
+        return lim
 
 
-def loop_cost(cost: Mapping[str, Any], t: np.ndarray, e: np.ndarray, u: np.ndarray, y: np.ndarray,
-              x: np.ndarray, h: float) -> tuple[float, dict[str, float]]:
-    """``(cost, terms)`` of one response (module docstring); terms are always all computed."""
-    ae = np.abs(e)
-    du = np.diff(u, prepend=u[:1])
-    terms = {"iae": float(ae.sum() * h), "ise": float((e * e).sum() * h), "itae": float((t * ae).sum() * h),
-             "itse": float((t * e * e).sum() * h), "effort": float((u * u).sum() * h),
-             "tv": float(np.abs(du).sum())}
-    if "mae_product" in cost:
-        f = 1.0
-        for s, w in cost["mae_product"].items():
-            sig = {"e": e, "u": u, "du": du / h}.get(s)
-            if sig is None:
-                sig = (y if s[0] == "y" else x)[:, int(s[1:])]
-            f *= float(np.mean(np.abs(sig))) ** float(w)
-        return f, terms
-    return float(sum(float(w) * terms[k] for k, w in cost.items())), terms
+def _case(i: int, spec: Mapping[str, Any], key: str, period_s: float, n_meas: int, real: Realism,
+          cost: dict[str, Any], job_req: Mapping[str, Any], named: bool) -> Case:
+    if not isinstance(spec, Mapping):
+        raise ValueError(f"{key}: expected a mapping (duration_s, reference, load, ...), got {spec!r}")
+    allowed = _CASE_KEYS if named else ("duration_s", "reference", "load")
+    unknown = sorted(set(spec) - set(allowed))
+    if unknown:
+        raise ValueError(f"{key}.{unknown[0]}: unknown key; allowed: {', '.join(allowed)}")
+    name = spec.get("name", f"scenario{i + 1}" if named else "scenario")
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"{key}.name: letters, digits, _ and - only, got {name!r}")
+    weight = _num(f"{key}.weight", spec.get("weight", 1.0), 0.0)
+    sc = scenario_from_spec(spec, period_s, key)
+    sen = spec.get("sensor") or {}
+    if not isinstance(sen, Mapping) or set(sen) - {"noise_std", "seed"}:
+        raise ValueError(f"{key}.sensor: a mapping of noise_std and seed (the job's sensor.quantum holds for "
+                         f"every scenario), got {sen!r}")
+    std = _noise(f"{key}.sensor.noise_std", sen["noise_std"]) if "noise_std" in sen else real.noise_std
+    seed = _seed(f"{key}.sensor.seed", sen["seed"]) if "seed" in sen else real.seed + i
+    arr = np.array(std, dtype=float)
+    if arr.size not in (1, n_meas):
+        where = f"{key}.sensor.noise_std" if "noise_std" in sen else "objective.sensor.noise_std"
+        raise ValueError(f"{where}: one value or {n_meas} (one per measured signal), got {arr.size}")
+    n = sc.t.size
+    noise = np.random.default_rng(seed).standard_normal((n, n_meas)) * arr if np.any(arr > 0) \
+        else np.zeros((n, n_meas))
+    sig = np.ascontiguousarray(np.column_stack([sc.r, sc.load, noise]))
+    own = requirements_from_spec(spec.get("requirements"), f"{key}.requirements")
+    c = cost_from_spec(spec["cost"], f"{key}.cost") if spec.get("cost") is not None else cost
+    win = windows(sc.r, sc.load)
+    case = Case(name, weight, sc, sig, win, c, {}, frozenset(own), std, seed)
+    limits: dict[str, float] = {}
+    for src, req in (("objective.requirements", job_req), (f"{key}.requirements", own)):
+        for k, v in req.items():
+            r = REQUIREMENTS[k]
+            if r.scope == "margin":
+                if src != "objective.requirements":
+                    raise ValueError(f"{src}.{k}: margins and Ms are properties of the loop on each model, not of "
+                                     "a scenario; give them under objective.requirements")
+                continue
+            if not case.defines(r.scope):
+                if src == "objective.requirements":
+                    continue  # holds where defined; checked below that some scenario defines it
+                what = "a reference step (reference)" if r.scope == "step" else "a load step (load)"
+                raise ValueError(f"{src}.{k}: needs {what} in this scenario")
+            window_s = (win[1] - win[0]) * period_s if r.scope == "step" else math.inf
+            limits[k] = check_limit(k, v, src, window_s)
+    return Case(name, weight, sc, sig, win, c, limits, frozenset(own), std, seed)
 
 
-def step_metrics(sc: Scenario, y: np.ndarray, h: float) -> dict[str, float]:
-    """Overshoot (%), rise time, settling time (s) and steady-state error of the first reference step."""
-    win = sc.first_step()
-    nan = dict.fromkeys(_STEP_METRICS, math.nan)
-    if win is None:
-        return nan
-    k0, k1 = win
-    r0 = sc.r[k0 - 1] if k0 > 0 else 0.0
-    rk = sc.r[k0:k1]
-    r1 = rk[-1]
-    step = r1 - r0
-    if step == 0:
-        return nan
-    yn = (y[k0:k1] - r0) / step  # normalised: 0 before, 1 at the target
-    overshoot = max(0.0, float(np.max(yn)) - 1.0) * 100.0
-    i10 = np.flatnonzero(yn >= 0.1)
-    i90 = np.flatnonzero(yn >= 0.9)
-    rise = (i90[0] - i10[0]) * h if i10.size and i90.size else math.inf
-    outside = np.flatnonzero(np.abs(yn - 1.0) > 0.02)
-    if outside.size == 0:
-        settle = 0.0
-    elif outside[-1] == yn.size - 1:
-        settle = math.inf
+def _check_total(scenarios: list[Any], period_s: float) -> None:
+    """The samples of all scenarios of a list together (each holds its signals and noise) against
+    :data:`tuner.sizes.MAX_SAMPLES`, before any is built (a duration that is not a number is left to
+    :func:`scenario_from_spec`'s error)."""
+    total = 0
+    for i, spec in enumerate(scenarios):
+        dur = spec.get("duration_s") if isinstance(spec, Mapping) else None
+        if isinstance(dur, bool) or not isinstance(dur, (int, float)) or not math.isfinite(dur) or dur <= 0:
+            continue
+        key = f"objective.scenarios[{i}].duration_s"
+        total += samples(key, dur, period_s, "the scenario")
+        check_samples(key, total, f"the scenarios up to scenarios[{i}] together")
+
+
+def cases_from_config(scenario: Any, scenarios: Any, period_s: float, n_meas: int, real: Realism,
+                      cost: dict[str, Any], job_req: Mapping[str, Any]) -> list[Case]:
+    """The scenarios of a job: ``scenarios`` (a list) or the single ``scenario`` (a mapping; the default
+    ``{duration_s: required}``); ``ValueError`` naming the key otherwise."""
+    if scenarios is not None:
+        if scenario:
+            raise ValueError("objective.scenarios: give scenario (one) or scenarios (a list), not both")
+        if not isinstance(scenarios, list) or not scenarios:
+            raise ValueError(f"objective.scenarios: expected a non-empty list of scenario mappings, got {scenarios!r}")
+        _check_total(scenarios, period_s)
+        cases = [_case(i, s, f"objective.scenarios[{i}]", period_s, n_meas, real, cost, job_req, True)
+                 for i, s in enumerate(scenarios)]
+        names = [c.name for c in cases]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"objective.scenarios: names must differ, {dup[0]!r} is given twice")
+        if sum(c.weight for c in cases) <= 0:
+            raise ValueError("objective.scenarios: the weights are all 0; at least one scenario must count")
     else:
-        settle = (outside[-1] + 1) * h
-    return {"overshoot_pct": overshoot, "rise_time_s": float(rise), "settling_time_s": float(settle),
-            "ss_error": float(abs(r1 - y[k1 - 1]))}
-
-
-def check_requirements(req: Mapping[str, float], m: Mapping[str, float]) -> str:
-    """The first violated requirement as a message ('' if all are met); NaN counts as violated."""
-    for key, lim in req.items():
-        metric, sense, what = REQUIREMENTS[key]
-        v = m.get(metric, math.nan)
-        ok = v <= lim if sense == "max" else v >= lim
-        if not ok:
-            return f"{what} {v:.4g} {'>' if sense == 'max' else '<'} {key} {lim:g}"
-    return ""
-
-
-def requirements_from_spec(spec: Any, has_step: bool, lti: bool, window_s: float = math.inf) -> dict[str, float]:
-    """Checked requirement limits; ``window_s``: the first step's window (s), over which a rise or
-    settling time is measured (a longer limit could not be checked)."""
-    spec = dict(spec or {})
-    for k, v in spec.items():
-        if k not in REQUIREMENTS:
-            raise ValueError(f"objective.requirements.{k}: unknown; allowed: {sorted(REQUIREMENTS)}")
-        v = _num(f"objective.requirements.{k}", v)
-        lo, strict, why = _REQ_RANGE[k]
-        if v < lo or (strict and v == lo):
-            raise ValueError(f"objective.requirements.{k}: {v:g} cannot be met; must be {'>' if strict else '>='} "
-                             f"{lo:g} ({why})")
-        if k == "min_phase_margin_deg" and v >= 180.0:
-            raise ValueError(f"objective.requirements.{k}: {v:g} cannot be met; a phase margin is below 180 deg "
-                             "(30-60 is usual)")
-        if k in ("max_rise_time_s", "max_settling_time_s") and v > window_s:
-            raise ValueError(f"objective.requirements.{k}: {v:g} s is longer than the first step's window "
-                             f"({window_s:g} s) in which it is measured; raise objective.scenario.duration_s "
-                             "or lower the limit")
-        metric = REQUIREMENTS[k][0]
-        if metric in _STEP_METRICS and not has_step:
-            raise ValueError(f"objective.requirements.{k}: needs a reference step in objective.scenario.reference")
-        if metric in _MARGIN_METRICS and not lti:
-            raise ValueError(f"objective.requirements.{k}: margins and Ms need an LTI plant (tf, zpk, ss)")
-    return {k: float(v) for k, v in spec.items()}
+        if scenario is not None and not isinstance(scenario, Mapping):
+            raise ValueError(f"objective.scenario: expected a mapping, got {scenario!r}")
+        cases = [_case(0, scenario or {}, "objective.scenario", period_s, n_meas, real, cost, job_req, False)]
+    for k in job_req:
+        r = REQUIREMENTS[k]
+        if r.scope != "margin" and not any(k in c.limits for c in cases):
+            what = "a reference step (reference)" if r.scope == "step" else "a load step (load)"
+            where = "objective.scenario.reference" if scenarios is None and r.scope == "step" else "a scenario"
+            raise ValueError(f"objective.requirements.{k}: needs {what} in {where}")
+    return cases

@@ -236,6 +236,10 @@ class WMPLoop:
                 "voltages": r["u"], "currents": r["x"][:, 6:8], "state": r["x"], "status": r["status"],
                 "status_name": r["status_name"], "n_done": r["n_done"]}
 
+    def evaluate(self, params: Mapping[str, Any] | None = None) -> Evaluation:
+        """The evaluation of ``params``: one simulation, scored (:meth:`evaluation`)."""
+        return self.evaluation(self.simulate(params), params)
+
     def evaluate_batch(self, params_list: list[Mapping[str, Any]], n_threads: int) -> list[Any]:
         """A population in one numba kernel on ``n_threads`` threads, equal to the serial evaluations
         (``backend: threads``; :mod:`.batch`)."""

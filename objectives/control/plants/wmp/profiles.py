@@ -52,8 +52,11 @@ class Profile:
             raise ValueError("profile values must be finite")
 
     def sample(self, Ts: float) -> np.ndarray:
-        """(N, 2) array of (nu_d m/s, xi_d rad/s) at t_k = k Ts, N = round(duration / Ts)."""
-        n = int(round(self.duration_s / Ts))
+        """(N, 2) array of (nu_d m/s, xi_d rad/s) at t_k = k Ts, N = round(duration / Ts) (at most
+        :data:`tuner.sizes.MAX_SAMPLES`, checked before anything is allocated)."""
+        from tuner.sizes import samples
+
+        n = samples("profile.duration_s", self.duration_s, Ts, "the profile")
         t = np.arange(n) * Ts
         idx = np.searchsorted(np.asarray(self.times_s), t + 1e-9 * Ts, side="right") - 1
         out = np.empty((n, 2))

@@ -19,6 +19,7 @@ import numpy as np
 from objectives.control.figure import new_figure, save_figure
 from objectives.control.plants.wmp.model import STATUS_OK
 from tuner.objective import Evaluation
+from tuner.safe_io import write_atomic
 
 __all__ = ["plot_surfaces", "plot_response", "save_response", "traces_doc", "write_report"]
 
@@ -133,8 +134,11 @@ def save_response(loop: Any, params: Mapping[str, Any] | None, path: str | pathl
     s = loop.simulate(params)
     path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(path, t=s["t"], references=s["references"], outputs=s["outputs"], voltages=s["voltages"],
-             n_done=s["n_done"], controller=loop.controller, fitness=loop.evaluation(s, params).fitness)
+    fitness = loop.evaluation(s, params).fitness
+    # never through a link or into a hard-linked file of the run directory (tuner.safe_io)
+    write_atomic(path, lambda fh: np.savez(fh, t=s["t"], references=s["references"], outputs=s["outputs"],
+                                           voltages=s["voltages"], n_done=s["n_done"], controller=loop.controller,
+                                           fitness=fitness), fsync=False)
     return path
 
 
@@ -182,7 +186,8 @@ def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: d
     out["train"] = {scenario: {"F": ev1.fitness, **{k: ev1.metrics.get(k, math.nan) for k in _COMPARED}}}
     plot_response(loop, init, best, fig_dir / "response.png")
     save_response(loop, best, run_dir / "response_best.npz")
-    (run_dir / "traces.json").write_text(json.dumps(traces_doc(loop, init, best), separators=(",", ":")))
+    write_atomic(run_dir / "traces.json", json.dumps(traces_doc(loop, init, best), separators=(",", ":")),
+                 fsync=False)
     if callable(getattr(loop.ctrl, "surfaces", None)):
         plot_surfaces(loop.ctrl, init, {**loop.fixed, **best}, fig_dir)
     return out
