@@ -108,6 +108,10 @@ class TunableObjective(Objective, Protocol):
         """Initial (untuned) values of the parameters, e.g. a paper's; preflight evaluates them once
         and ``tuner evaluate`` of a config scores them."""
 
+    def start_params(self) -> Mapping[str, Any] | None:
+        """Where the search starts when the config gives no ``optimizer.x0`` (e.g. a tuning rule's
+        controller), physical values by name; None for the optimiser's own start."""
+
     def parameter_names(self) -> Collection[str]:
         """Every name the objective accepts in a parameter dict; others are rejected at preflight."""
 
@@ -200,9 +204,10 @@ class TunableObjective(Objective, Protocol):
 
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
-HOOKS = ("default_space", "default_params", "parameter_names", "check_params", "preflight", "score", "has_test_data",
-         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize",
-         "deployment", "build", "export_c", "verify_c", "fingerprint", "compare_fingerprint")
+HOOKS = ("default_space", "default_params", "start_params", "parameter_names", "check_params", "preflight", "score",
+         "has_test_data", "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds",
+         "evaluate_batch", "finalize", "deployment", "build", "export_c", "verify_c", "fingerprint",
+         "compare_fingerprint")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

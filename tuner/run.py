@@ -175,7 +175,7 @@ class Run:
         return space
 
     def _new_optimizer(self, stage: int, space: Space, x0: np.ndarray | None):
-        return new_optimizer(self.cfg, stage, space, x0)
+        return new_optimizer(self.cfg, stage, space, x0, self.objective)
 
     def _write_meta(self, **kw: Any) -> None:
         self.meta = self.meta.replace(**kw)
