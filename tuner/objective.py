@@ -190,6 +190,14 @@ class TunableObjective(Objective, Protocol):
         the two outputs), and ``"compiler"``: the command line of the compiler that ran. :class:`ToolError`
         when the compiler is missing or fails."""
 
+    def fingerprint(self) -> Mapping[str, Any]:
+        """Statistics of the tuning data (e.g. a sensor's rate and noise), stored in the run directory at the
+        run's start (``fingerprint.json``); an optional ``"summary"`` list of lines is printed then."""
+
+    def compare_fingerprint(self, stored: Mapping[str, Any] | None) -> str | None:
+        """One warning line when this objective's data differs from a run's stored :meth:`fingerprint` beyond
+        the objective's thresholds (``tuner evaluate --data``, ``tuner verify-c --data``), else ``None``."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
@@ -198,7 +206,8 @@ class TunableObjective(Objective, Protocol):
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
 HOOKS = ("default_space", "default_params", "start_params", "parameter_names", "check_params", "preflight", "score",
          "has_test_data", "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds",
-         "evaluate_batch", "finalize", "deployment", "build", "export_c", "verify_c")
+         "evaluate_batch", "finalize", "deployment", "build", "export_c", "verify_c", "fingerprint",
+         "compare_fingerprint")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

@@ -57,6 +57,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude import fingerprint as _fingerprint
 from objectives.attitude.catalog import METRICS
 from objectives.attitude.cexport import hooks as _c_hooks
 from objectives.attitude.data.plausibility import unit_warnings
@@ -344,3 +345,11 @@ class FilterObjective(FilterData, FilterReporting):
 
     export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
     verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
+
+    def fingerprint(self) -> dict[str, Any]:
+        """The tuning data's sensor statistics (:mod:`objectives.attitude.fingerprint`), stored by every run."""
+        return _fingerprint.fingerprint(self.recordings("train"))
+
+    def compare_fingerprint(self, stored: Mapping[str, Any] | None) -> str | None:
+        """One warning line when this objective's data differs from ``stored`` beyond the thresholds."""
+        return _fingerprint.compare(stored, self.fingerprint())

@@ -38,6 +38,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from objectives.attitude import fingerprint as _fingerprint
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.start import initial_quaternion, quat_from_acc_mag, quat_from_rotmat
 from objectives.params import Declared, Param, ParamSet
@@ -186,7 +187,9 @@ class AttitudeFilter(Declared):
         if unknown:  # a value the filter would drop: the filter built would not be the one recorded
             raise ValueError(f"{run_dir}: deployment.values.{unknown[0]}: not a parameter of {target.name}; "
                              f"allowed: {', '.join(sorted(target.defaults))}")
-        return target(**{**dep.values, **overrides})
+        flt = target(**{**dep.values, **overrides})
+        flt.tuned_on = _fingerprint.stored(run_dir)  # new data is compared with it (run(), stream())
+        return flt
 
     # --- running ----------------------------------------------------------------------------
     def run(self, data: Recording | Any, acc: Any = None, mag: Any = None, *, rate_hz: float | None = None,
@@ -216,6 +219,7 @@ class AttitudeFilter(Declared):
         from objectives.attitude.filters.stream import as_recording
 
         rec = as_recording(self.name, data, acc, mag, rate_hz, dt, frame)
+        _fingerprint.warn_filter(self, rec)
         flt = self.imu_only() if not isinstance(data, Recording) and mag is None else self
         return flt.run_detailed(rec, q0, disturbances).quat
 
@@ -226,7 +230,9 @@ class AttitudeFilter(Declared):
             return self
         if "use_mag" not in self.values:
             raise ValueError(f"{self.name}: needs a magnetometer (no IMU-only version): pass mag= as an (N, 3) array")
-        return type(self)(**{**self.values, "use_mag": False})
+        other = type(self)(**{**self.values, "use_mag": False})
+        other.tuned_on = getattr(self, "tuned_on", None)
+        return other
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None,
                frame: str = "ENU") -> Any:
