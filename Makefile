@@ -55,5 +55,9 @@ papers-full: setup
 
 # The example jobs shipped in the package (tuner/data/configs/, `tuner demo`): copies of the configs/*.yaml
 # that need no shared data (no `broad:` source). Run after editing one; tests/tuner/test_package.py checks it.
+#: the README's own-CSV example: the job, its column map and its recording
+OWN_CSV := own_csv.yaml imu_columns.yaml imu.csv
+
 package-configs:
 	for f in configs/*.yaml; do grep -q 'broad:' "$$f" || cp -L "$$f" tuner/data/configs/; done
+	cp -L $(addprefix configs/examples/,$(OWN_CSV)) tuner/data/configs/examples/

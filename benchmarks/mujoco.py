@@ -153,6 +153,7 @@ def _traces(obj: Any, params: dict[str, Any], n: int) -> list[np.ndarray]:
 
     loop = obj.loop
     cases = loop._unc.held_out_set()[:n]
+    n = len(cases)  # a smoke run draws fewer held-out models than the figure shows
     plants = loop._held_plants[:n]
     runs = run_all(loop, [(loop.coeffs(params), j) for j in range(n)], 2, plants, cases)
     return [r["y"][: r["n_done"], 1:3] for r in runs]

@@ -97,6 +97,8 @@ def closed_loop_starter(name: str) -> str | None:
     if name not in CONTROLLERS:
         return None
     cls = get_controller(name)
+    if cls.family == "mujoco":
+        return _mujoco_starter(name)
     if cls.family != "wmp":
         return _loop_starter(name)
     d = cls.describe()
@@ -129,6 +131,39 @@ _LOOP_PLANTS = {
     "ss": ("{ss: {A: [[0, 1], [-2, -0.5]], B: [[0], [1]], C: [[1, 0]]}}   # mass on a spring-damper",
            {"ss": {"A": [[0, 1], [-2, -0.5]], "B": [[0], [1]], "C": [[1, 0]]}}),
 }
+
+
+#: the example model and scenario of a MuJoCo controller's starter (the repository's configs/examples/mujoco/)
+_MUJOCO_EXAMPLES = {
+    "lqr_fd": ("cartpole.xml", "keyframe: upright, outputs: [cart_position, hinge]",
+               "{duration_s: 5.0, reference: {cart_position: [{t: 1.0, value: 0.5}]}, initial: {hinge: 0.1}, "
+               "limits: {hinge: 0.8}}", "{iae: 1.0, effort: 0.0005}"),
+    "joint_pid": ("arm2.xml", "keyframe: hanging, outputs: [shoulder, elbow]",
+                  "{duration_s: 4.0, reference: {shoulder: [{t: 0.5, value: 1.0}], elbow: [{t: 1.5, value: 0.8}]}}",
+                  "{iae: 1.0, effort: 0.0001}"),
+}
+
+
+def _mujoco_starter(name: str) -> str | None:
+    """A job tuning MuJoCo controller ``name`` on the repository's example model (a MuJoCo plant's searched
+    parameters follow from its model, so the job searches the controller's default space)."""
+    if name not in _MUJOCO_EXAMPLES:
+        return None
+    model, plant, scenario, cost = _MUJOCO_EXAMPLES[name]
+    return (f"# Starter job: tune the {name} controller on a MuJoCo model (needs the mujoco extra:\n"
+            "# pip install 'tuner[mujoco]').\n"
+            f"# The plant is the repository's example model configs/examples/mujoco/{model}: copy that folder beside\n"
+            "# this job, or name your own MJCF or URDF file (`tuner describe plant`).\n"
+            f"# Written by `tuner init {name}`; run it with `tuner run {name}.yaml`.\n"
+            f"# `tuner describe {name}` says which parameters a model gives it (one set per loop or state).\n"
+            f"name: {name}\nseed: 1\nobjective:\n  kind: closed_loop\n"
+            f"  plant: {{mujoco: mujoco/{model}, {plant}}}\n  controller: {name}\n"
+            "  period_s: 0.002                # a whole number of the model's timestep\n"
+            f"  scenario: {scenario}\n"
+            f"  cost: {cost}\n"
+            "  requirements: {}               # e.g. {max_overshoot_pct: 10, max_settling_time_s: 3}\n"
+            "  # uncertainty: {parameters: {body.pole.mass: {rel: 0.2}}}   # tune on perturbed models too\n"
+            + _TAIL.format(evals=200))
 
 
 def _loop_starter(name: str) -> str | None:

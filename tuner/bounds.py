@@ -19,6 +19,7 @@ from tuner.failures import failure_groups
 from tuner.records import RunError
 from tuner.rundir import RunDir
 from tuner.space import Real, Space, SpaceError
+from tuner.verdict import defaults_verdict
 
 __all__ = ["ReportWarning", "bound_warnings", "failure_warnings", "run_warnings", "run_space", "BOUND_TOL"]
 
@@ -32,8 +33,9 @@ class ReportWarning:
 
     Attributes
     ----------
-    kind : {"bound", "failed"}
-        ``bound``: a parameter ended near a search bound; ``failed``: evaluations failed.
+    kind : {"bound", "failed", "defaults"}
+        ``bound``: a parameter ended near a search bound; ``failed``: evaluations failed; ``defaults``:
+        held-out or CV scores say the tuned values are worse than the defaults (:mod:`tuner.verdict`).
     message : str
         One line for people (plain text).
     param : str
@@ -49,7 +51,7 @@ class ReportWarning:
         for ``failed`` the failed fraction of all evaluations.
     """
 
-    kind: Literal["bound", "failed"]
+    kind: Literal["bound", "failed", "defaults"]
     message: str
     param: str = ""
     value: float = math.nan
@@ -133,6 +135,9 @@ def run_warnings(run_dir: str | Path, tol: float = BOUND_TOL) -> list[ReportWarn
     space = run_space(rd.path)
     if space is not None and rd.has_best():
         out += bound_warnings(dict(rd.best().params), space, tol)
+    verdict = defaults_verdict(rd.best().evaluation) if rd.has_best() else None
+    if verdict:  # held-out or CV scores say tuning made it worse (tuner.verdict)
+        out.append(ReportWarning("defaults", verdict))
     rows = rd.history_rows()
     if rows:
         failed = [r for r in rows if r.get("status") not in ("ok", None)]

@@ -46,7 +46,7 @@ TOP_KEYS = {
     "output": "directory holding the run directories (default: runs)",
     "repeats": "number of runs of this job, seeds seed + 0 .. seed + repeats - 1 (default: 1)",
     "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, "
-                  "select: {top_k, holdout, include_defaults}}",
+                  "select: {top_k, holdout, include_defaults}, chosen_on: text}",
 }
 
 
@@ -125,6 +125,9 @@ class ValidationConfig:
     gap_warn_rel, gap_warn_abs : the gap (CV score - tuning score) is *large* when it exceeds
         ``gap_warn_rel * |tuning score|`` or, when given, ``gap_warn_abs`` (fitness units, e.g. 0.6 deg).
     select : :class:`SelectConfig` or ``None``.
+    chosen_on : the data the config's fixed options and search ranges were chosen on by looking at it, when
+        that is the run's own data; the report then says the CV (which re-tunes only the searched values) is
+        optimistic (:func:`tuner.verdict.optimistic_note`). A declaration, not a setting: nothing else changes.
     """
 
     cv: str | None = None
@@ -133,6 +136,7 @@ class ValidationConfig:
     gap_warn_rel: float = 0.25
     gap_warn_abs: float | None = None
     select: SelectConfig | None = None
+    chosen_on: str | None = None
 
     @property
     def active(self) -> bool:
@@ -314,7 +318,7 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
         return ValidationConfig()
     if not isinstance(raw, Mapping):
         raise ConfigError(f, "validation", f"expected a mapping, got {type(raw).__name__} {raw!r}")
-    allowed = ("cv", "folds", "budget_fraction", "gap_warn_rel", "gap_warn_abs", "select")
+    allowed = ("cv", "folds", "budget_fraction", "gap_warn_rel", "gap_warn_abs", "select", "chosen_on")
     bad = sorted(set(raw) - set(allowed))
     if bad:
         raise ConfigError(f, f"validation.{bad[0]}", f"unknown key; allowed: {', '.join(allowed)}")
@@ -352,7 +356,11 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
                               f"fraction in (0, 0.5], got {holdout!r}")
         with_defaults = _get(sel_raw, "include_defaults", bool, f, "validation.select.", default=True)
         select = SelectConfig(top_k, holdout if isinstance(holdout, str) else float(holdout), with_defaults)
-    return ValidationConfig(cv, folds, frac, rel, gabs, select)
+    chosen_on = raw.get("chosen_on")
+    if chosen_on is not None and (not isinstance(chosen_on, str) or not chosen_on.strip()):
+        raise ConfigError(f, "validation.chosen_on", "expected a text naming the data the config's fixed options "
+                          f"and ranges were chosen on (e.g. 'the 16 shared BROAD trials'), got {chosen_on!r}")
+    return ValidationConfig(cv, folds, frac, rel, gabs, select, chosen_on)
 
 
 def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir: Path | None = None) -> RunConfig:

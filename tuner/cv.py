@@ -125,7 +125,8 @@ def _tune(cfg: RunConfig, objective: Any, evaluate: Callable, stage: int,
     space = cfg.space(objective)
     if space.dim == 0:
         raise ConfigError(cfg.source, "parameters", "every parameter is fixed: nothing to tune")
-    res = minimize(objective, space, new_optimizer(cfg, stage, space, None), evaluate=evaluate, callback=callback)
+    res = minimize(objective, space, new_optimizer(cfg, stage, space, None, objective), evaluate=evaluate,
+                   callback=callback)
     if res.best is None:
         return {}, math.inf
     return dict(res.best.params), float(res.best.fitness)

@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
+from tuner.verdict import defaults_verdict
+
 __all__ = ["collect_runs", "write_dashboard", "find_dashboard", "MARKER", "MAX_DEPTH"]
 
 #: file beside ``index.html`` that tells runs below the folder to refresh this dashboard
@@ -95,7 +97,8 @@ def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
     row.update({
         "objective": " ".join(str(obj[k]) for k in ("kind", "metric") if k in obj),
         "target": str(obj.get("filter") or obj.get("controller") or obj.get("function") or obj.get("callable") or ""),
-        "status": s["status"], "best": _num(s["best_fitness"]),
+        "status": f"{s['status']}; tuned worse than defaults" if defaults_verdict(ev) else s["status"],
+        "best": _num(s["best_fitness"]),
         "cv": _num(ev.get("cv_fitness", val.get("cv_score"))), "gap": _num(ev.get("cv_gap", val.get("gap"))),
         "n_evals": s["n_evals"], "wall_s": _num(s["wall_s"]), "date": (s["created"] or "")[:19],
         "params": {k: (v if isinstance(v, (int, float, str, bool)) else str(v)) for k, v in s["params"].items()},

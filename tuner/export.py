@@ -26,6 +26,7 @@ from typing import Any
 from tuner.export_formats import FORMATS, c_prefix, to_c, to_json, to_python, to_yaml
 from tuner.objective import hook
 from tuner.trust import data_only
+from tuner.verdict import defaults_verdict
 
 __all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c", "objective_formats", "export_own"]
 
@@ -73,6 +74,7 @@ def provenance(run_dir: Path, objective: Any = None) -> dict[str, Any]:
         "git_commit": meta.get("git_commit", ""),
         "exported": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "params": best["params"],
+        **({"warning": verdict} if (verdict := defaults_verdict(best.get("evaluation"))) else {}),
     }
 
 
@@ -158,8 +160,10 @@ def _sample_rate(obj: Any, why: str = "") -> dict[str, Any]:
     return {"sample_rate_hz": hz, "sample_rate_note": note}
 
 
-def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> tuple[Any, Any]:
-    """The run's objective (on ``data_file``'s data when given) and its :class:`tuner.deployment.Deployment`."""
+def _deployed_objective(run_dir: Path, data_file: str | Path | None = None,
+                        warnings: list[str] | None = None) -> tuple[Any, Any]:
+    """The run's objective (on ``data_file``'s data when given, its warnings appended to ``warnings``) and its
+    :class:`tuner.deployment.Deployment`."""
     from tuner.config import ConfigError
     from tuner.deployment import load_deployment
     from tuner.rescore import objective_on_data
@@ -168,7 +172,8 @@ def _deployed_objective(run_dir: Path, data_file: str | Path | None = None) -> t
     if objective is None:
         raise ConfigError(run_dir / "config.yaml", "objective", f"does not build: {why}")
     if data_file:
-        objective, _ = objective_on_data(objective, data_file)
+        objective, found = objective_on_data(objective, data_file, run_dir)
+        (warnings if warnings is not None else []).extend(found)
     return objective, load_deployment(run_dir)
 
 
@@ -246,12 +251,14 @@ def verify_c(run_dir: str | Path, data_file: str | Path | None = None, precision
     from tuner.config import ConfigError
 
     run_dir = Path(run_dir)
-    objective, dep = _deployed_objective(run_dir, data_file)
+    warnings: list[str] = []
+    objective, dep = _deployed_objective(run_dir, data_file, warnings)
     fn = hook(objective, "verify_c")
     if fn is None:
         raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C export to verify "
                           "(hook verify_c)")
     try:
-        return {"name": dep.name, **dict(fn(dict(dep.values), precision, tuple(opt)))}
+        return {"name": dep.name, **dict(fn(dict(dep.values), precision, tuple(opt))),
+                **({"warnings": warnings} if warnings else {})}
     except ValueError as exc:
         raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None

@@ -108,6 +108,10 @@ class TunableObjective(Objective, Protocol):
         """Initial (untuned) values of the parameters, e.g. a paper's; preflight evaluates them once
         and ``tuner evaluate`` of a config scores them."""
 
+    def start_params(self) -> Mapping[str, Any] | None:
+        """Where the search starts when the config gives no ``optimizer.x0`` (e.g. a tuning rule's
+        controller), physical values by name; None for the optimiser's own start."""
+
     def parameter_names(self) -> Collection[str]:
         """Every name the objective accepts in a parameter dict; others are rejected at preflight."""
 
@@ -195,15 +199,24 @@ class TunableObjective(Objective, Protocol):
         ``params``; ``comment`` is the run's provenance and scores. ``ValueError`` naming every value the format
         cannot express."""
 
+    def fingerprint(self) -> Mapping[str, Any]:
+        """Statistics of the tuning data (e.g. a sensor's rate and noise), stored in the run directory at the
+        run's start (``fingerprint.json``); an optional ``"summary"`` list of lines is printed then."""
+
+    def compare_fingerprint(self, stored: Mapping[str, Any] | None) -> str | None:
+        """One warning line when this objective's data differs from a run's stored :meth:`fingerprint` beyond
+        the objective's thresholds (``tuner evaluate --data``, ``tuner verify-c --data``), else ``None``."""
+
     def finalize(self, run_dir: Path, params: Mapping[str, Any]) -> Mapping[str, Any]:
         """After a finished run: extra scores (held-out data) and figures; the returned metrics go
         into ``best.yaml`` and the report."""
 
 
 #: names of the optional hooks (everything in :class:`TunableObjective` except ``__call__``)
-HOOKS = ("default_space", "default_params", "parameter_names", "check_params", "preflight", "score", "has_test_data",
-         "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds", "evaluate_batch", "finalize",
-         "deployment", "build", "export_c", "verify_c", "export_formats", "export_as")
+HOOKS = ("default_space", "default_params", "start_params", "parameter_names", "check_params", "preflight", "score",
+         "has_test_data", "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds",
+         "evaluate_batch", "finalize", "deployment", "build", "export_c", "verify_c", "fingerprint",
+         "compare_fingerprint", "export_formats", "export_as")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

@@ -40,6 +40,7 @@ from tuner.render import write_html as _write_html
 from tuner.rundir import RunDir
 from tuner.runinfo import run_summary
 from tuner.spread import spread_md
+from tuner.verdict import optimistic_note
 
 __all__ = ["write_run_report", "load_history", "run_summary", "md_table", "pivot_metrics", "write_html",
            "write_live_report", "throttled", "sweep_warnings_md", "LIVE_REFRESH_S"]
@@ -291,7 +292,9 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
     warnings = run_warnings(run_dir)
     val = _validation(run_dir)
     md += ["## Warnings", ""]
+    optimistic = optimistic_note((cfg.get("validation") or {}).get("chosen_on"))
     md += [f"- **{w.kind}**: {md_escape(w.message)}" for w in warnings] + _gap_warning(val) \
+        + ([f"- **optimistic CV**: {md_escape(optimistic)}."] if optimistic else []) \
         or ["None: no parameter within 2 % of a search bound, no failed evaluation."]
     md += [""]
     md += _validation_md(val)

@@ -68,8 +68,8 @@ def evaluate_target(target: str | Path, params_file: str | Path | None = None,
             check(full)
     except ValueError as exc:
         raise ConfigError(params_file or target, "params", str(exc)) from None
-    if data_file:  # the new data's preflight warnings (units, a start in motion)
-        objective, warnings = objective_on_data(objective, data_file)
+    if data_file:  # the new data's preflight warnings (units, a start in motion), and its fingerprint's
+        objective, warnings = objective_on_data(objective, data_file, target if target.is_dir() else None)
     else:  # the config's own data, loaded and checked as `tuner run` does: a NaN row is one error line
         warnings = _preflight(objective, cfg.source)
     from tuner.deployment import deployment_for
@@ -116,9 +116,11 @@ def _preflight(objective: Any, source: Any) -> list[str]:
         raise ConfigError(source, "objective", str(exc)) from None
 
 
-def objective_on_data(objective: Any, data_file: str | Path) -> tuple[Any, list[str]]:
+def objective_on_data(objective: Any, data_file: str | Path,
+                      run_dir: str | Path | None = None) -> tuple[Any, list[str]]:
     """``objective`` rebuilt on ``data_file``'s data (a YAML file, its ``data:`` block or the whole
-    document) and that data's preflight warnings. The data is loaded now, so a bad file is one
+    document) and that data's preflight warnings, with the objective's ``compare_fingerprint`` line when the
+    data differs from the fingerprint stored in ``run_dir``. The data is loaded now, so a bad file is one
     :class:`ConfigError` line on ``data_file``, not a traceback from the scoring."""
     doc = read_yaml(data_file, "--data")
     data = doc.get("data", doc) if isinstance(doc, dict) and "data" in doc else doc
@@ -129,6 +131,9 @@ def objective_on_data(objective: Any, data_file: str | Path) -> tuple[Any, list[
         objective = with_data(data)
         preflight = hook(objective, "preflight")
         warnings = list(preflight() or []) if preflight is not None else []
+        compare = hook(objective, "compare_fingerprint") if run_dir is not None else None
+        line = compare(RunDir(run_dir).fingerprint()) if compare is not None else None
+        warnings += [line] if line else []
     except ValueError as exc:
         raise ConfigError(data_file, "data", str(exc)) from None
     return objective, warnings

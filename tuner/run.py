@@ -35,6 +35,7 @@ from tuner.config import RunConfig
 from tuner.deployment import attach_deployment, load_best
 from tuner.evaluate import sigint_count
 from tuner.loop import BestPoint, Generation, SeededCall, minimize
+from tuner.objective import hook
 from tuner.records import Best, Checkpoint, HistoryRow, Meta, Repeats, RunError, Timing, config_hash, plain, read_back
 from tuner.replay import Replay as _Replay
 from tuner.rundir import RunDir, atomic_write
@@ -174,7 +175,7 @@ class Run:
         return space
 
     def _new_optimizer(self, stage: int, space: Space, x0: np.ndarray | None):
-        return new_optimizer(self.cfg, stage, space, x0)
+        return new_optimizer(self.cfg, stage, space, x0, self.objective)
 
     def _write_meta(self, **kw: Any) -> None:
         self.meta = self.meta.replace(**kw)
@@ -417,6 +418,20 @@ def check_unstarted(rd: RunDir, printer: Callable[[str], None] | None) -> None:
         printer(f"reusing {rd.path}: it was created but killed before the run started (no meta.json)")
 
 
+def _store_fingerprint(objective: Any, rd: RunDir) -> list[str]:
+    """Write the objective's ``fingerprint`` of its tuning data into the run directory; its summary lines."""
+    fn = hook(objective, "fingerprint")
+    if fn is None:
+        return []
+    try:
+        doc = dict(fn() or {})
+    except Exception as exc:  # noqa: BLE001 - a statistic must not stop the run it describes
+        return [f"note: no data fingerprint ({type(exc).__name__}: {exc})"]
+    if doc:
+        rd.write_fingerprint(doc)
+    return [str(x) for x in doc.get("summary", [])]
+
+
 def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         progress: Callable[[str], None] | None = None,
         on_generation: Callable[[Generation], None] | None = None, report: bool = True,
@@ -446,11 +461,14 @@ def run(cfg: RunConfig, run_dir: str | Path | None = None, quiet: bool = False,
         meta = new_meta(cfg, rd.write_config(resolved_config(cfg, space)), n_jobs, notes)
         rd.write_meta(meta)
         r = Run(cfg, rd, objective, space, printer, meta, n_jobs, on_generation, report, resume_as)
+        fingerprint = _store_fingerprint(objective, rd)
         if printer:
             printer(f"run {rd.path}  ({cfg.optimizer.method}, {space.dim} parameters, "
                     f"{cfg.parallel.backend} x {n_jobs})")
             for note in notes:
                 printer(f"note: {note}")
+            for line in fingerprint:
+                printer(line)
         return r.execute()
 
 

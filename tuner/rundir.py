@@ -44,7 +44,7 @@ import errno
 import io
 import json
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -396,6 +396,16 @@ class RunDir:
 
     def write_validation(self, doc: dict[str, Any]) -> None:
         atomic_write(self.path / "validation.json", json.dumps(plain(doc), indent=1))
+
+    def fingerprint(self) -> dict[str, Any] | None:
+        """``fingerprint.json``, the tuning data's statistics (``None`` when the run has none)."""
+        if not (self.path / "fingerprint.json").is_file():
+            return None
+        doc = self._json("fingerprint.json", "data fingerprint")
+        return doc if isinstance(doc, dict) else None
+
+    def write_fingerprint(self, doc: Mapping[str, Any]) -> None:
+        atomic_write(self.path / "fingerprint.json", json.dumps(plain(dict(doc)), indent=1))
 
     def write_cv_tables(self, markdown: str, table_csv: str) -> None:
         """``cv.md`` and ``cv.csv`` (the texts of :func:`tuner.cv.cv_texts`)."""

@@ -21,12 +21,13 @@ import numpy as np
 
 from tuner.config import ConfigError, RunConfig, check_optimizer_options, config_from_dict, optimizer_options
 from tuner.evaluate import EvalRecord, Evaluator, TimedObjective
+from tuner.objective import hook
 from tuner.optimizers import OptionError, get_optimizer
 from tuner.rundir import RunDir
 from tuner.space import Space
 
-__all__ = ["run_config", "run_origin", "run_objective", "build_objective", "build", "new_optimizer", "population",
-           "worker_count", "LiveMap"]
+__all__ = ["run_config", "run_origin", "run_objective", "build_objective", "build", "new_optimizer", "start_point",
+           "population", "worker_count", "LiveMap"]
 
 
 def run_config(rd: RunDir, raw: dict[str, Any] | None = None) -> RunConfig:
@@ -101,13 +102,18 @@ def build(cfg: RunConfig) -> tuple[Any, Space]:
     return objective, space
 
 
-def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | None):
-    """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``."""
+def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | None, objective: Any = None):
+    """The optimiser of a stage, seeded from ``(run seed, stage)``; bad options raise ``ConfigError``. Stage 0
+    starts at ``optimizer.x0``, else at the objective's ``start_params`` when it proposes one."""
     o = cfg.optimizer
     rng = np.random.default_rng(np.random.SeedSequence([cfg.seed, stage]))
     kwargs = optimizer_options(o.population, o.generations, o.options)
     if x0 is not None:
         kwargs["x0"] = x0
+    elif stage == 0 and kwargs.get("x0") is None and objective is not None:
+        start = start_point(objective, space)
+        if start is not None:
+            kwargs["x0"] = start
     try:
         if isinstance(kwargs.get("x0"), dict):
             kwargs["x0"] = space.encode(kwargs["x0"])
@@ -117,6 +123,21 @@ def new_optimizer(cfg: RunConfig, stage: int, space: Space, x0: np.ndarray | Non
                           f"invalid for {o.method}: {exc.message}") from None
     except (ValueError, TypeError) as exc:  # e.g. a warm start that does not fit the space, pycma refusing
         raise ConfigError(cfg.source, f"optimizer ({o.method})", str(exc)) from None
+
+
+def start_point(objective: Any, space: Space) -> np.ndarray | None:
+    """The objective's ``start_params`` in the unit cube of ``space`` (clipped to it; a free parameter the start
+    does not name takes the objective's default), or None when it proposes none."""
+    fn = hook(objective, "start_params")
+    start = fn() if fn is not None else None
+    if not start:
+        return None
+    dflt = hook(objective, "default_params")
+    base = dict(dflt() or {}) if dflt is not None else {}
+    values = {p.name: start.get(p.name, base.get(p.name)) for p in space.free}
+    if any(v is None for v in values.values()):
+        return None
+    return np.clip(space.encode(values), 0.0, 1.0)
 
 
 def population(cfg: RunConfig, dim: int) -> int:

@@ -80,10 +80,17 @@ def packaged_configs() -> list[str]:
     return sorted(p.name for p in root.iterdir() if p.name.endswith(".yaml"))
 
 
+#: the README's own-CSV example shipped in ``tuner/data/configs/examples/``: ``{job: its column map}``
+OWN_DATA_EXAMPLES = {"own_csv.yaml": "imu_columns.yaml"}
+
+
 def packaged_config(name: str) -> Path:
-    """Path of the packaged example job ``name`` (e.g. ``demo.yaml``); a sweep's ``base:`` files are beside it."""
+    """Path of the packaged example job ``name`` (e.g. ``demo.yaml``, or ``own_csv.yaml`` of
+    :data:`OWN_DATA_EXAMPLES`); a sweep's ``base:`` files are beside it, an example's data and column map too."""
     root = resources.files("tuner") / "data" / "configs"
     path = Path(str(root / name))
+    if not path.is_file() and name in OWN_DATA_EXAMPLES:
+        path = Path(str(root / "examples" / name))
     if not path.is_file():
         raise StarterError(f"{name}: not a packaged job; packaged: {', '.join(packaged_configs())}")
     return path

@@ -48,9 +48,8 @@ neither is pickled.
 
 from __future__ import annotations
 
-import copy
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -58,17 +57,18 @@ from typing import Any
 
 import numpy as np
 
-from objectives.attitude import deployment as _deployment
+from objectives.attitude import fingerprint as _fingerprint
 from objectives.attitude import ros_export as _ros_export
 from objectives.attitude.catalog import METRICS
 from objectives.attitude.cexport import hooks as _c_hooks
-from objectives.attitude.data.plausibility import motion_start, unit_warnings
-from objectives.attitude.data.recording import Recording, RecordingError
+from objectives.attitude.data.plausibility import unit_warnings
+from objectives.attitude.data.recording import Recording
 from objectives.attitude.data_specs import check_specs as _check_specs
 from objectives.attitude.data_specs import split_data as _split_data
 from objectives.attitude.divergence import recording_failure, unbounded_growth
 from objectives.attitude.fused_errors import error_sums
-from objectives.attitude.metrics import euler_lock_warning, remove_heading_offset
+from objectives.attitude.metrics import remove_heading_offset
+from objectives.attitude.objective_data import FilterData
 from objectives.attitude.objective_options import (
     AGG_KEYS,
     ERROR_KEYS,
@@ -76,10 +76,9 @@ from objectives.attitude.objective_options import (
     aggregate_scores,
     check_metric_options,
     check_prior,
-    ungrouped_if_missing,
 )
-from objectives.attitude.prepared import DataSplit, Prepared, Split, check_split, prepare
-from tuner.deployment import Deployment
+from objectives.attitude.objective_report import FilterReporting
+from objectives.attitude.prepared import DataSplit, Prepared, Split
 from tuner.objective import Evaluation, Score
 from tuner.space import Real, Space
 
@@ -91,8 +90,13 @@ _KEYS = ("kind", "filter", "fixed", "data", "metric", "metric_options", "prior",
 
 
 @dataclass
-class FilterObjective:
-    """Picklable objective scoring a filter's parameters on recordings (see module docstring)."""
+class FilterObjective(FilterData, FilterReporting):
+    """Picklable objective scoring a filter's parameters on recordings (see module docstring).
+
+    This class is the ``filter`` kind's entry point: construction and validation, the search space, scoring and
+    the population batch; its data half (recordings, splits, preflight, folds) is :class:`FilterData`, its
+    reporting half (catalog, provenance, deployment, report) :class:`FilterReporting`.
+    """
 
     filter: str
     train_specs: list
@@ -181,61 +185,6 @@ class FilterObjective:
             report=dict(section.get("report") or {}), base_dir=str(base), prior=section.get("prior") or {},
         )
 
-    @classmethod
-    def catalog(cls) -> dict[str, list[str]]:
-        """Names ``objective.filter``, ``objective.metric`` and data specs accept (``tuner list``)."""
-        from objectives.attitude.catalog import data_sources
-        from objectives.attitude.filters import filter_names
-
-        return {"filters": filter_names(), "metrics": list(METRICS), "data": list(data_sources())}
-
-    @classmethod
-    def explain(cls, name: str) -> dict[str, Any] | None:
-        """``tuner describe NAME``: a filter, metric or data source (see :mod:`objectives.attitude.catalog`)."""
-        from objectives.attitude.catalog import explain
-
-        return explain(name)
-
-    def with_data(self, data: Any) -> FilterObjective:
-        """The same objective on other data (``tuner evaluate --data``): all of it is 'train'."""
-        train, test = _split_data(data)
-        specs = train + test
-        _check_specs(specs, Path(self.base_dir), "data")
-        out = FilterObjective(self.filter, specs, [], dict(self.fixed), self.metric, dict(self.metric_options),
-                              self.q0, self.warmup_s, dict(self.report), self.base_dir, dict(self.prior))
-        if self.metric_options.get("group_balanced"):  # recordings without the run's groups score ungrouped
-            out.metric_options, out._notes = ungrouped_if_missing(out.metric_options, out.recordings("train"))
-        return out
-
-    def with_recordings(self, *, train: Iterable[Recording] | None = None,
-                        test: Iterable[Recording] | None = None) -> FilterObjective:
-        """A copy scoring the given recordings as its ``train`` / ``test`` split instead of loading them
-        (a cross-validation fold, one recording of the per-trial report); a split not given is as here.
-
-        Like loaded recordings they stay in this process: a pickled copy loads its specs again, so specs
-        that name the same recordings make a worker score the same.
-        """
-        out = copy.copy(self)  # through __getstate__: nothing loaded or prepared is shared
-        data = self._data
-        for split, recs in (("train", train), ("test", test)):
-            if recs is not None:
-                data = data.with_split(split, recs)
-        out._data = data
-        return out
-
-    def __getstate__(self) -> dict[str, Any]:
-        d = dict(self.__dict__)
-        d["_data"] = DataSplit()  # loaded recordings stay in the process that loaded them,
-        d["_prepared"] = {}  # and so does what was computed from them
-        d.pop("_cls", None)
-        return d
-
-    def __setstate__(self, d: dict[str, Any]) -> None:
-        from objectives.attitude.filters import get_filter
-
-        self.__dict__.update(d)
-        self._cls = get_filter(self.filter)
-
     # --- engine hooks (tuner.objective.TunableObjective) ---------------------------------------
     def default_params(self) -> dict[str, Any]:
         """The filter's default values with ``fixed`` applied."""
@@ -244,90 +193,6 @@ class FilterObjective:
     def parameter_names(self) -> list[str]:
         """Every value the filter takes (searched or not)."""
         return sorted(self._cls.defaults)
-
-    @property
-    def has_test_data(self) -> bool:
-        return bool(self.test_specs)
-
-    def sample_rate(self) -> tuple[float | None, str]:
-        """Rate of the training recordings (stated by synthetic specs, else read from the recordings)."""
-        specs = self.train_specs or []
-        if specs and all(isinstance(sp, dict) and set(sp) == {"synthetic"} and "rate_hz" in (sp["synthetic"] or {})
-                         for sp in specs):  # stated in the config: no need to generate the recordings
-            rates = sorted({round(float(sp["synthetic"]["rate_hz"]), 3) for sp in specs})
-        else:
-            try:
-                rates = sorted({round(1.0 / float(r.dt), 3) for r in self.recordings("train")})
-            except (RecordingError, OSError, ValueError) as exc:
-                return None, f"training data not readable: {exc}"
-        if not rates:
-            return None, "no training recording"
-        if max(rates) - min(rates) > 1e-3 * max(rates):
-            return None, "training recordings differ: " + ", ".join(f"{r:g} Hz" for r in rates)
-        return rates[0], "rate of the training recordings; per-sample parameters must be rescaled for another rate"
-
-    def describe(self) -> dict[str, Any]:
-        """Provenance for ``tuner export``: filter, metric and the data specs."""
-        def specs(lst):
-            out = []
-            for spec in lst:
-                if isinstance(spec, tuple) and spec[0] == "subset":  # a CV fold or a held-out selection part
-                    return {"all": specs(list(spec[1])), "subset": sorted(spec[2])}
-                if isinstance(spec, tuple):
-                    return {"all": spec[1], "kfold": {"k": spec[2], "fold": spec[3]}}
-                out.append(spec)
-            return out
-
-        data = specs(self.train_specs)
-        if self.test_specs and not isinstance(data, dict):
-            data = {"train": data, "test": specs(self.test_specs)}
-        return {"objective": {"kind": "filter", "filter": self.filter, "metric": self.metric}, "data": data}
-
-    def preflight(self) -> list[str]:
-        """Load every recording once (kept for the run), check ``warmup_s`` against each, warn on units."""
-        warnings: list[str] = list(self._notes)
-        for split, specs in (("train", self.train_specs), ("test", self.test_specs)):
-            key = "objective.data" + (f".{split}" if self.test_specs else "")
-            loaded = self._data.get(split)
-            recs: list[Recording] = list(loaded or [])
-            for i, spec in enumerate(specs if loaded is None else []):
-                where = "objective.data.all" if isinstance(spec, tuple) else f"{key}[{i}]"
-                try:
-                    recs += self._load([spec])
-                except ValueError as exc:  # RecordingError and the loaders' own checks
-                    raise ValueError(f"{where}: {exc}") from None
-                except (OSError, KeyError, IndexError) as exc:  # unreadable or truncated files
-                    raise ValueError(f"{where}: cannot load ({type(exc).__name__}: {exc})") from None
-            if split == "train" and not recs:  # an empty list, or a selection that keeps no recording
-                raise ValueError(f"{key}: no recordings to score; give at least one data spec")
-            for rec in recs:
-                if self.warmup_s >= rec.duration_s:
-                    raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "
-                                     f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
-                warnings += unit_warnings(rec) + list(rec.meta.get("warnings", []))  # units, what reading found
-                warnings += self._start_warning(rec) + euler_lock_warning(rec.name, self.metric, rec.quat,
-                                                                          self._mask(rec))
-            if loaded is None:
-                self._data = self._data.with_split(split, recs)
-        return list(dict.fromkeys(warnings))  # windows of one file read it once each: one line per finding
-
-    def start_init(self) -> Any:
-        """The start the filter uses: its fixed ``init`` option unless ``auto``, else ``q0``."""
-        init = self.fixed.get("init", self._cls.defaults.get("init", "auto"))
-        return self.q0 if init == "auto" else init
-
-    def _start_warning(self, rec: Recording) -> list[str]:
-        """A warning when ``rec`` starts in motion under an ``accmag``/``broad`` start without a warm-up
-        (:func:`objectives.attitude.data.plausibility.motion_start`)."""
-        init = self.start_init()
-        if self.warmup_s > 0 or not (init is None or (isinstance(init, str) and init in ("accmag", "broad"))):
-            return []
-        why = motion_start(rec)
-        if not why:
-            return []
-        return [f"{rec.name}: starts in motion ({why}), so the {init or 'accmag'} start orientation is wrong; "
-                "for scoring set `init: truth` (objective.fixed) or skip the start with `objective.warmup_s` "
-                "(e.g. 2.0)"]
 
     # --- search space ------------------------------------------------------------------------
     def default_space(self) -> Space:
@@ -344,41 +209,6 @@ class FilterObjective:
                           if p.name in self.fixed else p)
         return Space(params)
 
-    # --- data ---------------------------------------------------------------------------------
-    def _load(self, specs: list) -> list[Recording]:
-        from objectives.attitude.data.loaders import load_recordings
-
-        base = Path(self.base_dir)
-        out: list[Recording] = []
-        for spec in specs:
-            if isinstance(spec, tuple) and spec[0] == "subset":  # a cross-validation fold: these recordings
-                _, items, names = spec
-                out += [r for r in self._load(list(items)) if r.name in names]
-            elif isinstance(spec, tuple):  # k-fold: round-robin assignment of the listed recordings
-                which, items, k, fold = spec
-                recs = [r for s in items for r in load_recordings(s, base)]
-                out += [r for i, r in enumerate(recs) if (i % k == fold) == (which == "kfold-test")]
-            else:
-                out += load_recordings(spec, base)
-        return out
-
-    def recordings(self, split: Split = "train") -> tuple[Recording, ...]:
-        """The recordings of ``split``, loaded on first use (see :class:`~objectives.attitude.prepared.DataSplit`)."""
-        recs = self._data.get(check_split(split))
-        if recs is None:
-            recs = tuple(self._load(self.train_specs if split == "train" else self.test_specs))
-            self._data = self._data.with_split(split, recs)
-        return recs
-
-    def prepare(self, split: Split = "train") -> Prepared:
-        """What every evaluation on ``split`` reuses, computed on the split's first evaluation and kept
-        (:func:`objectives.attitude.prepared.prepare`: recordings, groups, disturbance inputs). One split at a
-        time, not both at once: a worker that tunes never scores the held-out split, so never loads it."""
-        split = check_split(split)
-        if split not in self._prepared:
-            self._prepared[split] = prepare(self, split)
-        return self._prepared[split]
-
     # --- scoring ------------------------------------------------------------------------------
     def check_params(self, params: Mapping[str, Any]) -> None:
         """The filter's own validation of ``params`` (with ``fixed``), nothing run (preflight's bound check)."""
@@ -393,12 +223,6 @@ class FilterObjective:
         if callable(getattr(flt, "disturbances", None)):  # fuzzy inputs depend only on fixed window options
             return flt.run_detailed(rec, self.q0, disturbances=self.prepare(idx[0]).disturbances(flt, idx[1]))
         return flt.run_detailed(rec, self.q0)
-
-    def _mask(self, rec: Recording) -> np.ndarray:
-        mask = rec.motion.copy()
-        if self.warmup_s > 0:
-            mask[: int(round(self.warmup_s / rec.dt))] = False
-        return mask
 
     def score(self, params: Mapping[str, Any], split: Split = "train", keep_outputs: bool = False,
               outputs_limit: int | None = None, filter_override: Any = None) -> Score:
@@ -520,71 +344,15 @@ class FilterObjective:
             return Evaluation(s.fitness + pen, metrics)
         return Evaluation(s.fitness, metrics)
 
-    # --- cross-validation (tuner cv) -----------------------------------------------------------------
-    def cv_folds(self, k: int | None = None) -> list[tuple[str, FilterObjective, FilterObjective]]:
-        """Folds over the objective's tuning recordings: ``(name, tune on, held out)``.
-
-        ``test:`` recordings are never pooled into the folds: they keep their own held-out score, which
-        the engine reports next to the CV score (:func:`tuner.cv.cross_validate`).
-
-        Without ``k``, recordings that are all BROAD trials (a ``trials.json`` beside them) are grouped by
-        BROAD's level-2 motion/disturbance group and each group is held out once (leave-one-group-out);
-        otherwise, or with ``k``, recordings are assigned round-robin to ``k`` folds (default ``min(5, n)``).
-        The tuning side keeps the objective's metric, options and prior; the held-out side keeps the metric
-        without the aggregation options (each held-out recording counts once, as in the plain metric), and
-        the engine scores it with ``score`` (no prior).
-        """
-        from objectives.attitude.objective_options import recording_groups
-        from objectives.attitude.trials import check_unique_names, kfold_folds, logo_folds
-
-        recs = list(self.recordings("train"))
-        names = [r.name for r in recs]
-        check_unique_names(recs, "objective.data")
-        if len(recs) < 2:
-            raise ValueError(f"objective.data{'.train' if self.test_specs else ''}: cross-validation needs >= 2 "
-                             f"tuning recordings, got {len(recs)} (test recordings are never pooled into folds)")
-        groups: dict[str, str] | None = None
-        if k is None:
-            try:
-                groups = recording_groups(recs, "broad")
-            except ValueError:
-                groups = None
-        if groups is not None and len(set(groups.values())) >= 2:
-            folds = logo_folds(names, groups)
-        else:
-            folds = kfold_folds(names, min(5, len(recs)) if k is None else int(k))
-        parts = [(f.name, list(f.test)) for f in folds]
-        specs = list(self.train_specs)
-        plain = {k: v for k, v in self.metric_options.items() if k not in AGG_KEYS}
-        by_name = dict(zip(names, recs))
-        out = []
-        for fname, held in parts:
-            rest = [n for n in names if n not in held]
-            sides = []
-            for keep, opts in ((rest, dict(self.metric_options)), (held, plain)):
-                obj = FilterObjective(self.filter, [("subset", specs, tuple(keep))], [], dict(self.fixed),
-                                      self.metric, opts, self.q0, self.warmup_s,
-                                      dict(self.report), self.base_dir, dict(self.prior))
-                sides.append(obj.with_recordings(train=[by_name[n] for n in keep]))
-            out.append((fname, sides[0], sides[1]))
-        return out
-
-    def deployment(self, params: Mapping[str, Any]) -> Deployment:
-        """The complete tuned filter: every value, scoring-only settings apart (objectives.attitude.deployment)."""
-        return _deployment.filter_deployment(self, params)
-
-    def build(self, params: Mapping[str, Any]):
-        """The deployed filter instance of ``params`` (``.run(gyr, acc, mag, rate_hz=...)``, ``.stream()``)."""
-        return _deployment.filter_build(self, params)
-
     export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
     verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
     export_formats = _ros_export.export_formats  # the filter's own formats: its ROS node's parameter file
     export_as = _ros_export.export_as  # tuner export --format ros2-params | ros1-params
 
-    # --- after the run ------------------------------------------------------------------------
-    def finalize(self, run_dir: Path, best: Mapping[str, Any]) -> dict[str, Any]:
-        """Train and test scores of the best parameters, a summary table and report figures."""
-        from objectives.attitude.report import filter_report
+    def fingerprint(self) -> dict[str, Any]:
+        """The tuning data's sensor statistics (:mod:`objectives.attitude.fingerprint`), stored by every run."""
+        return _fingerprint.fingerprint(self.recordings("train"))
 
-        return filter_report(self, Path(run_dir), dict(best))
+    def compare_fingerprint(self, stored: Mapping[str, Any] | None) -> str | None:
+        """One warning line when this objective's data differs from ``stored`` beyond the thresholds."""
+        return _fingerprint.compare(stored, self.fingerprint())

@@ -103,9 +103,9 @@ class ClosedLoopObjective:
 
     @property
     def defaults(self) -> dict[str, Any]:
-        """Initial parameter values (the declaration's defaults, thesis Table 2.7 for the pendulum) with
-        ``fixed`` applied."""
-        return self.decl.validate(self.fixed)
+        """Initial parameter values (the declaration's defaults, thesis Table 2.7 for the pendulum; a tuning
+        rule's PID with ``init:``) with ``fixed`` applied."""
+        return self.decl.validate({**self.loop.start_values(), **self.fixed})
 
     def default_space(self) -> Space:
         """The controller's default space with the ``fixed`` values pinned."""
@@ -115,6 +115,11 @@ class ClosedLoopObjective:
     def default_params(self) -> dict[str, Any]:
         """:attr:`defaults` (the engine's name for the untuned values)."""
         return self.defaults
+
+    def start_params(self) -> dict[str, Any] | None:
+        """Where the search starts: the ``init:`` rule's PID (:mod:`objectives.control.plants.start`), or None
+        (the optimiser's own start)."""
+        return self.defaults if self.loop.start_values() else None
 
     def parameter_names(self) -> list[str]:
         """Every parameter of the controller (searched or fixed)."""

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from objectives.attitude.data.synthetic import synthetic
-from objectives.attitude.filters._cf_robust import cf_robust_kernel, robust_states
-from objectives.attitude.filters.complementary import CCF, _cf_kernel, euler_zyx_from_quat
+from objectives.attitude.filters.complementary import CCF, euler_zyx_from_quat
+from objectives.attitude.filters.complementary.kernel import cf_kernel, cf_robust_kernel, robust_states
 from objectives.attitude.filters.ekf import gravity_in_units
 from objectives.attitude.filters.stream import as_recording
 from tests.conftest import BROAD_DIR as BROAD
@@ -47,7 +47,7 @@ def test_robust_kernel_with_blocks_off_computes_the_plain_kernel(rec, opts):
     s1, s2 = np.array([0.1, -0.05, 0.3, 0.0, 0.0, 0.0]), np.array([0.1, -0.05, 0.3, 0.0, 0.0, 0.0])
     q1, e1, b1 = np.empty((rec.n, 4)), np.empty((rec.n, 3)), np.empty((rec.n, 3))
     q2, e2, b2, gm = np.empty((rec.n, 4)), np.empty((rec.n, 3)), np.empty((rec.n, 3)), np.empty(rec.n)
-    _cf_kernel(gyr, acc, mag, coef, s1, q1, e1, b1)
+    cf_kernel(gyr, acc, mag, coef, s1, q1, e1, b1)
     _, mcoef, rcoef, acoef = CCF(acc_lp_tau_s=3.0)._blocks(g, rec.dt)
     off = np.array([0.0, 0.0, 1.0])  # no rejection, no low-pass, mag_weight 1
     cf_robust_kernel(gyr, acc, mag, coef, off, mcoef, rcoef, acoef, s2, *robust_states(), q2, e2, b2, gm)

@@ -13,8 +13,8 @@ import pytest
 
 from objectives.attitude.data.broad import load_broad
 from objectives.attitude.data.synthetic import synthetic
-from objectives.attitude.filters._ekf_kernel import ekf_kernel, ekf_robust_kernel
 from objectives.attitude.filters.ekf import EKF, FAEKF, gravity_in_units
+from objectives.attitude.filters.ekf.kernel import ekf_kernel, ekf_robust_kernel
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
 from objectives.attitude.fused_errors import error_sums
 from tests.conftest import BROAD_DIR as BROAD

@@ -108,23 +108,38 @@ def test_configurations_without_a_kernel_return_none(flt, section):
 
 
 def test_the_kernel_is_declared_by_the_class_itself():
-    """Every declared ``batch_kernel`` is a kernel of the batch; a subclass (which may change ``_run``) is batched
-    only under a declaration of its own."""
+    """Every declared ``population`` is a :class:`Population` of the class's unit; a subclass (which may change
+    ``_run``) is batched only under a declaration of its own."""
     from types import SimpleNamespace
 
-    from objectives.attitude.batch import _KERNELS
+    from objectives.attitude.batch import Population
     from objectives.attitude.filters import FILTERS, get_filter
+    from objectives.attitude.filters.base import own
     from objectives.attitude.filters.mahony import Mahony
 
-    declared = {n: vars(get_filter(n)).get("batch_kernel") for n in FILTERS}
-    assert {k for k in declared.values() if k} == set(_KERNELS)
+    declared = {n: own(get_filter(n), "population") for n in FILTERS}
+    assert all(isinstance(p, Population) for p in declared.values() if p is not None)
+    assert {n for n, p in declared.items() if p} == {"madgwick", "mahony", "ekf", "faekf", "kf1d", "qukf", "qraukf"}
 
     class Tuned(Mahony):
         def _run(self, rec, q0):  # pragma: no cover - never run
             raise AssertionError
 
-    assert Tuned.batch_kernel == "mahony"
+    assert Tuned.population is Mahony.population  # inherited as an attribute, but not the subclass's own
     assert not batchable(SimpleNamespace(_cls=Tuned, metric="euler_rmse_mean"))
+
+
+def test_importing_every_filter_leaves_numba_typed_lists_unloaded():
+    """The typed-list templates, once loaded, make numba type every later kernel slower: the filter classes and
+    their population kernels import them only when a batch runs."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom objectives.attitude.filters import FILTERS, get_filter\n"
+            "for n in FILTERS: get_filter(n).population\n"
+            "import objectives.attitude.batch\nprint('numba.typed.typedlist' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
 
 
 def _history(rd):

@@ -9,11 +9,13 @@ import pytest
 from objectives.attitude.data.imu_model import simulate_imu
 from objectives.attitude.filters._bias_filter import initial_state
 from objectives.attitude.filters.madgwick import DECL as MG_DECL
-from objectives.attitude.filters.madgwick import Madgwick, _madgwick_kernel, madgwick_batch
-from objectives.attitude.filters.madgwick import _coef as mg_coef
+from objectives.attitude.filters.madgwick import Madgwick, madgwick_batch
+from objectives.attitude.filters.madgwick.kernel import coefficients as mg_coef
+from objectives.attitude.filters.madgwick.kernel import madgwick_kernel
 from objectives.attitude.filters.mahony import DECL as MH_DECL
-from objectives.attitude.filters.mahony import Mahony, _mahony_kernel, mahony_batch
-from objectives.attitude.filters.mahony import _coef as mh_coef
+from objectives.attitude.filters.mahony import Mahony, mahony_batch
+from objectives.attitude.filters.mahony.kernel import coefficients as mh_coef
+from objectives.attitude.filters.mahony.kernel import mahony_kernel
 from objectives.attitude.metrics import broad_error_angles
 from objectives.attitude.quaternion import qrot_batch
 from objectives.attitude.quaternion.conversions import quat_from_euler_zyx
@@ -88,8 +90,8 @@ def test_robust_kernels_with_an_undisturbed_field_are_the_papers_filters():
     taken at the start: from the arbitrary start Q0 the first field's dip is wrong by the start's tilt error.)"""
     r = _clean_rotation()
     learned = {"mag_rejection": True, "mag_ref_start": False}
-    cases = ((_madgwick_kernel, MG_DECL, mg_coef, {"beta": 0.1}, madgwick_batch(r.gyr, r.acc, r.mag, DT, Q0, 0.1)),
-             (_mahony_kernel, MH_DECL, mh_coef, {"Kp": 0.8, "Ki": 0.05}, mahony_batch(r.gyr, r.acc, r.mag, DT, Q0,
+    cases = ((madgwick_kernel, MG_DECL, mg_coef, {"beta": 0.1}, madgwick_batch(r.gyr, r.acc, r.mag, DT, Q0, 0.1)),
+             (mahony_kernel, MH_DECL, mh_coef, {"Kp": 0.8, "Ki": 0.05}, mahony_batch(r.gyr, r.acc, r.mag, DT, Q0,
                                                                                        0.8, 0.05)))
     for kernel, decl, coef, gains, paper in cases:
         state = initial_state(Q0, True)

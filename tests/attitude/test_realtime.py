@@ -8,8 +8,9 @@ import pytest
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import get_filter
-from objectives.attitude.filters._realtime_kernel import STATE_LEN, realtime_kernel
 from objectives.attitude.filters.realtime import Realtime
+from objectives.attitude.filters.realtime.coefficients import STATE_LEN
+from objectives.attitude.filters.realtime.kernel import realtime_kernel
 from objectives.attitude.metrics import broad_errors
 
 G_UP = np.array([0.0, 0.0, 9.81])

@@ -9,10 +9,10 @@ from scipy.spatial.transform import Rotation
 
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.data.synthetic import simulate_imu
-from objectives.attitude.filters import _ukf_kernels as kern
-from objectives.attitude.filters import _ukf_scalar as sc
 from objectives.attitude.filters import get_filter
 from objectives.attitude.filters.ukf import QRAUKF, QUKF, run_ukf
+from objectives.attitude.filters.ukf import kernel as kern
+from objectives.attitude.filters.ukf import scalar as sc
 from objectives.attitude.metrics import broad_errors
 from objectives.attitude.quaternion import to_frame
 from tests.reference import ukf_reference as ref

@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from objectives.attitude.filters import _ukf_mean as um
-from objectives.attitude.filters import _ukf_scalar as sc
+from objectives.attitude.filters.ukf import mean as um
 from objectives.attitude.filters.ukf import run_ukf
+from objectives.attitude.filters.ukf import scalar as sc
 from tests.attitude.test_ukf import PARAMS, _disturbed, run_against_reference
 from tests.reference import ukf_reference as ref
 

@@ -1,4 +1,4 @@
-"""QRAUKF robust blocks (objectives.attitude.filters._ukf_robust): off = the paper's filter bit for bit;
+"""QRAUKF robust blocks (objectives.attitude.filters.ukf.robust): off = the paper's filter bit for bit;
 on, each block does its job on a recording built to need it."""
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import pytest
 
 from objectives.attitude.data.bench6dof import bench6dof
 from objectives.attitude.filters import get_filter
-from objectives.attitude.filters._ukf_kernels import new_state, new_work, ukf_chunk
-from objectives.attitude.filters._ukf_robust import ukf_robust_run
 from objectives.attitude.filters.robust import acc_lp_coefficients, mag_dist_coefficients, rest_coefficients
+from objectives.attitude.filters.ukf.kernel import new_state, new_work, ukf_chunk
+from objectives.attitude.filters.ukf.robust import ukf_robust_run
 from objectives.attitude.fused_errors import error_sums
 from tests.attitude.robust_cases import rest_recording
 

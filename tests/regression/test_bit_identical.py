@@ -119,13 +119,13 @@ def test_an_edited_callee_reaches_its_cached_caller_under_the_package_locators(t
 def test_the_package_kernels_are_cached_under_the_package_locators():
     """Every cached kernel of the package, the cross-module population and closed-loop kernels among them,
     uses rule 3's locators (a kernel module imported before them would not; rule_violations reports it)."""
-    from objectives.attitude import batch
+    from objectives.attitude.filters.madgwick import population
     from objectives.control.plants.wmp import batch as control_batch
     from objectives.control.plants.wmp import model as wmp
     from objectives.jit import CACHE, package_digest
 
     assert CACHE
-    for k in (batch._bias_batch, control_batch._closed_loop_batch, wmp._simulate):
+    for k in (population._population, control_batch._closed_loop_batch, wmp._simulate):
         stamp = k._cache._impl.locator.get_source_stamp()
         assert type(k._cache._impl.locator).__name__.startswith("Package") and stamp[1] == package_digest()
 

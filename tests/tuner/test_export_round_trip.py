@@ -20,15 +20,16 @@ FILTERS = REGISTRY.catalog()["filters"][1]
 CONTROLLERS = REGISTRY.catalog()["controllers"][1]
 
 
-def _loop_names():
+def _names(family):
     from objectives.control.controllers import controllers_of
 
-    return set(controllers_of("siso"))
+    return set(controllers_of(family))
 
 
-#: controllers of the pendulum (plant: wmp) and of any plant (objectives/control/plants), tested apart
-WMP_CONTROLLERS = [n for n in CONTROLLERS if n not in _loop_names()]
-LOOP_CONTROLLERS = [n for n in CONTROLLERS if n in _loop_names()]
+#: controllers of the pendulum (plant: wmp) and of any plant (objectives/control/plants), tested apart; those of
+#: MuJoCo models take their parameters from the model (tests/control/test_mujoco_jobs.py exports each)
+WMP_CONTROLLERS = [n for n in CONTROLLERS if n in _names("wmp")]
+LOOP_CONTROLLERS = [n for n in CONTROLLERS if n in _names("siso")]
 #: a plant every loop controller runs on (two outputs for the cascade, states for LQR)
 LOOP_OBJECTIVE = {"kind": "closed_loop", "period_s": 0.05,
                   "plant": {"ss": {"A": [[0.0, 1.0], [-1.0, -2.0]], "B": [[0.0], [1.0]], "C": [[1.0, 0.0], [0.0, 1.0]]},

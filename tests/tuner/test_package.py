@@ -45,9 +45,17 @@ def test_every_filter_and_controller_gets_a_starter_that_builds_and_preflights(t
     names = starter_names()
     assert {"madgwick", "ekf", "kf1d", "vqf", "pid", "lqr", "protective_fuzzy"} <= set(names)
     monkeypatch.chdir(tmp_path)
+    from objectives.control.controllers import controllers_of
+
+    on_mujoco = set(controllers_of("mujoco"))
     for name in sorted(names):
         if name == "vqf":
             pytest.importorskip("vqf", reason="vqf is an optional extra")
+        if name in on_mujoco:  # its starter names the repository's example model, copied beside the job
+            pytest.importorskip("mujoco", reason="mujoco is an optional extra")
+            if not (tmp_path / "mujoco").exists():
+                shutil.copytree(Path(__file__).resolve().parents[2] / "configs" / "examples" / "mujoco",
+                                tmp_path / "mujoco")
         text = starter_text(name)
         raw = yaml.safe_load(text)
         assert text.startswith("# Starter job") and raw["name"] == name
@@ -206,6 +214,10 @@ def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
     names = zipfile.ZipFile(wheels[0]).namelist()
     assert "tuner/data/configs/demo.yaml" in names and "objectives/starters.py" in names
     assert "tuner/static/tuner_report.js" in names  # the interactive report pages
+    assert {"tuner/data/configs/examples/own_csv.yaml", "tuner/data/configs/examples/imu_columns.yaml",
+            "tuner/data/configs/examples/imu.csv"} <= set(names)  # the README's own-CSV example, whole
+    # the C export's shared parts and the filter units' ports
+    assert {"objectives/attitude/cexport/templates/common.c", "objectives/attitude/filters/ekf/port.c"} <= set(names)
     assert not any(n.startswith(("tests/", "configs/", "benchmarks/")) for n in names)
     env["PYTHONDONTWRITEBYTECODE"] = "1"  # the linked dependencies are read, never written
     venv = tmp_path / "venv"
@@ -265,3 +277,31 @@ def test_default_broad_dir_is_not_read_relative_to_an_installed_package(tmp_path
     monkeypatch.setattr(broad, "__file__", str(site / "objectives" / "attitude" / "data" / "broad.py"))
     monkeypatch.chdir(tmp_path)
     assert broad.default_broad_dir() == tmp_path.parent / "shared" / "data" / "broad"
+
+
+def test_demo_list_names_the_own_csv_example_and_it_builds(tmp_path):
+    """The README's own-CSV example ships whole (job, column map, recording, copies of configs/examples/),
+    ``tuner demo --list`` names it with its column map, and the packaged job builds and preflights."""
+    from tests.conftest import run_tuner
+    from tuner.config import load_config
+    from tuner.setup import build
+
+    for name in ("own_csv.yaml", "imu_columns.yaml", "imu.csv"):
+        assert (PACKAGED / "examples" / name).read_bytes() == (ROOT / "configs" / "examples" / name).read_bytes(), \
+            f"tuner/data/configs/examples/{name} differs from configs/examples/{name}: run `make package-configs`"
+    out = run_tuner("demo", "--list")
+    assert out.returncode == 0
+    line = next(x for x in out.stdout.splitlines() if x.startswith("your own CSV: own_csv"))
+    assert str(PACKAGED / "examples" / "imu_columns.yaml") in line
+    assert packaged_config("own_csv.yaml") == PACKAGED / "examples" / "own_csv.yaml"
+    objective, space = build(load_config(packaged_config("own_csv.yaml")))
+    assert objective.preflight() is not None and "beta" in space
+
+
+def test_init_without_a_name_lists_the_starters():
+    from tests.conftest import run_tuner
+
+    out = run_tuner("init")
+    assert out.returncode == 0
+    listed = {n.strip() for line in out.stdout.splitlines()[1:] for n in line.split(":", 1)[1].split(",")}
+    assert listed == set(starter_names())

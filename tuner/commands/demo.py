@@ -6,7 +6,7 @@ import argparse
 
 from tuner.commands import run as run_command
 from tuner.commands.common import UsageError
-from tuner.starter import StarterError, packaged_config, packaged_configs
+from tuner.starter import OWN_DATA_EXAMPLES, StarterError, packaged_config, packaged_configs
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -20,6 +20,10 @@ def run(a: argparse.Namespace) -> int:
         names = packaged_configs()
         print(f"packaged jobs ({packaged_config(names[0]).parent}):")
         print("  " + ", ".join(n.removesuffix(".yaml") for n in names))
+        for job, columns in OWN_DATA_EXAMPLES.items():  # the README's "Your own data" example
+            path = packaged_config(job)
+            print(f"your own CSV: {job.removesuffix('.yaml')} ({path}); its column map: {path.parent / columns}, "
+                  "copy both and point them at your file (`tuner describe csv`)")
         return 0
     try:
         path = packaged_config(a.job if a.job.endswith(".yaml") else f"{a.job}.yaml")

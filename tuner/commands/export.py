@@ -25,6 +25,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                     "headers be included in one file")
 
 
+def _verdict(run_dir: Path) -> str | None:
+    from tuner.rundir import RunDir
+    from tuner.verdict import defaults_verdict
+
+    return defaults_verdict(RunDir(run_dir).best().evaluation)
+
+
 def run(a: argparse.Namespace) -> int:
     run_dir = Path(a.run_dir)
     source = a.format in (C_SOURCE, *C_SOURCE_ALIASES)
@@ -35,6 +42,9 @@ def run(a: argparse.Namespace) -> int:
                          f"(got --format {a.format})")
     if a.prefix is not None and (not a.prefix.isidentifier() or not a.prefix.isascii()):
         raise UsageError(f"--prefix {a.prefix!r}: a C identifier ([A-Za-z_][A-Za-z0-9_]*)")
+    verdict = _verdict(run_dir)
+    if verdict:
+        print(f"warning: {verdict}", file=sys.stderr)
     if a.format not in FORMATS and not source:
         own = objective_formats(run_dir)
         if a.format not in own:

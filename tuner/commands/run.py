@@ -16,6 +16,7 @@ from tuner.run import RunResult
 from tuner.rundir import RunDir
 from tuner.spread import spread_lines
 from tuner.sweep import is_sweep_file
+from tuner.verdict import defaults_verdict
 
 DESCRIPTION = "Run a tuning job and store it in its own run directory."
 
@@ -46,6 +47,17 @@ def run(a: argparse.Namespace) -> int:
     return print_result(run_job(cfg, run_dir=a.run_dir, quiet=a.quiet, report=not a.no_report))
 
 
+def _stored_verdict(run_dir: Path) -> str | None:
+    """The verdict of the run's ``best.yaml`` evaluation (validation writes its scores there)."""
+    from tuner.rundir import RunDir
+
+    rd = RunDir(run_dir)
+    try:
+        return defaults_verdict(rd.best().evaluation) if rd.has_best() else None
+    except Exception:  # noqa: BLE001 - an unreadable best.yaml is reported where it is read, not here
+        return None
+
+
 def print_result(res: RunResult) -> int:
     """The end of ``run`` and ``resume``: status, best fitness and parameters, where the run is; the exit
     status (1 when the run did not finish or every evaluation failed)."""
@@ -57,6 +69,9 @@ def print_result(res: RunResult) -> int:
     if summary:
         print()
         print(summary)
+    verdict = _stored_verdict(res.run_dir)
+    if verdict:
+        print(f"warning: {verdict}")
     if res.repeats is not None:
         print()
         print("\n".join(spread_lines(res.repeats)))

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from tuner.commands.common import UsageError
 from tuner.export import verify_c
@@ -22,6 +23,8 @@ def run(a: argparse.Namespace) -> int:
         out = verify_c(a.run_dir, a.data, a.precision, ("-O2", "-ffast-math") if a.fast_math else ("-O2",))
     except (ToolError, FileNotFoundError) as exc:  # no compiler, or one that failed: one line naming it
         raise UsageError(str(exc)) from None
+    for w in out.get("warnings", []):
+        print(f"warning: {w}", file=sys.stderr)
     py, c = out["python"], out["c"]
     compiler = f" with {out['compiler']}" if out.get("compiler") else ""
     print(f"{out['name']} compiled{compiler} ({out['precision']}, {' '.join(out['flags'])}): "

@@ -18,10 +18,11 @@ default (the kernels then run the papers' algorithms, bit for bit):
 - ``acc_lp_tau_s`` (block c): the accelerometer low-passed in the earth frame replaces the raw one in the
   gravity correction.
 
-With a block on, the coefficient array is the filter's own padded to :data:`ROBUST_AT` followed by the
-flags and the blocks' coefficients (:func:`with_robust`), and the state is :data:`STATE_LEN` long (the
-blocks' states after q and bias, :func:`initial_state`); the shared per-sample prologue is
-:func:`robust_sample`.
+Layouts, declared once (:class:`~objectives.attitude.filters.layout.Layout`): the state :data:`S` (q and bias,
+then with a block on the blocks' states, :func:`initial_state`) and the blocks' part of the coefficient array
+:data:`RC`, which with a block on follows the filter's own coefficients (each unit's ``C``) padded to
+:data:`ROBUST_AT` (:func:`with_robust`); the shared per-sample prologue is :func:`robust_sample`. The units' C
+ports share their state members (:data:`C_MEMBERS`, sized from :data:`S`) and parts (:data:`C_PARTS`).
 
 Each filter keeps its own short loop over :func:`sample_inputs`: the loops differ in the update's gains
 and in where and how the bias output is written (Madgwick before its update, ``b + offset``; Mahony after
@@ -37,13 +38,18 @@ from typing import Any, ClassVar
 import numpy as np
 from numba import njit
 
+from objectives.attitude.cexport.port import ROBUST_MEMBERS, CMember
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import _scalar as sc
 from objectives.attitude.filters._scalar import read_unit
 from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
+from objectives.attitude.filters.layout import Layout
 from objectives.attitude.filters.robust import (
+    ACC_COEF,
     ACC_STATE,
+    MAG_COEF,
     MAG_STATE,
+    REST_COEF,
     REST_STATE,
     _acc_lp_update,
     _mag_dist_update,
@@ -59,22 +65,33 @@ from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_array
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
            "with_robust", "robust_coef", "initial_state", "bias_setup", "robust_sample", "sample_inputs", "robust_on",
-           "ROBUST_AT", "COEF_LEN", "STATE_LEN", "ROBUST_NAMES"]
+           "ROBUST_AT", "COEF_LEN", "STATE_LEN", "ROBUST_NAMES", "RC", "S", "C_PARTS", "C_MEMBERS"]
 
-# --- layouts of the robust blocks in the coefficient and state arrays ----------------------------------------
+# --- layouts: the state, and the robust blocks' part of the coefficient array -------------------------------
 #: index of the first robust coefficient (the filters' own coefficients fit before it)
 ROBUST_AT = 8
-_MC = ROBUST_AT + 4  # flags: mag_rejection, rest_bias, acc_lp, mag_ref_start
-_RC = _MC + 11  # block a: mag_dist_coefficients (11,)
-_AC = _RC + 7  # block b: rest_coefficients (7,)
-#: length of a coefficient array with the blocks (block c: acc_lp_coefficients (4,) last)
-COEF_LEN = _AC + 4
-_MS = 7  # state: q (4), bias (3), then block a, b, c states and 7 scratch values (q, low-passed acc)
-_RS = _MS + MAG_STATE
-_AS = _RS + REST_STATE
-_SCR = _AS + ACC_STATE
-#: length of the state array with the blocks
-STATE_LEN = _SCR + 7
+#: the robust blocks' part of the coefficient array, from :data:`ROBUST_AT` (:func:`with_robust`)
+RC = Layout("RC", (("FLAGS", 4, "mag_rejection, rest_bias, acc_lp, mag_ref_start (0/1)"),
+                   ("MAG", MAG_COEF, "block a: robust.mag_dist_coefficients"),
+                   ("REST", REST_COEF, "block b: robust.rest_coefficients"),
+                   ("ACC", ACC_COEF, "block c: robust.acc_lp_coefficients")), start=ROBUST_AT)
+#: length of a coefficient array with the blocks
+COEF_LEN = RC.LEN
+#: the state: quaternion and bias (all of it with the blocks off), then the blocks' states and scratch
+S = Layout("S", (("Q", 4, "sensor-to-earth quaternion, NWU"),
+                 ("BIAS", 3, "gyro bias (Madgwick: omega_b; Mahony: the integral I = -b), rad/s"),
+                 ("MAG", MAG_STATE, "block a: robust.mag_dist_state"),
+                 ("REST", REST_STATE, "block b: robust.rest_state"),
+                 ("ACC", ACC_STATE, "block c: robust.acc_lp_state"),
+                 ("SCRATCH", 7, "the previous quaternion and the low-passed acc (block c)")))
+#: length of the state array with the blocks (:data:`S`; the quaternion and bias alone: ``S.MAG``)
+STATE_LEN = S.LEN
+#: the C ports' shared parts: the blocks, then the prologue of the quaternion-and-bias filters
+C_PARTS = ("robust.c", "bias_prologue.c")
+#: the C ports' state (``bias_prologue.c`` and ``robust.c`` read and write it), sized by :data:`S`
+C_MEMBERS = (CMember("real", "q", (S.field("Q").size,), "sensor-to-earth quaternion, working frame"),
+             CMember("real", "b", (S.field("BIAS").size,), S.field("BIAS").doc),
+             *ROBUST_MEMBERS)
 #: the options of the robust blocks in Madgwick and Mahony
 ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_norm_th", "mag_dip_th_deg", "rest_bias",
                 "rest_bias_tau_s", "mag_ref_start")
@@ -109,25 +126,26 @@ def with_robust(coef: np.ndarray, v: dict, dt: float) -> np.ndarray:
         return coef
     out = np.zeros(COEF_LEN)
     out[:coef.shape[0]] = coef
-    out[ROBUST_AT:_MC] = (float(rej), float(rest), float(alp), float(bool(v["mag_ref_start"])))
-    out[_MC:_RC] = mag_dist_coefficients(dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
-                                         max_rejection_s=float(v["mag_max_rejection_s"]))
-    out[_RC:_AC] = rest_coefficients(dt, th_acc=_REST_TH_ACC, tau_bias_s=float(v["rest_bias_tau_s"]))
-    out[_AC:] = acc_lp_coefficients(dt, tau_acc_s=float(v["acc_lp_tau_s"]) if alp else 0.0)
+    out[RC.START:] = RC.pack(
+        FLAGS=(float(rej), float(rest), float(alp), float(bool(v["mag_ref_start"]))),
+        MAG=mag_dist_coefficients(dt, norm_th=float(v["mag_norm_th"]), dip_th_deg=float(v["mag_dip_th_deg"]),
+                                  max_rejection_s=float(v["mag_max_rejection_s"])),
+        REST=rest_coefficients(dt, th_acc=_REST_TH_ACC, tau_bias_s=float(v["rest_bias_tau_s"])),
+        ACC=acc_lp_coefficients(dt, tau_acc_s=float(v["acc_lp_tau_s"]) if alp else 0.0))
     return out
 
 
 def robust_coef(coef: np.ndarray) -> bool:
     """True when the coefficient array switches a robust block on (the kernel then needs :data:`STATE_LEN`)."""
-    return coef.shape[0] >= COEF_LEN and bool(np.any(coef[ROBUST_AT:_MC] != 0.0))
+    return coef.shape[0] >= COEF_LEN and bool(np.any(coef[RC.FLAGS:RC.MAG] != 0.0))
 
 
 def initial_state(q0: np.ndarray, robust: bool) -> np.ndarray:
     """The kernels' start state: q0 and zero bias (7,), followed by the blocks' initial states when ``robust``."""
-    state = np.zeros(STATE_LEN if robust else 7)
-    state[:4] = q0
+    state = np.zeros(STATE_LEN if robust else S.MAG)
+    state[S.Q:S.Q + 4] = q0
     if robust:
-        state[_MS:_RS] = mag_dist_state()
+        state[S.MAG:S.REST] = mag_dist_state()
     return state
 
 
@@ -140,8 +158,8 @@ def bias_setup(coef: np.ndarray, q0: np.ndarray) -> KernelSetup:
 @njit(cache=True, inline="always")
 def robust_on(coef, state):
     """The kernels' switch: a robust block is on (``ValueError`` when the state has no room for the blocks)."""
-    on = coef.shape[0] >= COEF_LEN and (coef[ROBUST_AT] != 0.0 or coef[ROBUST_AT + 1] != 0.0
-                                        or coef[ROBUST_AT + 2] != 0.0)
+    on = coef.shape[0] >= COEF_LEN and (coef[RC.FLAGS] != 0.0 or coef[RC.FLAGS + 1] != 0.0
+                                        or coef[RC.FLAGS + 2] != 0.0)
     if on and state.shape[0] < STATE_LEN:
         raise ValueError("robust blocks on: the state array needs STATE_LEN entries (initial_state)")
     return on
@@ -156,21 +174,21 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
     ``acc_lp`` is on; ``acc_ok`` as :func:`~objectives.attitude.filters._scalar.read_unit`) and the
     magnetometer gain (1: use fully; 0: rejected; with ``mag_ref_start`` the first field is block a's
     reference, else the gain is 1 until block a has learned one, as in the EKF).
-    The blocks' states live in ``state[7:]`` and are updated in place.
+    The blocks' states live in ``state[S.MAG:]`` and are updated in place.
     """
-    rej, rest, alp = coef[ROBUST_AT] != 0.0, coef[ROBUST_AT + 1] != 0.0, coef[ROBUST_AT + 2] != 0.0
+    rej, rest, alp = coef[RC.FLAGS] != 0.0, coef[RC.FLAGS + 1] != 0.0, coef[RC.FLAGS + 2] != 0.0
     gx, gy, gz, g_ok = sc.read_vec(gyr, i)
     ax, ay, az, a_ok = sc.unit(acc[i, 0], acc[i, 1], acc[i, 2])
-    rs = state[_RS:_AS]
+    rs = state[S.REST:S.ACC]
     if (rej or rest) and g_ok and a_ok:
-        _rest_update(rs, coef[_RC:_AC], gx, gy, gz, ax, ay, az)
+        _rest_update(rs, coef[RC.REST:RC.ACC], gx, gy, gz, ax, ay, az)
     bx, by, bz = 0.0, 0.0, 0.0
     if rest:
         bx, by, bz = rs[8], rs[9], rs[10]
     if alp and a_ok:
-        scr = state[_SCR:]
+        scr = state[S.SCRATCH:]
         scr[0], scr[1], scr[2], scr[3] = q0, q1, q2, q3
-        _acc_lp_update(state[_AS:_SCR], coef[_AC:COEF_LEN], scr[:4], ax, ay, az, scr[4:7])
+        _acc_lp_update(state[S.ACC:S.SCRATCH], coef[RC.ACC:RC.LEN], scr[:4], ax, ay, az, scr[4:7])
         ax, ay, az, a_ok = sc.unit(scr[4], scr[5], scr[6])
     gm = 1.0
     if rej and use_mag:
@@ -178,10 +196,10 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
         if m_ok:
             hx, hy, hz = sc.rotate_sensor_to_earth(q0, q1, q2, q3, mx, my, mz)  # NWU: z up, as block a expects
             gl = math.sqrt(rs[0] * rs[0] + rs[1] * rs[1] + rs[2] * rs[2])
-            ms = state[_MS:_RS]
-            g = _mag_dist_update(ms, coef[_MC:_RC], hx, hy, hz, gl)
-            if ms[0] == 0.0 and coef[ROBUST_AT + 3] != 0.0:  # mag_ref_start: the first field is the reference
-                ms[0], ms[1], ms[2], ms[6] = ms[8], ms[9], coef[_MC + 5], 0.0
+            ms = state[S.MAG:S.REST]
+            g = _mag_dist_update(ms, coef[RC.MAG:RC.REST], hx, hy, hz, gl)
+            if ms[0] == 0.0 and coef[RC.FLAGS + 3] != 0.0:  # mag_ref_start: the first field is the reference
+                ms[0], ms[1], ms[2], ms[6] = ms[8], ms[9], coef[RC.MAG + 5], 0.0
                 g = 1.0
             gm = 1.0 if ms[0] == 0.0 else g
     return bx, by, bz, ax, ay, az, a_ok, gm
@@ -254,7 +272,7 @@ class BiasKernelFilter(AttitudeFilter):
     what :meth:`kernel_setup` builds the coefficients with) and ``bias_param``, the parameter whose positive
     value turns the bias estimate on::
 
-        class Madgwick(BiasKernelFilter, kernel=_madgwick_kernel, coef=_coef, bias_param="zeta"): ...
+        class Madgwick(BiasKernelFilter, kernel=madgwick_kernel, coef=coefficients, bias_param="zeta"): ...
     """
 
     working_frame = "NWU"

@@ -17,9 +17,13 @@ Output quaternions are sensor-to-earth ``(w, x, y, z)`` in the recording's frame
 A filter whose numba kernel takes a coefficient array and a start state builds both in one method,
 :meth:`AttitudeFilter.kernel_setup` (a :class:`KernelSetup`, with a kernel's further start arrays in its
 ``extra``), which its serial ``_run``, its ``stream()`` and the population batch (:mod:`objectives.attitude.batch`)
-all call (every filter with a numba kernel; VQF, which wraps an external package, is outside);
-``batch_kernel``, set on the class itself, names the population kernel that runs the class (None: evaluated
-serially only).
+all call (every filter with a numba kernel; VQF, which wraps an external package, is outside).
+
+A class declares what it offers beyond running, each in its own namespace (a subclass, which may change
+``_run``, declares its own): ``population``, the :class:`~objectives.attitude.batch.Population` that evaluates
+candidates of the class in one numba kernel (``backend: threads``; None: serially only), and ``c_port``, the
+:class:`~objectives.attitude.cexport.port.CPort` of its C99 version (None: no C export). Both live in the
+filter's unit, beside its kernel; :func:`own` reads them.
 
 Every filter runs on a :class:`Recording` or on plain arrays (``run(gyr, acc, mag, rate_hz=...)``) and
 offers a per-sample :meth:`AttitudeFilter.stream`; see :mod:`objectives.attitude.filters.stream`.
@@ -34,13 +38,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from objectives.attitude import fingerprint as _fingerprint
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.start import initial_quaternion, quat_from_acc_mag, quat_from_rotmat
 from objectives.params import Declared, Param, ParamSet
 from tuner.space import Real, Space
 
 __all__ = ["AttitudeFilter", "FilterResult", "KernelSetup", "G_SI", "INIT", "quat_from_rotmat", "quat_from_acc_mag",
-           "initial_quaternion"]
+           "initial_quaternion", "gravity_in_units", "own"]
 
 #: the start option every declared filter gets (YAML ``init: broad`` in ``fixed`` or a ``--params`` file)
 INIT = Param("init", "auto", choices=("auto", "accmag", "truth", "broad"),
@@ -51,6 +56,24 @@ INIT = Param("init", "auto", choices=("auto", "accmag", "truth", "broad"),
 
 #: standard gravity, m/s^2: ``g_ref`` of :meth:`AttitudeFilter.kernel_setup` for an accelerometer in m/s^2
 G_SI = 9.80665
+
+
+def gravity_in_units(rec: Recording) -> float:
+    """Standard gravity in the recording's accelerometer unit (``m/s^2`` or ``g``); else the median
+    ``|acc|`` of the recording (a recording at rest most of the time reads g): the ``g_ref`` a kernel that
+    compares ``|acc|`` with g gets from :meth:`AttitudeFilter.kernel_setup`."""
+    unit = str(rec.units.get("acc", "")).replace(" ", "").lower()
+    if unit in ("m/s^2", "m/s2", "m/s**2", "ms^-2"):
+        return G_SI
+    if unit == "g":
+        return 1.0
+    return float(np.median(np.linalg.norm(rec.acc, axis=1)))
+
+
+def own(cls: type, attr: str) -> Any:
+    """``cls``'s own ``attr`` (``population``, ``c_port``), not one inherited: a subclass may change what its
+    kernel computes, so it offers a population kernel or a C port only by declaring its own."""
+    return vars(cls).get(attr)
 
 
 @dataclass(frozen=True)
@@ -97,9 +120,11 @@ class AttitudeFilter(Declared):
     #: earth frame the kernel works in; the output is converted to the recording's frame
     working_frame: ClassVar[str] = "ENU"
     needs_mag: ClassVar[bool] = False
-    #: the population kernel of :mod:`objectives.attitude.batch` that runs this class (None: serial only);
-    #: read from the class's own namespace, so a subclass (which may change ``_run``) declares its own
-    batch_kernel: ClassVar[str | None] = None
+    #: the population kernel that runs this class (:class:`objectives.attitude.batch.Population`; None: serial
+    #: only); read from the class's own namespace (:func:`own`), so a subclass declares its own
+    population: ClassVar[Any] = None
+    #: the C port (:class:`objectives.attitude.cexport.port.CPort`; None: none); read as ``population``
+    c_port: ClassVar[Any] = None
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -152,7 +177,7 @@ class AttitudeFilter(Declared):
             raise ValueError(f"{run_dir}: the run tuned a {dep.kind} objective ({dep.name!r}), not a filter")
         target = cls
         if cls is AttitudeFilter or not cls.name:
-            from objectives.attitude.filters import get_filter
+            from objectives.attitude.filters.registry import get_filter
 
             target = get_filter(dep.name)
         elif dep.name and dep.name != cls.name:
@@ -162,7 +187,9 @@ class AttitudeFilter(Declared):
         if unknown:  # a value the filter would drop: the filter built would not be the one recorded
             raise ValueError(f"{run_dir}: deployment.values.{unknown[0]}: not a parameter of {target.name}; "
                              f"allowed: {', '.join(sorted(target.defaults))}")
-        return target(**{**dep.values, **overrides})
+        flt = target(**{**dep.values, **overrides})
+        flt.tuned_on = _fingerprint.stored(run_dir)  # new data is compared with it (run(), stream())
+        return flt
 
     # --- running ----------------------------------------------------------------------------
     def run(self, data: Recording | Any, acc: Any = None, mag: Any = None, *, rate_hz: float | None = None,
@@ -192,6 +219,7 @@ class AttitudeFilter(Declared):
         from objectives.attitude.filters.stream import as_recording
 
         rec = as_recording(self.name, data, acc, mag, rate_hz, dt, frame)
+        _fingerprint.warn_filter(self, rec)
         flt = self.imu_only() if not isinstance(data, Recording) and mag is None else self
         return flt.run_detailed(rec, q0, disturbances).quat
 
@@ -202,7 +230,9 @@ class AttitudeFilter(Declared):
             return self
         if "use_mag" not in self.values:
             raise ValueError(f"{self.name}: needs a magnetometer (no IMU-only version): pass mag= as an (N, 3) array")
-        return type(self)(**{**self.values, "use_mag": False})
+        other = type(self)(**{**self.values, "use_mag": False})
+        other.tuned_on = getattr(self, "tuned_on", None)
+        return other
 
     def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None,
                frame: str = "ENU") -> Any:
@@ -264,7 +294,7 @@ class AttitudeFilter(Declared):
         frame : str
             The recording's earth frame (the 1-D filters' tilt angle follows its convention).
         g_ref : float
-            Standard gravity in the accelerometer's unit (:func:`~objectives.attitude.filters.ekf.gravity_in_units`);
+            Standard gravity in the accelerometer's unit (:func:`gravity_in_units`);
             :data:`G_SI` for m/s^2, as :meth:`run` on arrays and :meth:`stream` take it.
 
         Filters without such a kernel raise ``NotImplementedError``.

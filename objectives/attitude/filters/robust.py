@@ -59,7 +59,8 @@ from numba import njit
 
 __all__ = [
     "lp_gain", "mag_dist_coefficients", "mag_dist_state", "rest_coefficients", "rest_state",
-    "acc_lp_coefficients", "acc_lp_state", "MAG_STATE", "REST_STATE", "ACC_STATE",
+    "acc_lp_coefficients", "acc_lp_state", "MAG_STATE", "REST_STATE", "ACC_STATE", "MAG_COEF", "REST_COEF",
+    "ACC_COEF",
 ]
 
 # --- layouts --------------------------------------------------------------------------------------
@@ -70,6 +71,11 @@ MAG_STATE = 11
 REST_STATE = 12
 #: acc state: acc_lp_earth[3], n (samples seen)
 ACC_STATE = 4
+#: lengths of the blocks' coefficient arrays (:func:`mag_dist_coefficients`, :func:`rest_coefficients`,
+#: :func:`acc_lp_coefficients`)
+MAG_COEF = 11
+REST_COEF = 7
+ACC_COEF = 4
 
 
 def lp_gain(tau_s: float, dt_s: float) -> float:

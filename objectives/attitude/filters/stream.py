@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude import fingerprint as _fingerprint
 from objectives.attitude.data.recording import Recording
 
 __all__ = ["as_recording", "resolve_dt", "StreamBase", "StateStream", "BufferedStream"]
@@ -92,6 +93,7 @@ class StreamBase:
 
         self.filter = flt
         self.dt = resolve_dt(flt.name, rate_hz, dt)
+        _fingerprint.warn_filter(flt, dt=self.dt)  # the rate only: the sensor's statistics need samples
         if frame not in FRAMES:
             raise ValueError(f"{flt.name}: frame must be one of {FRAMES}, got {frame!r}")
         if isinstance(q0, str) and q0 == "truth":

@@ -135,24 +135,28 @@ class DiscreteLTI:
         """None by name: an LTI model is perturbed in its spec (coefficients, matrix entries, delay)."""
         return {}
 
+    def _resolvent_b(self, omega_rad_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``z = e^{j w h}`` and ``(zI - Ad)^-1 Bd[:, 0]`` at every ``w``, shape (len(w), n) (one batched solve)."""
+        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float).reshape(-1) * self.period_s)
+        n = self.n_states
+        if n == 0:
+            return z, np.zeros((z.size, 0), dtype=complex)
+        m = z[:, None, None] * np.eye(n)[None] - self.Ad[None]
+        rhs = np.broadcast_to(self.Bd[:, 0].astype(complex), (z.size, n))[..., None]
+        return z, np.linalg.solve(m, rhs)[..., 0]
+
     def frequency_response(self, omega_rad_s: np.ndarray) -> np.ndarray:
         """``P(e^{j w h})`` of every output to input 0 with the delay, shape (len(w), p) complex.
 
         The feedthrough is delayed by one period as in the kernel."""
-        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float) * self.period_s)
-        n = self.n_states
-        out = np.empty((z.size, self.n_outputs), dtype=complex)
-        eye = np.eye(n)
-        for i, zi in enumerate(z):
-            g = self.Cd @ np.linalg.solve(zi * eye - self.Ad, self.Bd[:, 0]) if n else np.zeros(self.n_outputs)
-            out[i] = (g + self.Dd[:, 0] / zi) * zi ** (-self.delay_n)
-        return out
+        z, xb = self._resolvent_b(omega_rad_s)
+        g = xb @ self.Cd.T.astype(complex)
+        return (g + self.Dd[:, 0][None, :] / z[:, None]) * (z ** (-self.delay_n))[:, None]
 
     def state_frequency_response(self, omega_rad_s: np.ndarray) -> np.ndarray:
         """``(zI - Ad)^-1 Bd[:, 0] z^-d`` at ``z = e^{j w h}``, shape (len(w), n) complex."""
-        z = np.exp(1j * np.asarray(omega_rad_s, dtype=float) * self.period_s)
-        eye = np.eye(self.n_states)
-        return np.array([np.linalg.solve(zi * eye - self.Ad, self.Bd[:, 0]) * zi ** (-self.delay_n) for zi in z])
+        z, xb = self._resolvent_b(omega_rad_s)
+        return xb * (z ** (-self.delay_n))[:, None]
 
 
 class SteppedPlant:

@@ -99,6 +99,12 @@ class LoopController(Declared):
     def tables(cls, cp: np.ndarray, plant: Any) -> dict[str, dict[str, Any]]:
         raise NotImplementedError
 
+    @classmethod
+    def from_ideal(cls, K: float, Ti: float, Td: float) -> dict[str, float] | None:
+        """The controller's values of the ideal-form PID ``(K, Ti, Td)`` (a tuning rule's result, ``init:``);
+        None for a controller that is not one PID."""
+        return None
+
 
 def _pid_tables(cp: np.ndarray, h: float, prefix: str = "") -> dict[str, dict[str, Any]]:
     """A PID block's gains and difference-equation coefficients, for ``tuner export``."""
@@ -152,6 +158,10 @@ class PID2DOF(LoopController):
     def tables(cls, cp, plant):
         return _pid_tables(cp, plant.period_s)
 
+    @classmethod
+    def from_ideal(cls, K, Ti, Td):
+        return {"K": float(K), "Ti_s": float(Ti), "Td_s": float(Td)}
+
 
 class PID2DOFParallel(PID2DOF):
     """Two-degree-of-freedom PID in parallel form ``Kp, Ki, Kd`` (converted to the ideal form)."""
@@ -169,6 +179,10 @@ class PID2DOFParallel(PID2DOF):
         kp = float(v["Kp"])
         ti = math.inf if float(v["Ki"]) == 0 else kp / float(v["Ki"])
         return pid_coeffs(kp, ti, float(v["Kd"]) / kp, plant.period_s, v)
+
+    @classmethod
+    def from_ideal(cls, K, Ti, Td):
+        return {"Kp": float(K), "Ki": 0.0 if math.isinf(Ti) else float(K) / float(Ti), "Kd": float(K) * float(Td)}
 
 
 class PIDCascade(LoopController):

@@ -19,6 +19,7 @@ scenarios, actuator and sensor :mod:`.scenario`'s; cost and aggregation :mod:`.c
     cost: {iae: 1.0}
     aggregate: {scenarios: mean, models: worst}
     requirements: {max_overshoot_pct: 10, max_ms: 1.6}
+    init: {rule: amigo, fit: area}  # optional: start from a tuning rule's PID (:mod:`.start`)
     uncertainty: {parameters: {"tf.num[0]": {rel: 0.2}}, tune: {samples: 4}, validate: {samples: 200}}
 
 A candidate is scored on every (model, scenario) pair of its tuning set (the nominal plant alone
@@ -58,6 +59,7 @@ from objectives.control.plants.requirements import (
     violation,
 )
 from objectives.control.plants.scenario import cases_from_config, realism_from_spec
+from objectives.control.plants.start import Start, init_from_spec, rule_start
 from objectives.control.plants.uncertainty import check_largest_delay, draw_models, uncertainty_from_spec
 from tuner.objective import PENALTY, Evaluation
 from tuner.sizes import MAX_LOOP_SAMPLES, check_count
@@ -66,7 +68,7 @@ __all__ = ["SISOLoop", "DeployedController", "Scored"]
 
 #: the loop's settings (the objective's keys besides kind, plant, controller, fixed)
 _SETTINGS = ("period_s", "scenario", "scenarios", "actuator", "sensor", "cost", "aggregate", "requirements",
-             "uncertainty")
+             "uncertainty", "init")
 _MAPPINGS = ("scenario", "actuator", "sensor", "requirements", "uncertainty")
 #: each requirement metric's scope (which scenarios define it)
 _SCOPE = {r.metric: r.scope for r in REQUIREMENTS.values()}
@@ -116,7 +118,7 @@ class SISOLoop:
     def __init__(self, kind: PlantKind, spec: Any, cls: Any, fixed: dict[str, Any], base_dir: Any = None,
                  period_s: Any = 0.01, scenario: Any = None, scenarios: Any = None, actuator: Any = None,
                  sensor: Any = None, cost: Any = None, aggregate: Any = None, requirements: Any = None,
-                 uncertainty: Any = None) -> None:
+                 uncertainty: Any = None, init: Any = None) -> None:
         p = period_s
         if isinstance(p, bool) or not isinstance(p, (int, float)) or not (math.isfinite(p) and p > 0):
             raise ValueError(f"objective.period_s: the controller period must be a number > 0 s, got {p!r}")
@@ -150,6 +152,14 @@ class SISOLoop:
                 if not self.linear:
                     raise ValueError(f"objective.requirements.{k}: margins and Ms need an LTI plant (tf, zpk, ss)")
                 self._margin_req[k] = check_limit(k, v, "objective.requirements")
+        self.init = init
+        self._init = init_from_spec(init, self._margin_req.get("max_ms"))
+        self._start: Start | None = None
+        if self._init is not None:
+            if cls.from_ideal(1.0, 1.0, 0.0) is None:
+                raise ValueError(f"objective.init: a rule gives one PID (pid2dof, pid2dof_par), not a {cls.name}")
+            if self._init["max_ms"] is not None and not self.linear:
+                raise ValueError("objective.init.max_ms: Ms needs an LTI plant (tf, zpk, ss); leave max_ms out")
         n_meas = self.plant.n_states if cls.name == "lqr_sf" else self.plant.n_outputs
         self.cases = cases_from_config(scenario, scenarios, self.period, n_meas, self._real, self._cost, job_req)
         self._weights = np.array([c.weight for c in self.cases])
@@ -187,7 +197,7 @@ class SISOLoop:
             raise ValueError(f"objective.cost: expected a mapping, got {section['cost']!r}")
         out = {"period_s": section.get("period_s", 0.01),
                **{k: dict(section.get(k) or {}) for k in ("scenario", "actuator", "sensor", "cost", "requirements")}}
-        for k in ("scenarios", "aggregate", "uncertainty"):
+        for k in ("scenarios", "aggregate", "uncertainty", "init"):
             if section.get(k) is not None:
                 out[k] = section[k]
         return out
@@ -203,10 +213,24 @@ class SISOLoop:
         """The settings this loop was built from (the objective pickles them)."""
         out = {"period_s": self.period, "scenario": self.scenario, "actuator": self.actuator, "sensor": self.sensor,
                "cost": self.cost, "requirements": self.requirements}
-        for k in ("scenarios", "aggregate", "uncertainty"):
+        for k in ("scenarios", "aggregate", "uncertainty", "init"):
             if getattr(self, k) is not None:
                 out[k] = getattr(self, k)
         return out
+
+    def start(self) -> Start | None:
+        """The rule's PID of ``init`` (computed once: a step response, a fit and the detuning), or None."""
+        if self._init is not None and self._start is None:
+            def ms_of(pid: tuple[float, float, float]) -> float:
+                return self.loop_margins(self.ctrl.from_ideal(*pid))["ms"]
+
+            self._start = rule_start(self.plant, self._init, ms_of, float(self._sc.t[-1]))
+        return self._start
+
+    def start_values(self) -> dict[str, float]:
+        """The controller's values of the ``init`` rule's PID (empty without ``init``)."""
+        s = self.start()
+        return {} if s is None else self.ctrl.from_ideal(*s.pid)
 
     # --- the objective's hooks -------------------------------------------------------------------
     @property
@@ -232,8 +256,9 @@ class SISOLoop:
         return out
 
     def notes(self) -> list[str]:
+        s = self.start()
         return [f"the controller runs every period_s = {self.period:g} s; its discrete coefficients are "
-                "in the export's tables"]
+                "in the export's tables"] + ([f"the search started from {s.describe()}"] if s else [])
 
     def coeffs(self, params: Mapping[str, Any] | None) -> np.ndarray:
         """Kernel coefficients of ``params`` (with ``fixed`` and defaults); ValueError if not designable."""

@@ -1,4 +1,4 @@
-/* ---- angles without libm: the complementary filters' and the tilt KF's wrapping to [-pi, pi) ----------- */
+/* ---- angles without libm: wrapping to [-pi, pi) for the ports that carry angles ----------------------- */
 #define TWO_PI_ (2.0 * PI_)
 
 /* floor without libm (exact for |x| < 2^52; larger doubles are integers already) */

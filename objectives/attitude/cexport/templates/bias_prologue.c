@@ -1,4 +1,4 @@
-/* ---- the robust blocks' prologue of Madgwick and Mahony (_bias_filter.robust_sample) ------------------ */
+/* ---- the robust blocks' prologue of the quaternion-and-bias filters (_bias_filter.robust_sample) ------- */
 /* (x, y, z) / |(x, y, z)| and 1, or unchanged and 0 (zero or non-finite norm): _scalar.unit */
 static int unit3(real *x, real *y, real *z)
 {
@@ -145,9 +145,4 @@ void PFX_set_quaternion(PFX_filter *f, const PFX_real q[4])
 {
     from_output(q, f->q);
     f->started = 1;
-}
-
-void PFX_gyro_bias(const PFX_filter *f, PFX_real b[3])
-{
-    BIAS_OUT
 }

@@ -1,6 +1,7 @@
 /* ---- shared helpers (ported from objectives/attitude/filters/_scalar.py and base.py) ---------------- */
 #define PI_ 3.14159265358979323846
 #define DEG2RAD(x) ((x) * (PI_ / 180.0))
+#define COUNT_(a) ((int)(sizeof(a) / sizeof((a)[0]))) /* entries of an array member (sizes come from layouts) */
 
 static int finite3(const real *v)
 {

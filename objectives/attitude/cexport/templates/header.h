@@ -6,6 +6,7 @@ extern "C" {
 #endif
 
 typedef @REAL@ PFX_real;
+@ENUMS@
 
 /* the filter's complete configuration (PFX_tuned holds the tuned values) */
 typedef struct {

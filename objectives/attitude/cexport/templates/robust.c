@@ -1,28 +1,28 @@
 /* ---- robust blocks (ported from objectives/attitude/filters/robust.py) ------------------------------ */
-/* gain of a first-order low-pass, 1 - exp(-dt/tau) (VQF eq. 8); tau = 0: 1 */
+/* gain of a first-order low-pass, 1 - exp(-dt/tau) (Laidig & Seel 2023, eq. 8); tau = 0: 1 */
 static real lp_gain(real tau_s, real dt_s)
 {
     return tau_s == 0.0 ? 1.0 : 1.0 - EXP(-dt_s / tau_s);
 }
 
-/* block (a) coefficients: mag_dist_coefficients(dt, norm_th, dip_th_deg, max_rejection_s), other VQF defaults */
-static void mag_dist_coefficients(real c[11], real dt, real norm_th, real dip_th_deg, real max_rejection_s)
+/* block (a) coefficients: mag_dist_coefficients(dt, norm_th, dip_th_deg, max_rejection_s), the rest default */
+static void mag_dist_coefficients(real *c, real dt, real norm_th, real dip_th_deg, real max_rejection_s)
 {
     c[0] = dt; c[1] = norm_th; c[2] = DEG2RAD(dip_th_deg); c[3] = lp_gain(20.0, dt); c[4] = lp_gain(0.05, dt);
     c[5] = 0.5; c[6] = 20.0; c[7] = 5.0; c[8] = DEG2RAD(20.0); c[9] = max_rejection_s; c[10] = 2.0;
 }
 
-static void mag_dist_state(real s[11])
+static void mag_dist_state(real *s, int n)
 {
     int i;
-    for (i = 0; i < 11; i++)
+    for (i = 0; i < n; i++)
         s[i] = 0.0;
     s[3] = -1.0;
     s[6] = 1.0;
 }
 
-/* block (b) coefficients: rest_coefficients(dt, th_acc=th_acc, tau_bias_s=tau_bias_s), other VQF defaults */
-static void rest_coefficients(real c[7], real dt, real th_acc, real tau_bias_s)
+/* block (b) coefficients: rest_coefficients(dt, th_acc=th_acc, tau_bias_s=tau_bias_s), the rest default */
+static void rest_coefficients(real *c, real dt, real th_acc, real tau_bias_s)
 {
     real th_g = DEG2RAD(2.0);
     c[0] = dt; c[1] = lp_gain(0.5, dt); c[2] = th_g * th_g; c[3] = th_acc * th_acc; c[4] = 1.5;
@@ -171,10 +171,10 @@ static void robust_init(PFX_filter *f, const PFX_params *p)
     int i;
     f->p = *p;
     f->started = 0;
-    mag_dist_state(f->ms);
-    for (i = 0; i < 12; i++)
+    mag_dist_state(f->ms, COUNT_(f->ms));
+    for (i = 0; i < COUNT_(f->rs); i++)
         f->rs[i] = 0.0;
-    for (i = 0; i < 4; i++)
+    for (i = 0; i < COUNT_(f->as); i++)
         f->as[i] = 0.0;
 }
 

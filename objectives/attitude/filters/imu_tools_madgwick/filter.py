@@ -36,10 +36,12 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude.cexport.port import CMember, CPort
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
 from objectives.attitude.filters.imu_tools_madgwick.kernel import (
     FRAMES,
+    S,
     coefficients,
     imu_tools_madgwick_kernel,
     initial_state,
@@ -80,9 +82,15 @@ ROS_NODE = RosNode("imu_filter_madgwick", (
                "stateless": False, "remove_gravity_vector": False})
 
 
+#: the C port (port.c, ported from kernel.py line by line): the state array of the kernel's layout S
+C_PORT = CPort((__package__, "port.c"), (), (CMember("real", "s", (S.LEN,)), CMember("params", "p")), layouts=(S,))
+
+
 class ImuToolsMadgwick(AttitudeFilter):
     """The filter of ``imu_filter_madgwick`` (module docstring). Searched by default: ``gain``.
     ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s (omega_b of the MARG update)."""
+
+    c_port = C_PORT
 
     name = "imu_tools_madgwick"
     decl = DECL

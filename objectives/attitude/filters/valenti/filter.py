@@ -34,9 +34,10 @@ from typing import Any
 
 import numpy as np
 
+from objectives.attitude.cexport.port import CField, CMember, CPort
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
-from objectives.attitude.filters.valenti.kernel import coefficients, initial_state, valenti_kernel
+from objectives.attitude.filters.valenti.kernel import S, coefficients, initial_state, valenti_kernel
 from objectives.attitude.ros_params import RosNode, RosParam
 from objectives.params import Interval, Param, ParamSet
 
@@ -71,10 +72,22 @@ ROS_NODE = RosNode("imu_complementary_filter", (
                "reverse_tf": False, "constant_dt": 0.0, "publish_debug_topics": False, "orientation_stddev": 0.0})
 
 
+def _c_fields(v: dict, ctx) -> list[CField]:
+    """The node's gravity 9.81 m/s^2 in the recording's accelerometer unit (``ctx.g`` is 9.80665 in it)."""
+    return [CField("real", "g_node", 9.81 * ctx.g / 9.80665, "the node's gravity, in the accelerometer's unit")]
+
+
+#: the C port (port.c, ported from kernel.py line by line): the state array of the kernel's layout S
+C_PORT = CPort((__package__, "port.c"), (), (CMember("real", "s", (S.LEN,)), CMember("params", "p")), layouts=(S,),
+               fields=_c_fields, gravity=True)
+
+
 class Valenti(AttitudeFilter):
     """The complementary filter of Valenti et al. 2015 as ``imu_complementary_filter`` runs it (module
     docstring). Searched by default: ``gain_acc``, ``gain_mag``, ``bias_alpha``. ``run_detailed`` adds the
     diagnostic ``gyr_bias`` (N, 3), rad/s."""
+
+    c_port = C_PORT
 
     name = "valenti"
     decl = DECL

@@ -237,6 +237,10 @@ class MujocoLoop:
         runs = [self.run_case(cp, j, self._data(j)) for j in range(len(self.cases))]
         return {"t": self._sc.t, "r": self._sc.r, "runs": runs}
 
+    def start_values(self) -> dict[str, Any]:
+        """No tuning rule starts a MuJoCo loop's controllers: the declaration's defaults are the start."""
+        return {}
+
     def evaluate(self, params: Mapping[str, Any] | None = None) -> Evaluation:
         """The evaluation of ``params`` on the tuning set (``ValueError`` when the design cannot be built)."""
         return self.evaluation(self.simulate(params), params)

@@ -187,6 +187,10 @@ class WMPLoop:
         """The settings this loop was built from (the objective pickles them)."""
         return {k: getattr(self, k) for k in _DEFAULTS}
 
+    def start_values(self) -> dict[str, Any]:
+        """No tuning rule starts the pendulum's controllers: its defaults are thesis Table 2.7's."""
+        return {}
+
     # --- the objective's hooks -------------------------------------------------------------------
     @property
     def period_s(self) -> float:

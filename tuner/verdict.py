@@ -1,0 +1,62 @@
+"""Whether tuning helped: the one line a run's result carries when held-out or CV scores say the tuned
+values are worse than the objective's defaults.
+
+A tuning score is measured on the data the search looked at, so it always favours the tuned values; only
+scores on data the search did not see can say the tuning made things worse. Two such comparisons exist in a
+run's ``best.yaml`` evaluation (:mod:`tuner.validation`): ``test_fitness`` against ``defaults_test_fitness``
+(held-out recordings) and ``cv_fitness`` against ``defaults_cv_fitness`` (the same folds for both). When the
+tuned side is worse in either, the run says so in one line, in the terminal at its end, ``tuner show``, the
+report's warnings, the dashboard and ``tuner export``; the line also says what is deployed: the defaults, when
+the held-out selection (``validation: {select: ...}``, which includes the defaults by default) chose them,
+else the tuned values. Lower is better, as everywhere in the engine. Imports nothing, so every reader can use it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = ["defaults_verdict", "optimistic_note"]
+
+#: (tuned key, defaults key, what the scores are)
+_PAIRS = (("test_fitness", "defaults_test_fitness", "held-out"), ("cv_fitness", "defaults_cv_fitness", "CV"))
+
+
+def _num(v: Any) -> float | None:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def defaults_verdict(evaluation: Mapping[str, Any] | None) -> str | None:
+    """One line when held-out or CV scores in ``evaluation`` (a ``best.yaml`` evaluation) are worse for the
+    tuned values than for the defaults, else ``None``."""
+    if not evaluation:
+        return None
+    worse = []
+    for tuned_key, dflt_key, what in _PAIRS:
+        t, d = _num(evaluation.get(tuned_key)), _num(evaluation.get(dflt_key))
+        if t is not None and d is not None and t > d:
+            worse.append(f"{what} {t:.4g} vs defaults {d:.4g}")
+    if not worse:
+        return None
+    sel = evaluation.get("selection")
+    chosen = isinstance(sel, Mapping) and bool(sel.get("defaults_chosen"))
+    deployed = ("the run deploys the defaults (the held-out selection chose them)" if chosen else
+                "best.yaml holds the tuned values; `validation: {select: {}}` deploys the defaults when they "
+                "score better held out")
+    return f"tuned is worse than the defaults on data the search did not see ({'; '.join(worse)}): {deployed}"
+
+
+def optimistic_note(chosen_on: Any) -> str | None:
+    """The report's note for a config whose fixed choices (options, search ranges) were made by looking at the
+    same data (the objective's ``chosen_on:`` declaration, a text saying on what): its CV, which re-tunes only the
+    searched values in each fold, is optimistic."""
+    if not chosen_on:
+        return None
+    return (f"the config's fixed options and search ranges were chosen on {chosen_on}, outside this run's "
+            "validation: its CV re-tunes only the searched values per fold, so the CV score is optimistic "
+            "for data those choices never saw")
