@@ -19,6 +19,7 @@ no longer builds) exports its kind and the parameters only.
 from __future__ import annotations
 
 import datetime as _dt
+import math
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,7 @@ from tuner.objective import hook
 from tuner.trust import data_only
 from tuner.verdict import defaults_verdict
 
-__all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c"]
+__all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c", "objective_formats", "export_own"]
 
 #: the format name of the tuned system itself as C99 source (the objective's ``export_c`` hook), and the names it
 #: is also accepted under
@@ -196,6 +197,49 @@ def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None 
              f"data: {doc['data']}", f"git commit: {doc['git_commit']}", f"exported: {doc['exported']}"]
     try:
         return dict(fn(dict(dep.values), precision, c_prefix(prefix), "\n".join(lines)))
+    except ValueError as exc:
+        raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
+
+
+def objective_formats(run_dir: str | Path) -> dict[str, str]:
+    """``{format: help}`` of the run's objective's own formats (hook ``export_formats``; empty when it has none or
+    no longer builds)."""
+    objective, _ = _build(Path(run_dir))
+    fn = hook(objective, "export_formats") if objective is not None else None
+    return dict(fn()) if fn is not None else {}
+
+
+def export_own(run_dir: str | Path, fmt: str) -> str:
+    """The deployed system in the objective's own format ``fmt`` (hook ``export_as``), led by the run's provenance
+    and scores (run, fitness, held-out and CV scores when recorded, optimiser, data, commit).
+
+    Raises ConfigError naming ``best.yaml``'s deployment for a value the format cannot express, and the config's
+    objective when the objective has no such format.
+    """
+    from tuner.config import ConfigError
+    from tuner.rundir import RunDir
+
+    run_dir = Path(run_dir)
+    objective, dep = _deployed_objective(run_dir)
+    own = objective_formats(run_dir)
+    if fmt not in own:
+        raise ConfigError(run_dir / "config.yaml", "objective", f"no export format {fmt!r}; this objective's own: "
+                          f"{', '.join(own) or 'none'}; the engine's: {', '.join([*FORMATS, C_SOURCE])}")
+    doc = provenance(run_dir, objective)
+    best = RunDir(run_dir).best().to_doc()
+    scores = {k: v for k, v in (best.get("evaluation") or {}).items()
+              if k.endswith("_fitness") and isinstance(v, (int, float))}
+    worse = [f"{w} {scores[f'{w}_fitness']:.6g} against the defaults' {scores[f'defaults_{w}_fitness']:.6g}"
+             for w in ("cv", "test") if scores.get(f"{w}_fitness", -math.inf) > scores.get(f"defaults_{w}_fitness",
+                                                                                          math.inf)]
+    lines = [f"run: {doc['run']}", f"fitness: {doc['fitness']!r} ({(doc['objective'] or {}).get('metric', '')})",
+             *(f"{k}: {v!r}" for k, v in sorted(scores.items())),
+             *([f"note: on data the tuning did not see the defaults score better ({'; '.join(worse)})"] if worse
+               else []),
+             f"optimizer: {doc['optimizer']}, seed {doc['seed']}, {doc['n_evals']} evaluations",
+             f"data: {doc['data']}", f"git commit: {doc['git_commit']}", f"exported: {doc['exported']}"]
+    try:
+        return hook(objective, "export_as")(fmt, dict(dep.values), "\n".join(lines))
     except ValueError as exc:
         raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
 

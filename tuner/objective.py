@@ -190,6 +190,15 @@ class TunableObjective(Objective, Protocol):
         the two outputs), and ``"compiler"``: the command line of the compiler that ran. :class:`ToolError`
         when the compiler is missing or fails."""
 
+    def export_formats(self) -> Mapping[str, str]:
+        """``{format: help}``: export formats of the objective's own (``tuner export --format NAME``), e.g. the
+        parameter file of the program that runs the deployed system; names the engine's formats do not take."""
+
+    def export_as(self, fmt: str, params: Mapping[str, Any], comment: str) -> str:
+        """The text of the objective's own format ``fmt`` (one of :meth:`export_formats`) for the deployed
+        ``params``; ``comment`` is the run's provenance and scores. ``ValueError`` naming every value the format
+        cannot express."""
+
     def fingerprint(self) -> Mapping[str, Any]:
         """Statistics of the tuning data (e.g. a sensor's rate and noise), stored in the run directory at the
         run's start (``fingerprint.json``); an optional ``"summary"`` list of lines is printed then."""
@@ -207,7 +216,7 @@ class TunableObjective(Objective, Protocol):
 HOOKS = ("default_space", "default_params", "start_params", "parameter_names", "check_params", "preflight", "score",
          "has_test_data", "with_data", "export_tables", "describe", "sample_rate", "traces", "cv_folds",
          "evaluate_batch", "finalize", "deployment", "build", "export_c", "verify_c", "fingerprint",
-         "compare_fingerprint")
+         "compare_fingerprint", "export_formats", "export_as")
 
 
 def hook(objective: Any, name: str) -> Callable[..., Any] | None:

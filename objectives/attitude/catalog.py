@@ -93,6 +93,7 @@ def data_sources() -> dict[str, dict[str, Any]]:
     """``{name: description}`` of every data source a data spec may name (broad, csv, synthetic:<gen>)."""
     from objectives.attitude.data.cache import GENERATORS
     from objectives.attitude.data.csv import csv_keys
+    from objectives.attitude.data.rosbag import rosbag_keys
 
     out: dict[str, dict[str, Any]] = {
         "broad": {"summary": "BROAD trials (.mat/.hdf5, Laidig et al. 2021, CC-BY-4.0)",
@@ -105,6 +106,12 @@ def data_sources() -> dict[str, dict[str, Any]]:
                 "spec": "{csv: {path, columns: {gyr: [..], acc: [..], mag: [..], quat: [..], time: t}, ...}}",
                 "keys": [*csv_keys(),
                          *({"name": k, "default": None, "doc": d} for k, d in _CUT.items())]},
+        "rosbag": {"summary": "a ROS 1 bag or a ROS 2 bag (sqlite3, MCAP): sensor_msgs/Imu, MagneticField and a "
+                              "pose, transform, tf or odometry topic as truth (needs the extra .[ros]; "
+                              "`tuner bag PATH` lists a bag's topics)",
+                   "spec": "{rosbag: {path, imu: /imu/data_raw, mag: /imu/mag, truth: /mocap/pose, ...}}",
+                   "keys": [*rosbag_keys(),
+                            *({"name": k, "default": None, "doc": d} for k, d in _CUT.items())]},
     }
     for gen, fn in sorted(GENERATORS.items()):
         doc = (fn.__doc__ or "").strip().splitlines()

@@ -59,6 +59,12 @@ def check_specs(specs: list, base_dir: Path, where: str) -> None:
             if not p.is_file():
                 raise ValueError(f"{where}[{i}].csv.path: " + (("not a file" if p.exists() else "file not found")
                                  + f": {p}" if opts.get("path") else "missing (required): the CSV file"))
+        if kind == "rosbag":
+            p = Path(str(opts.get("path", "")))
+            p = p if p.is_absolute() else base_dir / p
+            if not opts.get("path") or not p.exists():
+                raise ValueError(f"{where}[{i}].rosbag.path: " + (f"not found: {p}" if opts.get("path") else
+                                 "missing (required): a ROS 1 .bag file or a ROS 2 bag directory"))
         if kind == "broad":
             from objectives.attitude.data.broad import default_broad_dir
 

@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude import fingerprint as _fingerprint
+from objectives.attitude import ros_export as _ros_export
 from objectives.attitude.catalog import METRICS
 from objectives.attitude.cexport import hooks as _c_hooks
 from objectives.attitude.data.plausibility import unit_warnings
@@ -345,6 +346,8 @@ class FilterObjective(FilterData, FilterReporting):
 
     export_c = _c_hooks.export_c_filter  # C99 of the deployed filter (tuner export --format c-source)
     verify_c = _c_hooks.verify_c_filter  # that C compiled and scored next to the model (tuner verify-c)
+    export_formats = _ros_export.export_formats  # the filter's own formats: its ROS node's parameter file
+    export_as = _ros_export.export_as  # tuner export --format ros2-params | ros1-params
 
     def fingerprint(self) -> dict[str, Any]:
         """The tuning data's sensor statistics (:mod:`objectives.attitude.fingerprint`), stored by every run."""

@@ -202,7 +202,7 @@ def test_run_on_arrays_errors(rec):
 # --- streaming -----------------------------------------------------------------------------------
 #: filters whose kernel carries its state: O(1) per sample
 NATIVE = {"madgwick", "mahony", "lcf", "ncf", "ccf", "ekf", "kf1d", "mahony1d", "madgwick1d", "realtime", "qukf",
-          "qraukf"}
+          "qraukf", "imu_tools_madgwick", "valenti"}
 
 
 @pytest.mark.parametrize("name", NAMES)

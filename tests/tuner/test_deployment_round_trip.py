@@ -50,6 +50,8 @@ NONDEFAULT = {
     "qukf": {"p0_att": 0.2, "p0_bias": 0.02, "init": "broad"},
     "vqf": {"offline": True, "magDistRejectionEnabled": False, "tauMag": 5.0},
     "realtime": {"mag_first_at_rest": True, "mag_recover_tau_s": 4.0, "motion_bias": False, "start": "q0"},
+    "imu_tools_madgwick": {"world_frame": "ned", "zeta": 0.02, "mag_bias_x": 1.5, "init": "broad"},
+    "valenti": {"use_mag": True, "do_adaptive_gain": False, "do_bias_estimation": False, "init": "broad"},
 }
 
 

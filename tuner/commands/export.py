@@ -8,14 +8,16 @@ import sys
 from pathlib import Path
 
 from tuner.commands.common import UsageError
-from tuner.export import C_SOURCE, C_SOURCE_ALIASES, FORMATS, export, export_c
+from tuner.export import C_SOURCE, C_SOURCE_ALIASES, FORMATS, export, export_c, export_own, objective_formats
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dir")
-    p.add_argument("--format", default="yaml", choices=[*FORMATS, C_SOURCE, *C_SOURCE_ALIASES],
-                   help=f"{C_SOURCE}: C99 header + source of the tuned system itself, e.g. the filter (see "
-                        f"--precision, --out; {', '.join(C_SOURCE_ALIASES)}: the same)")
+    p.add_argument("--format", default="yaml", metavar="FORMAT",
+                   help=f"{', '.join(FORMATS)} (default yaml); {C_SOURCE}: C99 header + source of the tuned system "
+                        f"itself, e.g. the filter (see --precision, --out; {', '.join(C_SOURCE_ALIASES)}: the same); "
+                        "or a format of the run's objective's own, e.g. ros2-params / ros1-params (the ROS node's "
+                        "parameter file of a filter a ROS node runs)")
     p.add_argument("--precision", default="double", choices=["double", "float"], help=f"{C_SOURCE}: arithmetic")
     p.add_argument("--out", default=".", help=f"{C_SOURCE}: directory for <prefix>.h and <prefix>.c (default: .)")
     p.add_argument("-o", "--output", help="write to this file instead of standard output")
@@ -43,6 +45,19 @@ def run(a: argparse.Namespace) -> int:
     verdict = _verdict(run_dir)
     if verdict:
         print(f"warning: {verdict}", file=sys.stderr)
+    if a.format not in FORMATS and not source:
+        own = objective_formats(run_dir)
+        if a.format not in own:
+            raise UsageError(f"--format {a.format!r}: allowed: {', '.join([*FORMATS, C_SOURCE, *own])}")
+        if a.prefix is not None:
+            raise UsageError(f"--prefix {a.prefix!r}: names C identifiers, not for --format {a.format}")
+        text = export_own(run_dir, a.format)
+        if a.output:
+            Path(a.output).write_text(text)
+            print(f"wrote {a.output}", file=sys.stderr)
+        else:
+            sys.stdout.write(text)
+        return 0
     if source:
         files = export_c(run_dir, a.precision, a.prefix)
         Path(a.out).mkdir(parents=True, exist_ok=True)

@@ -67,7 +67,8 @@ from objectives.attitude.data.timebase import (
     truth_sanity,
 )
 
-__all__ = ["load_csv", "GYR_UNITS", "ACC_UNITS", "TIME_UNITS", "CSV_OPTIONS", "RATE_RANGE_HZ", "csv_keys"]
+__all__ = ["load_csv", "from_stamps", "GYR_UNITS", "ACC_UNITS", "TIME_UNITS", "CSV_OPTIONS", "RATE_RANGE_HZ",
+           "csv_keys"]
 
 #: gyr unit -> factor to rad/s
 GYR_UNITS = {"rad/s": 1.0, "deg/s": np.pi / 180.0, "dps": np.pi / 180.0}
@@ -368,7 +369,7 @@ def load_csv(
             raise RecordingError(f"{path}: give either a 'time' column or 'dt', not both")
         if rate_hz is not None and resample_hz is not None:
             raise RecordingError(f"{path}: rate_hz: not with resample_hz (the rate is resample_hz's)")
-        return _from_stamps(path, t, sig, common, wanted["time"][0], spec, jitter_tol=jitter_tol, rate_hz=rate_hz,
+        return from_stamps(path, t, sig, common, wanted["time"][0], spec, jitter_tol=jitter_tol, rate_hz=rate_hz,
                             max_dropped_share=max_dropped_share, resample_hz=resample_hz,
                             max_truth_gap_s=max_truth_gap_s, quat_norm_tol=quat_norm_tol,
                             truth_rate_factor=truth_rate_factor)
@@ -383,20 +384,23 @@ def load_csv(
     if not (np.isfinite(step) and step > 0):
         raise RecordingError(f"{path}: 'rate_hz'/'dt' must be positive numbers, got {rate_hz!r}/{dt!r}")
     t = np.arange(sig["gyr"].shape[0]) * step
-    return _from_stamps(path, t, sig, common, "", spec, jitter_tol=jitter_tol, rate_hz=None,
+    return from_stamps(path, t, sig, common, "", spec, jitter_tol=jitter_tol, rate_hz=None,
                         max_dropped_share=max_dropped_share, resample_hz=None, max_truth_gap_s=max_truth_gap_s,
                         quat_norm_tol=quat_norm_tol, truth_rate_factor=truth_rate_factor, step=step)
 
 
-def _from_stamps(path: Path, t: np.ndarray, sig: dict, common: dict, column: str, spec: AlignSpec | None, *,
-                 jitter_tol: float, rate_hz: float | None, max_dropped_share: float, resample_hz: float | None,
-                 max_truth_gap_s: float, quat_norm_tol: float, truth_rate_factor: float,
-                 step: float | None = None) -> Recording:
+def from_stamps(path: Path, t: np.ndarray, sig: dict, common: dict, column: str, spec: AlignSpec | None, *,
+                jitter_tol: float, rate_hz: float | None, max_dropped_share: float, resample_hz: float | None,
+                max_truth_gap_s: float, quat_norm_tol: float, truth_rate_factor: float,
+                step: float | None = None, warnings: list[str] | None = None,
+                meta: Mapping[str, Any] | None = None) -> Recording:
     """The recording of the signals ``sig`` (rows at stamps ``t``, s): stamps cleaned, sample-and-hold found,
     resampled, truth checked and aligned (:mod:`objectives.attitude.data.timebase`); ``step`` is the stated
-    sample time of a file without a time column."""
+    sample time of a file without a time column. Also the ROS bag reader's (:mod:`objectives.attitude.data.rosbag`):
+    ``warnings`` of its own reading come first, ``meta`` joins the recording's."""
     rows = t.shape[0]
-    keep, warnings = _dropped_stamps(path, t, column, max_dropped_share) if column else (np.ones(rows, bool), [])
+    keep, dropped = _dropped_stamps(path, t, column, max_dropped_share) if column else (np.ones(rows, bool), [])
+    warnings = list(warnings or []) + dropped
     t = t[keep]
     sig = {k: (None if v is None else v[keep]) for k, v in sig.items()}
     imu = np.column_stack([sig["gyr"], sig["acc"]] + ([sig["mag"]] if sig["mag"] is not None else []))
@@ -461,7 +465,8 @@ def _from_stamps(path: Path, t: np.ndarray, sig: dict, common: dict, column: str
                     log_rate_hz=float(log_rate), imu_rate_hz=float(imu_rate),
                     resampled_hz=None if resample_hz is None else float(resample_hz), largest_imu_gap_s=gap,
                     truth_nan_norm=n_norm, truth_nan_rate=n_rate, truth_nan_gap=n_gap, start_s=float(grid[0]))
-    meta = {"read": info, "warnings": warnings, **({"alignment": alignment} if alignment is not None else {})}
+    meta = {**(meta or {}), "read": info, "warnings": warnings,
+            **({"alignment": alignment} if alignment is not None else {})}
     signals = dict(gyr=cols["gyr"], acc=cols["acc"], mag=cols["mag"], quat=truth, motion=cols["motion"])
     if resample_hz is not None:
         return Recording(dt=1.0 / float(resample_hz), meta=meta, **signals, **common)

@@ -6,9 +6,10 @@ A data spec is a one-key mapping (the YAML ``data:`` list holds such items)::
     {broad: {dir: ..., trials: [01_undisturbed_slow_rotation_A, 24_disturbed_tapping_A]}}  # load_recordings
     {csv: {path: runs/log.csv, columns: {gyr: [gx, gy, gz], acc: [ax, ay, az]}, rate_hz: 100}}
     {csv: {path: runs/log.csv, columns: maps/imu.yaml}}     # column map (and units) in a YAML file
+    {rosbag: {path: flight.bag, imu: /imu/data_raw, mag: /imu/mag, truth: /mocap/pose}}  # ROS 1 or 2 bag
     {synthetic: {generator: bench6dof, duration_s: 160, rate_hz: 1000, seed: 1}}
 
-``broad`` and ``csv`` also take ``start_s`` / ``stop_s`` (seconds from the first sample) to cut the
+``broad``, ``csv`` and ``rosbag`` also take ``start_s`` / ``stop_s`` (seconds from the first sample) to cut the
 recording; a window is named after its file and its bounds (``imu@10s-70s``, :func:`window_name`) unless
 the spec states a ``name``, so windows of one file have distinct names. Relative paths are resolved
 against ``base_dir`` (the directory of the config file).
@@ -25,7 +26,7 @@ from objectives.attitude.data.recording import Recording, RecordingError
 
 __all__ = ["load_recording", "load_recordings", "window_name", "KINDS"]
 
-KINDS = ("broad", "csv", "synthetic")
+KINDS = ("broad", "csv", "rosbag", "synthetic")
 _CUT = ("start_s", "stop_s")
 
 
@@ -139,6 +140,16 @@ def _load_csv(opts: dict, base_dir: Path) -> Recording:
     return _cut(rec, "csv", opts, rename="name" not in options)
 
 
+def _load_rosbag(opts: dict, base_dir: Path) -> Recording:
+    from objectives.attitude.data.rosbag import ROSBAG_OPTIONS, load_rosbag
+
+    _check_keys("rosbag", opts, ("path", *ROSBAG_OPTIONS, *_CUT))
+    if "path" not in opts:
+        raise RecordingError("data spec 'rosbag': needs 'path' (a ROS 1 .bag file or a ROS 2 bag directory)")
+    rec = load_rosbag(_resolve(opts["path"], base_dir), **{k: opts[k] for k in ROSBAG_OPTIONS if k in opts})
+    return _cut(rec, "rosbag", opts, rename="name" not in opts)
+
+
 def load_recording(spec: Mapping[str, Any], base_dir: str | Path = ".") -> Recording:
     """The one :class:`Recording` a data spec describes (see the module docstring).
 
@@ -167,6 +178,8 @@ def load_recording(spec: Mapping[str, Any], base_dir: str | Path = ".") -> Recor
         return _cut(rec, "broad", opts)
     if kind == "csv":
         return _load_csv(opts, base_dir)
+    if kind == "rosbag":
+        return _load_rosbag(opts, base_dir)
     # synthetic: generators live in their own module, imported only when used
     from objectives.attitude.data.cache import synthetic
 

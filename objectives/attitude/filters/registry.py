@@ -34,6 +34,8 @@ FILTERS: dict[str, str] = {
     "qraukf": "objectives.attitude.filters.ukf:QRAUKF",
     "vqf": "objectives.attitude.filters.vqf:VQF",
     "realtime": "objectives.attitude.filters.realtime:Realtime",
+    "imu_tools_madgwick": "objectives.attitude.filters.imu_tools_madgwick:ImuToolsMadgwick",
+    "valenti": "objectives.attitude.filters.valenti:Valenti",
 }
 
 
