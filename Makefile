@@ -26,7 +26,7 @@ demo: setup
 test: setup
 	$(BIN)/python -m pytest -n 2
 
-# everything but the tests marked slow (tunings, subprocess runs, whole BROAD trials): under 2 min
+# everything but the tests marked slow (over about a second each on a warm cache): under 2 min warm on 2 cores
 test-fast: setup
 	NUMBA_CACHE_DIR=$(CURDIR)/.cache/numba $(BIN)/python -m pytest -n 2 -m "not slow"
 

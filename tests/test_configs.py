@@ -15,6 +15,7 @@ CONFIGS = sorted(p for p in [*ROOT.glob("*.yaml"), *(ROOT / "papers").glob("*.ya
 
 @pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.broad) if "broad" in p.name else p
                                   for p in CONFIGS], ids=[p.name for p in CONFIGS])
+@pytest.mark.slow
 def test_config_builds(path):
     if path.name == "broad_vqf.yaml":
         pytest.importorskip("vqf")

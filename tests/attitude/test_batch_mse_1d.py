@@ -1,6 +1,7 @@
 """The kf1d population kernel's mse_1d equals objectives.attitude.metrics.mse_1d bit for bit."""
 
 import numpy as np
+import pytest
 
 from objectives.attitude.batch import _mse_1d_kernel, _wrap_angle
 from objectives.attitude.metrics import mse_1d, wrap_angle
@@ -19,6 +20,7 @@ def test_wrap_angle_kernel_equals_numpy_with_signs_and_edges():
     assert np.all((got[np.isfinite(got)] >= -np.pi) & (got[np.isfinite(got)] < np.pi))
 
 
+@pytest.mark.slow
 def test_mse_1d_kernel_equals_numpy_with_gaps_masks_and_non_finite_estimates():
     rng = np.random.default_rng(1)
     for _ in range(200):

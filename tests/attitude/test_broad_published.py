@@ -43,6 +43,7 @@ def _filters():
 
 
 @pytest.mark.parametrize("alg", ["madgwick", "mahony"])
+@pytest.mark.slow
 def test_every_trial_matches_published_rmse(broad, alg):
     published, recs = broad
     filt = _filters()[alg]

@@ -15,6 +15,7 @@ BROAD = Path(__file__).resolve().parents[3] / "shared" / "data" / "broad"
 
 
 @pytest.mark.skipif(not BROAD.is_dir(), reason="BROAD trials not found beside the repository")
+@pytest.mark.slow
 def test_broad_realtime_runs_end_to_end(tmp_path):
     from tuner.run import run
 

@@ -39,6 +39,7 @@ def test_output_with_the_options_off_is_the_seed_output(rec, opts, digest):
 
 
 @pytest.mark.parametrize("opts", [h[0] for h in HASHES])
+@pytest.mark.slow
 def test_robust_kernel_with_blocks_off_computes_the_plain_kernel(rec, opts):
     flt = CCF(**opts)
     g = gravity_in_units(rec)

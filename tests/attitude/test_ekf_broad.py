@@ -36,6 +36,7 @@ def test_gravity_unit(rec):
     assert gravity_in_units(rec) == pytest.approx(9.80665)
 
 
+@pytest.mark.slow
 def test_outliers_break_the_paper_filter_and_the_gate_fixes_it(rec):
     paper = _total(EKF(**BASE).run(rec), rec)
     robust = _total(EKF(**BASE, **REAL, acc_gate=0.1, huber_deg=2.0).run(rec), rec)

@@ -28,6 +28,7 @@ def rec():
 
 
 @pytest.mark.parametrize("per_sample_scale", [False, True])
+@pytest.mark.slow
 def test_robust_kernel_with_blocks_off_is_the_plain_kernel(rec, per_sample_scale):
     flt = EKF(**BASE)
     gyr, acc, mag, use_mag = flt._inputs(rec)

@@ -163,6 +163,7 @@ def test_paramset_rejects_inconsistent_declarations():
 
 # --- plain arrays --------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", NAMES)
+@pytest.mark.slow
 def test_run_on_arrays_equals_run_on_recording(name, rec):
     flt = get_filter(name)()
     want = flt.run(rec)
@@ -218,6 +219,7 @@ def test_stream_equals_batch_sample_by_sample(name, rec):
 
 
 @pytest.mark.parametrize("name", sorted(NATIVE - {"kf1d", "mahony1d", "madgwick1d", "qukf", "qraukf"}))  # UKFs: 9-D
+@pytest.mark.slow
 def test_native_stream_imu_only_and_explicit_start(name, rec):
     flt = get_filter(name)(use_mag=False, **({"gyro_sample": "current", "acc_gate": 0.5} if name == "ekf" else {}))
     q0 = np.array([0.9, 0.1, -0.2, 0.3]) / np.linalg.norm([0.9, 0.1, -0.2, 0.3])

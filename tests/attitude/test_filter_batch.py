@@ -69,6 +69,7 @@ def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
 
 
 @pytest.mark.parametrize("flt, key", [("madgwick", "beta"), ("mahony", "Kp")])
+@pytest.mark.slow
 def test_candidates_with_and_without_robust_blocks_share_a_batch(flt, key):
     """Madgwick / Mahony pairs with the blocks on get the longer coefficients and state, the others zero padding
     (blocks off); every candidate still equals its serial evaluation."""
@@ -194,6 +195,7 @@ def test_with_a_timeout_the_batch_runs_in_a_forked_child_with_the_same_history(t
     assert got == ref
 
 
+@pytest.mark.slow
 def test_a_runaway_error_fails_in_the_batch_as_serially():
     # the EKF's candidates of the parametrised test above include one whose finite error runs away
     # (objectives.attitude.divergence); the population kernel must flag it too, not score it

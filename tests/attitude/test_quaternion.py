@@ -188,6 +188,7 @@ def synth(q, frame, incl_deg=64.0, field=48.0, g=9.81):
 
 
 @pytest.mark.parametrize("frame", ["NED", "ENU", "NWU"])
+@pytest.mark.slow
 def test_triad_recovers_truth_on_noise_free_data(frame):
     q = random_quats(200, seed=7)
     q *= np.sign(q[:, :1])

@@ -42,6 +42,7 @@ def test_deviation_pass_series_and_exact_logarithm_agree(spread):
 
 
 @pytest.mark.parametrize("spread", [1e-4, 0.01, 0.3])
+@pytest.mark.slow
 def test_weighted_mean_matches_reference_mean(spread):
     rng = np.random.default_rng(2)
     c = ref.r2q(rng.normal(size=3))

@@ -63,6 +63,7 @@ def _kernel_inputs(rec):
     return arrays, coef, v
 
 
+@pytest.mark.slow
 def test_per_sample_driver_with_every_block_off_equals_one_kernel_call():
     rec = bench6dof(duration_s=2, seed=4, frame="ENU")
     (gyr, acc, mag), coef, v = _kernel_inputs(rec)

@@ -25,6 +25,7 @@ def test_rules_on_the_fourth_order_plant_use_the_half_rule():
     assert K > 0 and Ti > 0 and Td > 0
 
 
+@pytest.mark.slow
 def test_smoke_run_scores_every_method():
     out = pb.run(smoke=True)
     assert set(out["results"]) == set(list(pb.PLANTS)[:2])

@@ -48,6 +48,7 @@ def test_batch_equals_serial_bit_for_bit(cfg):
     assert obj.evaluate_batch(params[:2], 1) == ref[:2]
 
 
+@pytest.mark.slow
 def test_fallen_and_undesignable_candidates_fail_as_in_serial():
     doc = _doc("wmp_lqr.yaml")
     obj = ClosedLoopObjective.from_config(doc["objective"], CONFIGS)

@@ -37,6 +37,7 @@ def test_pendulum_figures_leave_backend_and_rcparams(tmp_path, svg_backend):
     _untouched(svg_backend)
 
 
+@pytest.mark.slow
 def test_loop_report_leaves_backend_and_rcparams(tmp_path, svg_backend):
     obj = ClosedLoopObjective.from_config({"plant": {"tf": {"num": [2.0], "den": [0.5, 1.0]}}, "controller": "pid2dof",
                                            "scenario": {"duration_s": 2.0, "reference": [{"t": 0.1, "value": 1.0}]},

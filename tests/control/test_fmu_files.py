@@ -132,6 +132,7 @@ def test_entry_count_and_unpacked_size_are_capped(fmu, tmp_path, monkeypatch):
     assert _mine() == before
 
 
+@pytest.mark.slow
 def test_extraction_folders_are_removed_with_the_plant_and_stale_ones_swept(fmu, tmp_path):
     from objectives.control.objective import ClosedLoopObjective
 
@@ -147,6 +148,7 @@ def test_extraction_folders_are_removed_with_the_plant_and_stale_ones_swept(fmu,
     assert _mine() == before
 
 
+@pytest.mark.slow
 def test_a_loky_run_leaves_no_extraction_folder_in_any_process(fmu, tmp_path):
     shutil.copy(fmu, tmp_path / "plant.fmu")
     job = _job(tmp_path, parallel={"backend": "loky", "n_jobs": 2})

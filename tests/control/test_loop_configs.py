@@ -99,6 +99,7 @@ def test_bad_plant_spec_is_one_error_line(tmp_path, capsys, case):
 
 
 @pytest.mark.parametrize("name", ["dc_motor_pid", "ss_lqr", "cartpole_lqr"])
+@pytest.mark.slow
 def test_example_runs_tunes_reports_and_exports(tmp_path, capsys, name):
     """Each example from its own folder (the cart-pendulum imports cartpole.py next to its config); the
     objective's report (figures, requirements.md) is read; the run's own report.md is left out (``--no-report``)."""
@@ -148,6 +149,7 @@ def test_kind_python_imports_from_the_config_folder(tmp_path, capsys):
     assert main(["run", str(p), "--no-report"]) == 0, capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_same_seed_same_history_serial_and_threads(tmp_path, monkeypatch):
     from tuner.config import config_from_dict
     from tuner.run import run

@@ -96,6 +96,7 @@ def test_item_kernel_equals_each_item_run_alone_serial_and_on_threads():
         [row_metrics(serial[1, m, 0], 1, 2)[0]["iae"] for m in range(7)]), rel=1e-12)
 
 
+@pytest.mark.slow
 def test_stepped_plants_run_item_by_item_with_the_same_statistics():
     """A Python plant (one model per params set) through the runner equals its own loop, and the linear
     dynamics equal the LTI plant's statistics."""

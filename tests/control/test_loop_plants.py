@@ -157,6 +157,7 @@ def test_lqr_gain_is_dlqr_and_prefilter_tracks():
     assert np.max(np.abs(np.linalg.eigvals(d.A - d.B @ k_ref))) < 1.0
 
 
+@pytest.mark.slow
 def test_nonlinear_linear_dynamics_equal_the_lti_plant():
     """dx = A x + B u through RK4 (50 sub-steps) matches the exact ZOH discretisation."""
     o_nl = _obj({"python": "tests.control.loop_dynamics:linear", "x0": [0.0, 0.0], "outputs": [0], "n_sub": 50},

@@ -65,6 +65,7 @@ def test_outputs_read_what_mujoco_says():
     assert y[3] == pytest.approx(euler_zyx(d.xquat[2])[1], abs=1e-15) and abs(y[4]) < 1e-12
 
 
+@pytest.mark.slow
 def test_urdf_compiled_by_mujoco_with_motors_added(tmp_path):
     urdf = tmp_path / "arm.urdf"
     link = ('<link name="{n}"><inertial><origin xyz="0 0 -0.2"/><mass value="1.0"/><inertia ixx="0.02" iyy="0.02" '

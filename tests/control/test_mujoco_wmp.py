@@ -42,6 +42,7 @@ def test_the_lagrangian_with_eq_2_3s_sign_is_our_model():
     assert np.abs(rigid_derivatives(q, u, p, -1.0, False) - ref).max() > 1e-3  # the sign matters
 
 
+@pytest.mark.slow
 def test_mujoco_agrees_with_the_rigid_body_not_with_eq_2_12_as_published():
     models = {"mj": MujocoWMP(), "rigid": RigidWMP(-1.0, True), "pub": PublishedWMP()}
     runs = {k: simulate(m, u_open=np.array([1.3, 1.3]), n=40) for k, m in models.items()}

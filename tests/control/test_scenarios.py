@@ -166,6 +166,7 @@ def test_small_signal_is_python_controls_linear_loop_and_shows_what_saturation_h
     assert a.small.check("max_overshoot_pct", 0)["values"].shape == (1,)
 
 
+@pytest.mark.slow
 def test_small_signal_of_a_stepped_plant_is_the_linearised_loop():
     """A Python plant with linear dynamics: the 1 % drive about the unforced run, scaled back, equals the LTI
     plant's limit-free loop (to RK4's accuracy), though the actuator saturates the scenario itself."""

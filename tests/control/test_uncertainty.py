@@ -166,6 +166,7 @@ def test_heldout_assessment_against_an_independent_per_model_computation():
     assert heldout_summary(a.heldout)["ms_max"] == pytest.approx(ref.max(), rel=2e-3)
 
 
+@pytest.mark.slow
 def test_python_plant_parameters_share_one_compiled_loop():
     """params.<name> of a Python plant: each model is the plant built with that value (equal responses), and the
     models share the dynamics' dispatcher and params class, so the loop compiles once."""

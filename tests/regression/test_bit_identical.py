@@ -40,6 +40,7 @@ def test_filter_outputs_bit_identical():
     assert not changed, f"filter outputs changed (pinned, now): {changed}"
 
 
+@pytest.mark.slow
 def test_digests_do_not_depend_on_the_cache():
     """A child process that loads the kernels from the on-disk cache this suite filled (NUMBA_CACHE_DIR, as CI
     and the Makefile set it; compiling what is not there yet) gives the bits this process computed (before the
@@ -92,6 +93,7 @@ print(g(1.0))
 
 
 @pytest.mark.parametrize("locators", ["numba", "package"])
+@pytest.mark.slow
 def test_an_edited_callee_reaches_its_cached_caller_under_the_package_locators(tmp_path, locators):
     """Rule 3: numba keys a cache entry on the caller's own file, so a cached kernel kept running the old body
     of a kernel it calls from another module (shown with numba's locators); under the package's locators

@@ -42,6 +42,7 @@ def test_good_addresses_load_and_the_timeout_stays_out_of_older_configs():
     assert cfg.parallel.connect_timeout_s == 2.0
 
 
+@pytest.mark.slow
 def test_a_server_that_is_not_a_scheduler_is_one_error_line_within_the_timeout(tmp_path):
     pytest.importorskip("distributed", reason="needs the cluster extra")
     srv = socket.socket()

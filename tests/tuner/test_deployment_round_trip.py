@@ -283,6 +283,7 @@ def test_loop_controller_deployment_round_trip(name, tmp_path):
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "flc" else n
                                   for n in WMP_CONTROLLERS])
+@pytest.mark.slow
 def test_controller_deployment_round_trip(name, tmp_path):
     from objectives.control.controllers import get_controller
     from objectives.control.objective import ClosedLoopObjective

@@ -43,6 +43,7 @@ def _blocked_python(tmp_path, code):
                                             "NUMBA_CACHE_DIR": str(tmp_path / "numba")})
 
 
+@pytest.mark.slow
 def test_every_tuner_module_imports_and_a_python_objective_runs_without_objectives(tmp_path):
     (tmp_path / "userobj.py").write_text("def f(p):\n    return (p['a'] - 1.0) ** 2\n")
     cfg = {"name": "u", "objective": {"kind": "python", "callable": "userobj:f"},

@@ -109,6 +109,7 @@ def test_without_a_usable_hook_threads_fall_back_to_serial_with_a_note(objective
     assert capsys.readouterr().err.count("note: backend threads") == 1  # said once, not per batch
 
 
+@pytest.mark.slow
 def test_a_batch_that_overruns_its_timeout_is_rerun_one_candidate_at_a_time():
     obj = TimedObjective(Batched(hang_above=0.6), 1.0)
     t0 = time.perf_counter()
@@ -121,6 +122,7 @@ def test_a_batch_that_overruns_its_timeout_is_rerun_one_candidate_at_a_time():
     assert got[2].evaluation.error.startswith("ValueError: a too large")
 
 
+@pytest.mark.slow
 def test_a_hung_candidate_times_out_as_in_the_serial_backend():
     class Hangs(Batched):
         def __call__(self, p):

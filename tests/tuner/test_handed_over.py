@@ -330,6 +330,7 @@ def test_code_commands_refuse_a_plant_module_inside_the_run_directory(plant_run,
     assert not marker.exists()
 
 
+@pytest.mark.slow
 def test_a_handed_over_sweep_report_never_imports_its_plant_module(plant_run, tmp_path):
     """`tuner report SWEEP_DIR` rebuilt every job's objective for its response figure, importing the plant
     module the jobs' configs named, from inside the sweep directory."""

@@ -37,6 +37,7 @@ def test_packaged_jobs_are_the_repository_jobs_that_need_no_shared_data():
     assert packaged_config("demo.yaml") == PACKAGED / "demo.yaml"
 
 
+@pytest.mark.slow
 def test_every_filter_and_controller_gets_a_starter_that_builds_and_preflights(tmp_path, monkeypatch):
     """Each starter job is valid YAML, a valid config, names only parameters its objective has, and its
     default parameters evaluate (the preflight that `tuner run` does before the first generation)."""

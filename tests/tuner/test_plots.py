@@ -63,6 +63,7 @@ def run_plots():
 
 
 @pytest.mark.parametrize("with_slot", [False, True])
+@pytest.mark.slow
 def test_a_plot_registered_from_outside_is_drawn_in_both_pages(run_dir, tmp_path, run_plots, with_slot):
     d = Path(shutil.copytree(run_dir, tmp_path / "run"))
     plots.register(_toy(with_slot))

@@ -157,6 +157,7 @@ def test_interrupted_repeat_is_resumed_through_the_parent(tmp_path, monkeypatch)
     assert RunDir(tmp_path / "cut").repeats().fitness == whole.repeats.fitness
 
 
+@pytest.mark.slow
 def test_filter_job_deploys_by_held_out_score_and_every_command_reads_it(tmp_path, capsys):
     raw = {"name": "mw", "seed": 3, "repeats": 2, "output": str(tmp_path / "runs"),
            "objective": {"kind": "filter", "filter": "madgwick", "warmup_s": 1.0,
@@ -192,6 +193,7 @@ def test_filter_job_deploys_by_held_out_score_and_every_command_reads_it(tmp_pat
     assert "## Repeats" in report and "(deployed)" in report and (d / "figures" / "repeats_convergence.png").exists()
 
 
+@pytest.mark.slow
 def test_controller_job_repeats(tmp_path):
     cfg = config_from_dict({"name": "pid", "seed": 1, "repeats": 2, "output": str(tmp_path / "runs"),
                             "objective": {"kind": "closed_loop", "controller": "pid", "profile": "thesis_2s",

@@ -97,6 +97,7 @@ def test_run_without_report_writes_the_same_records(tmp_path):
     assert (b.run_dir / "best.yaml").exists() and a.best_params == b.best_params and b.status == "finished"
 
 
+@pytest.mark.slow
 def test_without_report_no_live_view_is_written_and_resume_writes_none_either(tmp_path, monkeypatch):
     """``report=False`` also leaves out the live view (here due after every generation), in ``run`` and in
     ``resume``; records are those of the same run and resume with their report."""

@@ -44,6 +44,7 @@ def _status(run_dir) -> str:
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.slow
 def test_run_and_resume_stop_on_the_signal_and_resume_to_the_uninterrupted_history(tmp_path, sig):
     ref = run(load_job(_job(tmp_path, "ref", 0.0), tmp_path), run_dir=tmp_path / "ref", quiet=True, report=False)
     run_dir = tmp_path / "sig"
@@ -97,6 +98,7 @@ def _session_processes(sid: int) -> list[int]:
 
 
 @pytest.mark.parametrize("jobs", [1, 2])
+@pytest.mark.slow
 def test_sweep_stops_on_sigterm_and_leaves_no_process_behind(tmp_path, jobs):
     sweep = _sweep_file(tmp_path, [1, 2, 3, 4])
     out_dir = tmp_path / "sweepdir"

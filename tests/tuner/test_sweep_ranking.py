@@ -77,6 +77,7 @@ def _defaults_score(job_dir: Path, which: str) -> float:
     return obj.score(obj.default_params(), which).fitness
 
 
+@pytest.mark.slow
 def test_demo_sweep_ranks_by_test_score_with_defaults_rows(tmp_path):
     sw = _demo_sweep(tmp_path)
     s = pd.read_csv(sw / "summary.csv", index_col=0)
@@ -99,6 +100,7 @@ def test_demo_sweep_ranks_by_test_score_with_defaults_rows(tmp_path):
         == list(s.index)
 
 
+@pytest.mark.slow
 def test_demo_sweep_with_validation_ranks_by_cv(tmp_path, capsys):
     sw = _demo_sweep(tmp_path, {"cv": "kfold", "folds": 2})
     s = pd.read_csv(sw / "summary.csv", index_col=0)

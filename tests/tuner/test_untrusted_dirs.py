@@ -100,6 +100,7 @@ def test_linked_entries_are_never_read_or_written_through(tmp_path, victim, fini
     assert sorted(p.name for p in tmp_path.iterdir()) == before
 
 
+@pytest.mark.slow
 def test_read_only_commands_never_import_the_code_a_run_names(tmp_path, monkeypatch):
     marker = tmp_path / "IMPORTED"
     code = f"import pathlib\npathlib.Path({str(marker)!r}).write_text('x')\ndef f(params):\n" \
@@ -163,6 +164,7 @@ def test_sweep_jobs_must_be_positive(tmp_path, jobs):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 def test_sweep_jobs_are_capped_and_the_directory_is_self_contained(tmp_path):
     _sweep(tmp_path, seeds=(1, 2))
     out = tuner("sweep", "sw.yaml", "--dir", "out", "--jobs", "64", cwd=tmp_path)
@@ -225,6 +227,7 @@ def test_sizes_and_nul_bytes_are_refused_before_anything_is_allocated(tmp_path, 
     assert not (tmp_path / "runs").exists()
 
 
+@pytest.mark.slow
 def test_a_huge_error_message_is_stored_cut_and_the_history_stays_readable(tmp_path):
     (tmp_path / "loud_u.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
                                         "    raise ValueError('y' * 200_000)\n")
