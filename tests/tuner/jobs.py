@@ -40,6 +40,16 @@ def unrendered():
         yield
 
 
+def sphere_job(tmp_path, name: str = "h", **over) -> dict:
+    """A raw config dict of a tiny serial PSO on the 2-d sphere (12 evaluations), writing below ``tmp_path``;
+    ``over`` replaces top-level keys."""
+    raw = {"name": name, "seed": 2, "output": str(tmp_path / "runs"),
+           "objective": {"kind": "function", "function": "sphere", "dim": 2},
+           "optimizer": {"method": "pso", "population": 4, "generations": 3}, "parallel": {"backend": "serial"}}
+    raw.update(over)
+    return raw
+
+
 def rastrigin_job(tmp_path, dim: int, population: int, generations: int, **over):
     """The config of a serial PSO run on ``dim``-D Rastrigin; ``over`` updates top-level sections."""
     raw = {"name": "t", "seed": 3,

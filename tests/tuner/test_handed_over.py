@@ -18,35 +18,12 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.conftest import one_error_line as one_error
 from tests.conftest import run_tuner
+from tests.tuner.jobs import sphere_job
 from tuner.config import config_from_dict
 from tuner.records import config_hash
 from tuner.run import run
-
-
-def one_error(out, *fragments):
-    assert out.returncode == 2, (out.returncode, out.stdout, out.stderr)
-    lines = [ln for ln in out.stderr.splitlines() if ln.strip() and not ln.startswith("note:")]
-    assert len(lines) == 1 and lines[0].startswith("error: "), out.stderr
-    for f in fragments:
-        assert f in lines[0], (f, lines[0])
-    assert "Traceback" not in out.stderr
-
-
-def _raw(tmp_path, **over):
-    raw = {"name": "h", "seed": 2, "output": str(tmp_path / "runs"),
-           "objective": {"kind": "function", "function": "sphere", "dim": 2},
-           "optimizer": {"method": "pso", "population": 4, "generations": 3}, "parallel": {"backend": "serial"}}
-    raw.update(over)
-    return raw
-
-
-@pytest.fixture(scope="module")
-def finished(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("fin")
-    res = run(config_from_dict(_raw(tmp), base_dir=tmp), run_dir=tmp / "run", quiet=True)
-    assert res.status == "finished"
-    return res.run_dir
 
 
 @pytest.fixture
@@ -97,7 +74,7 @@ def test_a_hard_linked_lock_or_history_is_never_written(tmp_path, finished, hand
     victim = tmp_path / "victim.txt"
     victim.write_text("the user's own file\n")
     job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(_raw(tmp_path)))
+    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'h')))
     empty = tmp_path / "empty"
     empty.mkdir()
     os.link(victim, empty / ".lock")  # `run --run-dir` truncated the victim to the pid
@@ -180,7 +157,7 @@ def _chain(d: Path, key: bytes | None) -> str:
 def test_a_keyed_chain_cannot_be_recomputed_without_the_key(tmp_path, monkeypatch):
     key = "k" * 32
     monkeypatch.setenv("TUNER_CHAIN_KEY", key)
-    d = run(config_from_dict(_raw(tmp_path), base_dir=tmp_path), run_dir=tmp_path / "keyed", quiet=True,
+    d = run(config_from_dict(sphere_job(tmp_path, 'h'), base_dir=tmp_path), run_dir=tmp_path / "keyed", quiet=True,
             report=False).run_dir
     head = (d / "history.chain").read_text().splitlines()[0]
     assert head.startswith("#hmac-sha256 key ") and key not in (d / "history.chain").read_text()
@@ -209,7 +186,7 @@ def test_a_keyed_chain_cannot_be_recomputed_without_the_key(tmp_path, monkeypatc
 def test_a_short_chain_key_is_refused(tmp_path, monkeypatch):
     monkeypatch.setenv("TUNER_CHAIN_KEY", "short")
     job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(_raw(tmp_path)))
+    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'h')))
     one_error(run_tuner("run", job, "--run-dir", tmp_path / "r", "-q"), "TUNER_CHAIN_KEY", "shorter than 16")
 
 
@@ -388,7 +365,7 @@ def test_tune_reraises_keyboard_interrupt_after_saving(tmp_path):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        tuner.tune(_raw(tmp_path, optimizer={"method": "pso", "population": 4, "generations": 10}),
+        tuner.tune(sphere_job(tmp_path, 'h', optimizer={"method": "pso", "population": 4, "generations": 10}),
                    run_dir=tmp_path / "r", progress=False, callback=stop, report=False)
     res = tuner.load(tmp_path / "r")
     assert res.status == "interrupted" and res.n_evals == 8
@@ -398,7 +375,7 @@ def test_a_run_whose_every_evaluation_failed_is_not_finished(tmp_path):
     (tmp_path / "failall_h.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
                                            "    raise RuntimeError('always')\n")
     job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(_raw(tmp_path, objective={"kind": "python", "callable": "failall_h:f"},
+    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'h', objective={"kind": "python", "callable": "failall_h:f"},
                                        parameters={"x": {"low": 0.0, "high": 1.0}})))
     out = run_tuner("run", job, "--run-dir", tmp_path / "runs" / "r", "-q", "--no-report")
     assert out.returncode == 1 and "every one of 12 evaluations failed" in out.stderr, out.stderr
@@ -445,7 +422,7 @@ def test_a_stopped_dashboard_leaves_no_temporary_file(tmp_path, finished, monkey
 
 
 def test_the_dashboard_over_several_runs_folders_shows_every_sweep_job(tmp_path):
-    (tmp_path / "base.yaml").write_text(yaml.safe_dump(_raw(tmp_path)))
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(sphere_job(tmp_path, 'h')))
     (tmp_path / "sw.yaml").write_text(yaml.safe_dump({"sweep": {"name": "sw", "base": "base.yaml", "seeds": [1, 2]}}))
     parent = tmp_path / "parent"
     for proj in ("p1", "p2"):
@@ -462,7 +439,7 @@ def test_the_dashboard_over_several_runs_folders_shows_every_sweep_job(tmp_path)
 
 
 def test_sweep_set_overrides_every_job(tmp_path):
-    (tmp_path / "base.yaml").write_text(yaml.safe_dump(_raw(tmp_path)))
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(sphere_job(tmp_path, 'h')))
     (tmp_path / "sw.yaml").write_text(yaml.safe_dump({"sweep": {"name": "sw", "base": "base.yaml", "seeds": [1, 2],
                                                                 "grid": {"optimizer.population": [4, 6]}}}))
     out = run_tuner("sweep", tmp_path / "sw.yaml", "--dir", tmp_path / "o", "-q", "--no-report",
@@ -481,7 +458,7 @@ def test_sigterm_to_a_parallel_sweep_marks_its_jobs_interrupted(tmp_path):
     import subprocess
     import time
 
-    slow = _raw(tmp_path, objective={"kind": "function", "function": "sphere", "dim": 2, "sleep_s": 0.05},
+    slow = sphere_job(tmp_path, 'h', objective={"kind": "function", "function": "sphere", "dim": 2, "sleep_s": 0.05},
                 optimizer={"method": "pso", "population": 4, "generations": 200})
     (tmp_path / "base.yaml").write_text(yaml.safe_dump(slow))
     (tmp_path / "sw.yaml").write_text(yaml.safe_dump({"sweep": {"name": "sw", "base": "base.yaml", "seeds": [1, 2]}}))

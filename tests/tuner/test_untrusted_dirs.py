@@ -16,7 +16,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.conftest import one_error_line as one_error
 from tests.conftest import run_tuner
+from tests.tuner.jobs import sphere_job
 from tuner.config import config_from_dict
 from tuner.run import run
 
@@ -27,29 +29,7 @@ def tuner(*args, cwd=None, env=None):
     return run_tuner(*args, cwd=cwd, env=env)  # in this process, or a new one for an environment
 
 
-def one_error(out, *fragments):
-    assert out.returncode == 2, (out.stdout, out.stderr)
-    lines = [ln for ln in out.stderr.splitlines() if ln.strip() and not ln.startswith("note:")]
-    assert len(lines) == 1 and lines[0].startswith("error: "), out.stderr
-    for f in fragments:
-        assert f in lines[0], (f, lines[0])
-    assert "Traceback" not in out.stderr
 
-
-def _raw(tmp_path, **over):
-    raw = {"name": "u", "seed": 2, "output": str(tmp_path / "runs"),
-           "objective": {"kind": "function", "function": "sphere", "dim": 2},
-           "optimizer": {"method": "pso", "population": 4, "generations": 3}, "parallel": {"backend": "serial"}}
-    raw.update(over)
-    return raw
-
-
-@pytest.fixture(scope="module")
-def finished(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("fin")
-    res = run(config_from_dict(_raw(tmp), base_dir=tmp), run_dir=tmp / "run", quiet=True)
-    assert res.status == "finished"
-    return res.run_dir
 
 
 @pytest.fixture
@@ -67,7 +47,7 @@ def _copy(finished, tmp_path) -> Path:
 
 def test_a_lock_link_is_refused_and_its_target_untouched(tmp_path, victim, finished):
     job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(_raw(tmp_path)))
+    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'u')))
     d = tmp_path / "empty"
     d.mkdir()
     (d / ".lock").symlink_to(victim)
@@ -109,7 +89,7 @@ def test_read_only_commands_never_import_the_code_a_run_names(tmp_path, monkeypa
     pkg.mkdir()
     (pkg / "evilmod_u.py").write_text(code)
     monkeypatch.syspath_prepend(str(pkg))
-    raw = _raw(tmp_path, objective={"kind": "python", "callable": "evilmod_u:f"},
+    raw = sphere_job(tmp_path, 'u', objective={"kind": "python", "callable": "evilmod_u:f"},
                parameters={"x": {"low": 0.0, "high": 1.0}})
     res = run(config_from_dict(raw, base_dir=tmp_path), run_dir=tmp_path / "py", quiet=True, report=False)
     assert res.status == "finished"
@@ -131,7 +111,7 @@ def test_read_only_commands_never_import_the_code_a_run_names(tmp_path, monkeypa
 
 
 def _sweep(tmp_path, base_over=None, seeds=(1,)) -> Path:
-    (tmp_path / "base.yaml").write_text(yaml.safe_dump(_raw(tmp_path, **(base_over or {}))))
+    (tmp_path / "base.yaml").write_text(yaml.safe_dump(sphere_job(tmp_path, 'u', **(base_over or {}))))
     p = tmp_path / "sw.yaml"
     p.write_text(yaml.safe_dump({"sweep": {"name": "sw", "base": "base.yaml", "seeds": list(seeds)}}))
     return p
@@ -196,7 +176,8 @@ def test_yaml_bombs_and_errors_are_one_line(tmp_path, text, what):
 
 def test_a_full_disk_names_the_file(tmp_path):
     job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(_raw(tmp_path, optimizer={"method": "pso", "population": 20, "generations": 60})))
+    job.write_text(yaml.safe_dump(sphere_job(
+        tmp_path, 'u', optimizer={"method": "pso", "population": 20, "generations": 60})))
 
     def small_files():  # files may not grow past 24 kB: the history hits it, as on a full disk
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
@@ -216,7 +197,7 @@ def test_a_full_disk_names_the_file(tmp_path):
 ])
 def test_sizes_and_nul_bytes_are_refused_before_anything_is_allocated(tmp_path, key, value, what):
     job = tmp_path / "job.yaml"
-    text = yaml.safe_dump(_raw(tmp_path))
+    text = yaml.safe_dump(sphere_job(tmp_path, 'u'))
     job.write_text(text)
     if key == "output":
         lines = [ln for ln in text.splitlines() if not ln.startswith("output:")]
@@ -232,7 +213,7 @@ def test_a_huge_error_message_is_stored_cut_and_the_history_stays_readable(tmp_p
     (tmp_path / "loud_u.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
                                         "    raise ValueError('y' * 200_000)\n")
     job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(_raw(tmp_path, objective={"kind": "python", "callable": "loud_u:f"},
+    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'u', objective={"kind": "python", "callable": "loud_u:f"},
                                        parameters={"x": {"low": 0.0, "high": 1.0}})))
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
     out = tuner("run", job, "--run-dir", tmp_path / "r", "-q", "--no-report", env=env)
