@@ -50,6 +50,7 @@ import numpy as np
 from objectives.control.plants.base import PlantKind
 from objectives.control.plants.batch import ItemRunner
 from objectives.control.plants.cost import aggregation_from_spec, combine, cost_from_spec, cost_of_stats
+from objectives.control.plants.loop_yaml import LoopYaml
 from objectives.control.plants.metrics import S_DONE, S_STATUS, row_metrics
 from objectives.control.plants.modelset import MARGIN_KEYS, ModelSet, build_models
 from objectives.control.plants.requirements import (
@@ -69,7 +70,6 @@ __all__ = ["SISOLoop", "DeployedController", "Scored"]
 #: the loop's settings (the objective's keys besides kind, plant, controller, fixed)
 _SETTINGS = ("period_s", "scenario", "scenarios", "actuator", "sensor", "cost", "aggregate", "requirements",
              "uncertainty", "init")
-_MAPPINGS = ("scenario", "actuator", "sensor", "requirements", "uncertainty")
 #: each requirement metric's scope (which scenarios define it)
 _SCOPE = {r.metric: r.scope for r in REQUIREMENTS.values()}
 #: the output and control limits a small-signal check lifts
@@ -107,11 +107,14 @@ class Scored:
     status: float = 0.0
 
 
-class SISOLoop:
+class SISOLoop(LoopYaml):
     """The generic loop on one plant (and its model set) for one controller class (module docstring)."""
 
     family: ClassVar[str] = "siso"
     KEYS: ClassVar[frozenset[str]] = frozenset(_SETTINGS)
+    MAPPINGS: ClassVar[tuple[str, ...]] = ("scenario", "actuator", "sensor", "requirements", "uncertainty", "cost")
+    SECTIONS: ClassVar[tuple[str, ...]] = ("scenario", "actuator", "sensor", "cost", "requirements")
+    OPTIONAL: ClassVar[tuple[str, ...]] = ("scenarios", "aggregate", "uncertainty", "init")
     DEFAULT_CONTROLLER: ClassVar[str] = "pid2dof"
     rate_name: ClassVar[str] = "controller period period_s"
 
@@ -180,34 +183,6 @@ class SISOLoop:
         if self.linear:
             self._omega, prs = self.models.responses(states=cls.name == "lqr_sf")
             self._pr = prs[0]
-
-    # --- construction from YAML --------------------------------------------------------------------
-    @classmethod
-    def settings_from_config(cls, section: Mapping[str, Any], base_dir: pathlib.Path | None) -> dict[str, Any]:
-        """The loop's settings of the YAML ``objective:`` mapping; unknown keys and non-mappings are
-        ``ValueError`` naming the key."""
-        allowed = cls.KEYS | {"kind", "plant", "controller", "fixed"}
-        unknown = sorted(set(section) - allowed)
-        if unknown:
-            raise ValueError(f"objective.{unknown[0]}: unknown key for a plant mapping; allowed: {sorted(allowed)}")
-        for k in ("fixed", *_MAPPINGS):
-            if section.get(k) is not None and not isinstance(section[k], Mapping):
-                raise ValueError(f"objective.{k}: expected a mapping, got {section[k]!r}")
-        if section.get("cost") is not None and not isinstance(section["cost"], Mapping):
-            raise ValueError(f"objective.cost: expected a mapping, got {section['cost']!r}")
-        out = {"period_s": section.get("period_s", 0.01),
-               **{k: dict(section.get(k) or {}) for k in ("scenario", "actuator", "sensor", "cost", "requirements")}}
-        for k in ("scenarios", "aggregate", "uncertainty", "init"):
-            if section.get(k) is not None:
-                out[k] = section[k]
-        return out
-
-    @staticmethod
-    def error_key(msg: str) -> str:
-        """``msg`` with the config key it concerns in front (``objective.fixed`` for a controller value)."""
-        if msg.startswith("objective"):
-            return msg
-        return f"{'objective.fixed' if msg.startswith('controller') else 'objective'}: {msg}"
 
     def settings(self) -> dict[str, Any]:
         """The settings this loop was built from (the objective pickles them)."""

@@ -40,6 +40,7 @@ import numpy as np
 
 from objectives.control.plants.base import PlantKind
 from objectives.control.plants.loop import DeployedController
+from objectives.control.plants.loop_yaml import LoopYaml
 from objectives.control.plants.mujoco.kernel import STATUS_DIVERGED, STATUS_LIMIT, STATUS_OK
 from objectives.control.plants.mujoco.scenario import (
     cost_for,
@@ -61,14 +62,17 @@ from tuner.objective import Evaluation
 __all__ = ["MujocoLoop"]
 
 _SETTINGS = ("period_s", "scenario", "sensor", "cost", "requirements", "uncertainty", "aggregate")
-_MAPPINGS = ("scenario", "sensor", "cost", "requirements", "uncertainty")
 
 
-class MujocoLoop:
+class MujocoLoop(LoopYaml):
     """The loop on a MuJoCo plant for one controller class (module docstring); built by the objective."""
 
     family: ClassVar[str] = "mujoco"
     KEYS: ClassVar[frozenset[str]] = frozenset(_SETTINGS)
+    MAPPINGS: ClassVar[tuple[str, ...]] = ("scenario", "sensor", "cost", "requirements", "uncertainty")
+    SECTIONS: ClassVar[tuple[str, ...]] = ("scenario", "sensor", "cost", "requirements")
+    OPTIONAL: ClassVar[tuple[str, ...]] = ("uncertainty", "aggregate")
+    WHAT: ClassVar[str] = "a MuJoCo plant"
     DEFAULT_CONTROLLER: ClassVar[str] = "joint_pid"
     rate_name: ClassVar[str] = "controller period period_s"
 
@@ -137,32 +141,6 @@ class MujocoLoop:
     def model_plant(self, case: ModelCase) -> Any:
         """The plant of one model (the nominal plant itself when nothing is perturbed)."""
         return self.plant.with_parameters(case.values, "objective.uncertainty") if case.values else self.plant
-
-    # --- construction from YAML --------------------------------------------------------------------
-    @classmethod
-    def settings_from_config(cls, section: Mapping[str, Any], base_dir: pathlib.Path | None) -> dict[str, Any]:
-        """The loop's settings of the YAML ``objective:`` mapping; unknown keys and non-mappings are
-        ``ValueError`` naming the key."""
-        allowed = cls.KEYS | {"kind", "plant", "controller", "fixed"}
-        unknown = sorted(set(section) - allowed)
-        if unknown:
-            raise ValueError(f"objective.{unknown[0]}: unknown key for a MuJoCo plant; allowed: {sorted(allowed)}")
-        for k in ("fixed", *_MAPPINGS):
-            if section.get(k) is not None and not isinstance(section[k], Mapping):
-                raise ValueError(f"objective.{k}: expected a mapping, got {section[k]!r}")
-        out = {"period_s": section.get("period_s", 0.01),
-               **{k: dict(section.get(k) or {}) for k in ("scenario", "sensor", "cost", "requirements")}}
-        out["uncertainty"] = dict(section["uncertainty"]) if section.get("uncertainty") is not None else None
-        if section.get("aggregate") is not None:
-            out["aggregate"] = section["aggregate"]
-        return out
-
-    @staticmethod
-    def error_key(msg: str) -> str:
-        """``msg`` with the config key it concerns in front (``objective.fixed`` for a controller value)."""
-        if msg.startswith("objective"):
-            return msg
-        return f"{'objective.fixed' if msg.startswith('controller') else 'objective'}: {msg}"
 
     def settings(self) -> dict[str, Any]:
         return {"period_s": self.period, "scenario": self.scenario, "sensor": self.sensor, "cost": self.cost,
