@@ -31,7 +31,7 @@ __all__ = ["CField", "CMember", "CPort", "RenderContext", "decl_fields", "choice
 
 #: the shared parts a port may list in ``parts`` (files of ``cexport/templates/``), in the order they are
 #: concatenated: a piece two ports need is written once, in the first part both get
-SHARED_PARTS = ("robust.c", "bias_prologue.c", "trig.c", "angle.c")
+SHARED_PARTS = ("robust.c", "bias_prologue.c", "trig.c", "angle.c", "node.c")
 
 
 @dataclass(frozen=True)

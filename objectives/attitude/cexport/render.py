@@ -176,9 +176,10 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define WORK_TO_OUT {_quat_literal(rot)}",
            f"#define OUT_TO_WORK {_quat_literal(qconj_batch(rot))}",
            *(port.defines(flt, ctx) if port.defines is not None else []), ""]
-    own_part = "\n".join([*(layout_enum(lay) for lay in port.layouts), _source(port)])
-    body = _API_DEF.sub(r"static void PFX_\1_(", "\n".join([*(_shared(p) for p in ("common.c", *port.parts)),
-                                                            own_part]))
+    # the layouts' enums first: a shared part may read the port's state layout (node.c)
+    body = _API_DEF.sub(r"static void PFX_\1_(", "\n".join([_shared("common.c"),
+                                                            *(layout_enum(lay) for lay in port.layouts),
+                                                            *(_shared(p) for p in port.parts), _source(port)]))
     body += "\n" + _shared("run.c")  # the exported names of the static functions and PFX_run
     tuned = f"const PFX_params PFX_tuned = {{\n{init_vals}\n}};\n"
     source = "\n".join(pre) + "\n" + tuned + "\n" + body

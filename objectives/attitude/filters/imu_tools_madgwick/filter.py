@@ -37,8 +37,7 @@ from typing import Any
 import numpy as np
 
 from objectives.attitude.cexport.port import CMember, CPort
-from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
+from objectives.attitude.filters.base import G_SI, KernelSetup
 from objectives.attitude.filters.imu_tools_madgwick.kernel import (
     FRAMES,
     S,
@@ -46,6 +45,7 @@ from objectives.attitude.filters.imu_tools_madgwick.kernel import (
     imu_tools_madgwick_kernel,
     initial_state,
 )
+from objectives.attitude.filters.node_stream import NodeFilter
 from objectives.attitude.ros_params import RosNode, RosParam
 from objectives.params import NONNEG, Param, ParamSet
 
@@ -83,10 +83,11 @@ ROS_NODE = RosNode("imu_filter_madgwick", (
 
 
 #: the C port (port.c, ported from kernel.py line by line): the state array of the kernel's layout S
-C_PORT = CPort((__package__, "port.c"), (), (CMember("real", "s", (S.LEN,)), CMember("params", "p")), layouts=(S,))
+C_PORT = CPort((__package__, "port.c"), ("node.c",), (CMember("real", "s", (S.LEN,)), CMember("params", "p")),
+               layouts=(S,))
 
 
-class ImuToolsMadgwick(AttitudeFilter):
+class ImuToolsMadgwick(NodeFilter):
     """The filter of ``imu_filter_madgwick`` (module docstring). Searched by default: ``gain``.
     ``run_detailed`` adds the diagnostic ``gyr_bias`` (N, 3), rad/s (omega_b of the MARG update)."""
 
@@ -99,13 +100,6 @@ class ImuToolsMadgwick(AttitudeFilter):
     ros = ROS_NODE
     kernel = staticmethod(imu_tools_madgwick_kernel)
 
-    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
-        """O(1) per-sample filter (the kernel with its state carried; equal to :meth:`run` on the samples so far),
-        started from its first sample as the node is."""
-        from objectives.attitude.filters.node_stream import NodeStream
-
-        return NodeStream(self, rate_hz, dt, q0, frame)
-
     def __init__(self, **values: Any):
         super().__init__(**values)
         self.working_frame = str(self.values["world_frame"]).upper()
@@ -117,30 +111,3 @@ class ImuToolsMadgwick(AttitudeFilter):
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"imu_tools_madgwick: dt must be a positive number of seconds, got {dt!r}")
         return KernelSetup(coefficients(self.values, dt, use_mag), initial_state(q0))
-
-    def _run_detailed(self, rec: Recording, q0: Any = None) -> FilterResult:
-        init = self.values.get("init", "auto")
-        want = q0 if init == "auto" else init
-        if want is None or (isinstance(want, str) and want in ("auto", "accmag")):
-            return self._finish(rec, self._run(rec, None))  # the node's start from the first sample
-        return super()._run_detailed(rec, q0)
-
-    def _finish(self, rec: Recording, res: FilterResult) -> FilterResult:
-        from objectives.attitude.quaternion import to_frame
-
-        if res.frame != rec.frame:
-            return FilterResult(to_frame(res.quat, res.frame, rec.frame), rec.frame, res.diagnostics)
-        return res
-
-    def _run(self, rec: Recording, q0: np.ndarray | None) -> FilterResult:
-        if self.values["use_mag"] and rec.mag is None:
-            raise ValueError(f"{self.name}: recording {rec.name!r} has no magnetometer; set use_mag: false")
-        use_mag = bool(self.values["use_mag"]) and rec.mag is not None
-        setup = self.kernel_setup(rec.dt, use_mag, q0, rec.frame)
-        n = rec.gyr.shape[0]
-        out, bias = np.empty((n, 4)), np.empty((n, 3))
-        mag = np.ascontiguousarray(rec.mag, dtype=np.float64) if use_mag else np.zeros((0, 3))
-        imu_tools_madgwick_kernel(np.ascontiguousarray(rec.gyr, dtype=np.float64),
-                                  np.ascontiguousarray(rec.acc, dtype=np.float64), mag, setup.coef, setup.state,
-                                  out, bias)
-        return FilterResult(out, self.working_frame, {"gyr_bias": bias})

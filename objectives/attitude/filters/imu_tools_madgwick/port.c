@@ -47,29 +47,12 @@ static int itm_stateless(int frame, const real a_in[3], const real e[3], real q[
     return 1;
 }
 
-static void itm_start(PFX_filter *f, const real q[4])
+static void node_given(PFX_filter *f, const real q[4])
 {
     real n = SQRT(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     int i;
     for (i = 0; i < 4; i++) f->s[S_Q + i] = q[i] / n;
     f->s[S_PHASE] = 2.0;
-}
-
-void PFX_init(PFX_filter *f, const PFX_params *p)
-{
-    int i;
-    f->p = *p;
-    for (i = 0; i < S_LEN; i++) f->s[i] = 0.0;
-    f->s[S_Q] = 1.0;
-    if (p->init == 2)
-        itm_start(f, p->q0);
-}
-
-void PFX_set_quaternion(PFX_filter *f, const PFX_real q[4])
-{
-    real w[4];
-    from_output(q, w);
-    itm_start(f, w);
 }
 
 void PFX_update(PFX_filter *f, const PFX_real gyr[3], const PFX_real acc[3], const PFX_real mag[3], PFX_real dt)

@@ -30,13 +30,11 @@ Defaults are the node's (``use_mag: false``).
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from objectives.attitude.cexport.port import CField, CMember, CPort
-from objectives.attitude.data.recording import Recording
-from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
+from objectives.attitude.filters.base import G_SI, KernelSetup
+from objectives.attitude.filters.node_stream import NodeFilter
 from objectives.attitude.filters.valenti.kernel import S, coefficients, initial_state, valenti_kernel
 from objectives.attitude.ros_params import RosNode, RosParam
 from objectives.params import Interval, Param, ParamSet
@@ -78,11 +76,11 @@ def _c_fields(v: dict, ctx) -> list[CField]:
 
 
 #: the C port (port.c, ported from kernel.py line by line): the state array of the kernel's layout S
-C_PORT = CPort((__package__, "port.c"), (), (CMember("real", "s", (S.LEN,)), CMember("params", "p")), layouts=(S,),
-               fields=_c_fields, gravity=True)
+C_PORT = CPort((__package__, "port.c"), ("node.c",), (CMember("real", "s", (S.LEN,)), CMember("params", "p")),
+               layouts=(S,), fields=_c_fields, gravity=True)
 
 
-class Valenti(AttitudeFilter):
+class Valenti(NodeFilter):
     """The complementary filter of Valenti et al. 2015 as ``imu_complementary_filter`` runs it (module
     docstring). Searched by default: ``gain_acc``, ``gain_mag``, ``bias_alpha``. ``run_detailed`` adds the
     diagnostic ``gyr_bias`` (N, 3), rad/s."""
@@ -96,13 +94,6 @@ class Valenti(AttitudeFilter):
     ros = ROS_NODE
     kernel = staticmethod(valenti_kernel)
 
-    def stream(self, rate_hz: float | None = None, dt: float | None = None, q0: Any = None, frame: str = "ENU"):
-        """O(1) per-sample filter (the kernel with its state carried; equal to :meth:`run` on the samples so far),
-        started from its first sample as the node is."""
-        from objectives.attitude.filters.node_stream import NodeStream
-
-        return NodeStream(self, rate_hz, dt, q0, frame)
-
     def kernel_setup(self, dt: float, use_mag: bool, q0: np.ndarray | None, frame: str,
                      g_ref: float = G_SI) -> KernelSetup:
         """Coefficients at sample time ``dt`` s (``g_ref``: standard gravity in the accelerometer's unit) and the
@@ -110,26 +101,3 @@ class Valenti(AttitudeFilter):
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"valenti: dt must be a positive number of seconds, got {dt!r}")
         return KernelSetup(coefficients(self.values, dt, use_mag, g_ref), initial_state(q0))
-
-    def _run_detailed(self, rec: Recording, q0: Any = None) -> FilterResult:
-        init = self.values.get("init", "auto")
-        want = q0 if init == "auto" else init
-        if want is None or (isinstance(want, str) and want in ("auto", "accmag")):
-            from objectives.attitude.quaternion import to_frame
-
-            res = self._run(rec, None)  # the node's start from the first sample
-            return FilterResult(to_frame(res.quat, res.frame, rec.frame), rec.frame, res.diagnostics)
-        return super()._run_detailed(rec, q0)
-
-    def _run(self, rec: Recording, q0: np.ndarray | None) -> FilterResult:
-        if self.values["use_mag"] and rec.mag is None:
-            raise ValueError(f"{self.name}: recording {rec.name!r} has no magnetometer; set use_mag: false")
-        use_mag = bool(self.values["use_mag"]) and rec.mag is not None
-        unit = str(rec.units.get("acc", "m/s^2")).replace(" ", "").lower()
-        setup = self.kernel_setup(rec.dt, use_mag, q0, rec.frame, 1.0 if unit == "g" else G_SI)
-        n = rec.gyr.shape[0]
-        out, bias = np.empty((n, 4)), np.empty((n, 3))
-        mag = np.ascontiguousarray(rec.mag, dtype=np.float64) if use_mag else np.zeros((0, 3))
-        valenti_kernel(np.ascontiguousarray(rec.gyr, dtype=np.float64),
-                       np.ascontiguousarray(rec.acc, dtype=np.float64), mag, setup.coef, setup.state, out, bias)
-        return FilterResult(out, "NWU", {"gyr_bias": bias})

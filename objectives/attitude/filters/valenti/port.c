@@ -69,7 +69,7 @@ static void val_start(const real acc[3], const real *mag, real q[4])
     }
 }
 
-static void val_given(PFX_filter *f, const real w[4])
+static void node_given(PFX_filter *f, const real w[4])
 {
     real n = SQRT(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3]);
     f->s[S_Q] = w[0] / n;
@@ -77,23 +77,6 @@ static void val_given(PFX_filter *f, const real w[4])
     f->s[S_Q + 2] = -w[2] / n;
     f->s[S_Q + 3] = -w[3] / n;
     f->s[S_PHASE] = 2.0;
-}
-
-void PFX_init(PFX_filter *f, const PFX_params *p)
-{
-    int i;
-    f->p = *p;
-    for (i = 0; i < S_LEN; i++) f->s[i] = 0.0;
-    f->s[S_Q] = 1.0;
-    if (p->init == 2)
-        val_given(f, p->q0);
-}
-
-void PFX_set_quaternion(PFX_filter *f, const PFX_real q[4])
-{
-    real w[4];
-    from_output(q, w);
-    val_given(f, w);
 }
 
 void PFX_update(PFX_filter *f, const PFX_real gyr[3], const PFX_real acc[3], const PFX_real mag[3], PFX_real dt)
