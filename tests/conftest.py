@@ -88,6 +88,18 @@ def one_error_line(out: subprocess.CompletedProcess, *expected: str) -> str:
     return lines[0]
 
 
+
+def refused_job(path: Path, capsys, expected: str) -> None:
+    """``tuner run path`` in this process exits 2 with one ``error: <path>: ...`` line containing ``expected``
+    and creates no run (the job's ``output`` is ``runs`` beside it)."""
+    from tuner.cli import main
+
+    assert main(["run", str(path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: {path}: ") and expected in err[0], err
+    runs = path.parent / "runs"
+    assert not runs.exists() or not any(runs.iterdir())
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         if "broad_dir" in getattr(item, "fixturenames", ()):

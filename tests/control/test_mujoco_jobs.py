@@ -7,6 +7,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.conftest import refused_job
+
 pytest.importorskip("mujoco")
 
 from tuner.cli import main  # noqa: E402
@@ -78,11 +80,7 @@ BAD = {
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_bad_input_is_one_error_line(tmp_path, capsys, case):
     objective, expected = BAD[case]
-    path = _job(tmp_path, objective)
-    assert main(["run", str(path)]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith(f"error: {path}: ") and expected in err[0], err
-    assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
+    refused_job(_job(tmp_path, objective), capsys, expected)
 
 
 @pytest.mark.slow
