@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from tuner.figures import LEGEND_PT, log_y_if_wide, new_figure
+from tuner.figures import LEGEND_PT, new_figure
 from tuner.plots.context import RunContext, log_scale
-from tuner.plots.sweep_convergence import best_so_far
+from tuner.plots.sweep_convergence import best_so_far, finish_best_so_far
 from tuner.records import RunError
 from tuner.rundir import RunDir
 
@@ -50,13 +50,7 @@ def figure(d: dict[str, Any]) -> Any:
         ax.plot(r["x"], r["y"], lw=2.4 if r["chosen"] else 1.0, alpha=1.0 if r["chosen"] else 0.7,
                 label=f"seed {r['seed']}" + (" (deployed)" if r["chosen"] else ""))
     ax.legend(fontsize=LEGEND_PT, ncol=2 if len(d["runs"]) > 6 else 1)
-    if d["log"]:
-        log_y_if_wide(ax, [v for r in d["runs"] for v in r["y"]])
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("best fitness so far")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
+    return finish_best_so_far(fig, ax, d)
 
 
 def slot(d: dict[str, Any]) -> None:

@@ -59,6 +59,18 @@ def caption(d: dict[str, Any]) -> str:
     return "Best fitness so far of each job against its evaluations (colour: method)."
 
 
+def finish_best_so_far(fig: Any, ax: Any, d: dict[str, Any]) -> Any:
+    """The axes of a best-so-far plot of ``d["runs"]`` (``x`` evaluations, ``y`` best fitness; log y when
+    ``d["log"]`` and the values span decades), laid out; returns ``fig``."""
+    if d["log"]:
+        log_y_if_wide(ax, [v for r in d["runs"] for v in r["y"]])
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("best fitness so far")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
 def figure(d: dict[str, Any]) -> Any:
     fig = new_figure(4.0)
     ax = fig.subplots()
@@ -69,13 +81,7 @@ def figure(d: dict[str, Any]) -> Any:
                 label=None if r["method"] in seen else r["method"])
         seen.add(r["method"])
     ax.legend(fontsize=LEGEND_PT)
-    if d["log"]:
-        log_y_if_wide(ax, [v for r in d["runs"] for v in r["y"]])
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("best fitness so far")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return fig
+    return finish_best_so_far(fig, ax, d)
 
 
 def slot(d: dict[str, Any]) -> dict[str, Any]:
