@@ -146,6 +146,22 @@ def write_result(name: str, payload: dict[str, Any], out_dir: Path = RESULTS_DIR
     return path
 
 
+
+def run_alone(name: str, run: Any) -> None:
+    """``python -m benchmarks.<name> [--smoke]``: ``run(smoke=...)`` timed, its result written to ``<name>.json``
+    (a full run; SUMMARY.md untouched), its markdown printed; exit 0 when every target passes, else 1."""
+    import sys
+    import time
+
+    smoke = "--smoke" in sys.argv
+    t0 = time.perf_counter()
+    res = run(smoke=smoke)
+    res["seconds"] = time.perf_counter() - t0
+    if not smoke:
+        write_result(name, {"mode": "full", **res})
+    print(res["markdown"])
+    sys.exit(0 if all(t["pass"] for t in res["targets"]) else 1)
+
 def fmt(v: Any, digits: int = 3) -> str:
     """Compact number for tables (None/inf/NaN as a dash)."""
     if v is None:

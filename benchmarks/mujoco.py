@@ -293,13 +293,6 @@ def run(smoke: bool = False, n_jobs: int = 2, out_dir: Path | None = None, **_: 
 
 
 if __name__ == "__main__":  # python -m benchmarks.mujoco [--smoke]: this page alone (SUMMARY.md untouched)
-    from benchmarks.common import write_result
+    from benchmarks.common import run_alone
 
-    smoke = "--smoke" in sys.argv
-    t0 = time.perf_counter()
-    res = run(smoke=smoke)
-    res["seconds"] = time.perf_counter() - t0
-    if not smoke:
-        write_result("mujoco", {"mode": "full", **res})
-    print(res["markdown"])
-    sys.exit(0 if all(t["pass"] for t in res["targets"]) else 1)
+    run_alone("mujoco", run)

@@ -41,7 +41,6 @@ in that state, by central differences of one period through the bindings) scored
 from __future__ import annotations
 
 import math
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -453,13 +452,6 @@ def run(smoke: bool = False, out_dir: Path | None = None, **_: Any) -> dict[str,
 
 
 if __name__ == "__main__":  # python -m benchmarks.mujoco_wmp [--smoke]: this page alone (SUMMARY.md untouched)
-    from benchmarks.common import write_result
+    from benchmarks.common import run_alone
 
-    smoke = "--smoke" in sys.argv
-    t0 = time.perf_counter()
-    r = run(smoke=smoke)
-    r["seconds"] = time.perf_counter() - t0
-    if not smoke:
-        write_result("mujoco_wmp", {"mode": "full", **r})
-    print(r["markdown"])
-    sys.exit(0 if all(t["pass"] for t in r["targets"]) else 1)
+    run_alone("mujoco_wmp", run)
