@@ -151,6 +151,15 @@ def read_back(metrics: Mapping[str, Any]) -> dict[str, Any]:
 
 
 # --- typed records -----------------------------------------------------------------------------
+def _versioned(doc: Any, version: int, where: Path) -> dict[str, Any]:
+    """``doc`` checked to be a JSON object of the record's ``version``."""
+    if not isinstance(doc, dict):
+        raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
+    if doc.get("version") != version:
+        raise RunError(f"{where}: version: expected {version}, got {doc.get('version')!r}")
+    return doc
+
+
 def _req(doc: dict[str, Any], key: str, types: type | tuple[type, ...], where: Path) -> Any:
     if key not in doc:
         raise RunError(f"{where}: {key}: missing")
@@ -288,10 +297,7 @@ class Checkpoint:
 
     @classmethod
     def from_doc(cls, doc: Any, where: Path) -> Checkpoint:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
-        if doc.get("version") != 2:
-            raise RunError(f"{where}: version: expected 2, got {doc.get('version')!r}")
+        doc = _versioned(doc, 2, where)
         vals = [_req(doc, k, int, where) for k in ("n_evals", "stage", "generations")]
         if min(vals) < 0:
             raise RunError(f"{where}: negative counts {vals}")
@@ -497,10 +503,7 @@ class Repeats:
 
     @classmethod
     def from_doc(cls, doc: Any, where: Path) -> Repeats:
-        if not isinstance(doc, dict):
-            raise RunError(f"{where}: expected a JSON object, got {type(doc).__name__}")
-        if doc.get("version") != 1:
-            raise RunError(f"{where}: version: expected 1, got {doc.get('version')!r}")
+        doc = _versioned(doc, 1, where)
         seeds = _req(doc, "seeds", list, where)
         if not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
             raise RunError(f"{where}: seeds: expected integers, got {seeds!r}")

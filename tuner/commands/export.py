@@ -51,13 +51,7 @@ def run(a: argparse.Namespace) -> int:
             raise UsageError(f"--format {a.format!r}: allowed: {', '.join([*FORMATS, C_SOURCE, *own])}")
         if a.prefix is not None:
             raise UsageError(f"--prefix {a.prefix!r}: names C identifiers, not for --format {a.format}")
-        text = export_own(run_dir, a.format)
-        if a.output:
-            Path(a.output).write_text(text)
-            print(f"wrote {a.output}", file=sys.stderr)
-        else:
-            sys.stdout.write(text)
-        return 0
+        return _emit(export_own(run_dir, a.format), a.output)
     if source:
         files = export_c(run_dir, a.precision, a.prefix)
         Path(a.out).mkdir(parents=True, exist_ok=True)
@@ -65,10 +59,14 @@ def run(a: argparse.Namespace) -> int:
             (Path(a.out) / name).write_text(text)
             print(f"wrote {Path(a.out) / name}", file=sys.stderr)
         return 0
-    text = export(run_dir, a.format, prefix=a.prefix)
-    if a.output:
-        Path(a.output).write_text(text)
-        print(f"wrote {a.output}", file=sys.stderr)
+    return _emit(export(run_dir, a.format, prefix=a.prefix), a.output)
+
+
+def _emit(text: str, output: str | None) -> int:
+    """``text`` to the file ``output`` (saying so on stderr) or to stdout; 0."""
+    if output:
+        Path(output).write_text(text)
+        print(f"wrote {output}", file=sys.stderr)
     else:
         sys.stdout.write(text)
     return 0
