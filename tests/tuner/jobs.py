@@ -50,6 +50,18 @@ def sphere_job(tmp_path, name: str = "h", **over) -> dict:
     return raw
 
 
+
+def failing_python_job(tmp_path, module: str, error: str, name: str = "h") -> Path:
+    """``job.yaml`` of a :func:`sphere_job` on the Python objective ``module:f`` over ``x`` in [0, 1], which
+    scores 1.0 at x = 0.5 and raises ``error`` (a Python expression) everywhere else; the module is written
+    beside the job."""
+    (tmp_path / f"{module}.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
+                                          f"    raise {error}\n")
+    job = tmp_path / "job.yaml"
+    job.write_text(yaml.safe_dump(sphere_job(tmp_path, name, objective={"kind": "python", "callable": f"{module}:f"},
+                                             parameters={"x": {"low": 0.0, "high": 1.0}})))
+    return job
+
 def rastrigin_job(tmp_path, dim: int, population: int, generations: int, **over):
     """The config of a serial PSO run on ``dim``-D Rastrigin; ``over`` updates top-level sections."""
     raw = {"name": "t", "seed": 3,

@@ -20,7 +20,7 @@ import yaml
 
 from tests.conftest import one_error_line as one_error
 from tests.conftest import run_tuner
-from tests.tuner.jobs import sphere_job
+from tests.tuner.jobs import failing_python_job, sphere_job
 from tuner.config import config_from_dict
 from tuner.records import config_hash
 from tuner.run import run
@@ -372,11 +372,7 @@ def test_tune_reraises_keyboard_interrupt_after_saving(tmp_path):
 
 
 def test_a_run_whose_every_evaluation_failed_is_not_finished(tmp_path):
-    (tmp_path / "failall_h.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
-                                           "    raise RuntimeError('always')\n")
-    job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'h', objective={"kind": "python", "callable": "failall_h:f"},
-                                       parameters={"x": {"low": 0.0, "high": 1.0}})))
+    job = failing_python_job(tmp_path, "failall_h", "RuntimeError('always')")
     out = run_tuner("run", job, "--run-dir", tmp_path / "runs" / "r", "-q", "--no-report")
     assert out.returncode == 1 and "every one of 12 evaluations failed" in out.stderr, out.stderr
     meta = json.loads((tmp_path / "runs" / "r" / "meta.json").read_text())

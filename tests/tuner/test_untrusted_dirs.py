@@ -18,7 +18,7 @@ import yaml
 
 from tests.conftest import one_error_line as one_error
 from tests.conftest import run_tuner
-from tests.tuner.jobs import sphere_job
+from tests.tuner.jobs import failing_python_job, sphere_job
 from tuner.config import config_from_dict
 from tuner.run import run
 
@@ -210,11 +210,7 @@ def test_sizes_and_nul_bytes_are_refused_before_anything_is_allocated(tmp_path, 
 
 @pytest.mark.slow
 def test_a_huge_error_message_is_stored_cut_and_the_history_stays_readable(tmp_path):
-    (tmp_path / "loud_u.py").write_text("def f(params):\n    if params['x'] == 0.5:\n        return 1.0\n"
-                                        "    raise ValueError('y' * 200_000)\n")
-    job = tmp_path / "job.yaml"
-    job.write_text(yaml.safe_dump(sphere_job(tmp_path, 'u', objective={"kind": "python", "callable": "loud_u:f"},
-                                       parameters={"x": {"low": 0.0, "high": 1.0}})))
+    job = failing_python_job(tmp_path, "loud_u", "ValueError('y' * 200_000)", "u")
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
     out = tuner("run", job, "--run-dir", tmp_path / "r", "-q", "--no-report", env=env)
     assert out.returncode == 1 and "Traceback" not in out.stderr, out.stderr  # every evaluation failed
