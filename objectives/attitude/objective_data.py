@@ -115,6 +115,12 @@ class FilterData:
                 if self.warmup_s >= rec.duration_s:
                     raise ValueError(f"objective.warmup_s: {self.warmup_s:g} s is not shorter than recording "
                                      f"{rec.name!r} ({rec.duration_s:.4g} s, {rec.source or 'no source'})")
+                if rec.quat is not None and not np.isfinite(rec.quat[self._mask(rec)]).all(axis=1).any():
+                    raise ValueError(
+                        f"{key}: recording {rec.name!r} ({rec.source or 'no source'}) has no sample to score: none "
+                        f"with a finite truth quaternion inside its motion mask after warmup_s = {self.warmup_s:g} "
+                        f"s ({int(rec.motion.sum())} of {rec.motion.size} samples in motion); give truth for the "
+                        "motion, a shorter warm-up, or leave the recording out")
                 warnings += unit_warnings(rec) + list(rec.meta.get("warnings", []))  # units, what reading found
                 warnings += self._start_warning(rec) + euler_lock_warning(rec.name, self.metric, rec.quat,
                                                                           self._mask(rec))

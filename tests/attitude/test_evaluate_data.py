@@ -38,3 +38,17 @@ def test_evaluate_with_data_that_has_no_recordings_is_an_error(tmp_path):
         out = run_tuner("evaluate", cfg, "--data", tmp_path / "none.yaml")
         assert out.returncode == 2 and "Traceback" not in out.stderr and "nan" not in out.stdout, out
         assert "none.yaml" in out.stderr and out.stderr.startswith("error: "), out.stderr
+
+
+def test_a_recording_without_truth_where_it_is_scored_is_one_error_line_for_run_and_evaluate(tmp_path):
+    """Truth cells all empty (a lost reference): nothing to score. Before, `evaluate` ended in a traceback from the
+    scoring and `run` in "evaluating the default parameters failed"; now the preflight of both names the
+    recording, what is missing and the ways out."""
+    cfg = _own_csv(tmp_path, False)
+    lines = (tmp_path / "imu.csv").read_text().splitlines()
+    (tmp_path / "imu.csv").write_text("\n".join([lines[0]] + [",".join(ln.split(",")[:-4] + [""] * 4)
+                                                              for ln in lines[1:]]) + "\n")
+    for cmd in ("evaluate", "run"):
+        one_error_line(run_tuner(cmd, cfg), "objective.data", "'imu'", "no sample to score",
+                       "finite truth quaternion")
+    assert not (tmp_path / "runs").exists() or not any((tmp_path / "runs").iterdir())
