@@ -285,7 +285,8 @@ def _flat(prefix: str, d: dict[str, Any]) -> dict[str, Any]:
 
 
 def collect(sweep_dir: Path) -> Any:
-    """One row per job: ids, seed, status, best fitness, train/test scores, parameters, metrics."""
+    """One row per job: ids (``method``: the variant and the grid values; ``variant``: its variant alone), seed,
+    status, the numeric grid values (``grid.<key>``), best fitness, train/test scores, parameters, metrics."""
     import pandas as pd
 
     sweep_dir = Path(sweep_dir)
@@ -293,8 +294,8 @@ def collect(sweep_dir: Path) -> Any:
     rows = []
     for job in sw["jobs"]:
         d = sweep_dir / "jobs" / job["id"]
-        row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
-                               "status": _job_status(d)}
+        row: dict[str, Any] = {"job": job["id"], "method": job["method"], "variant": job.get("variant") or "",
+                               "seed": job["seed"], "status": _job_status(d), **_flat("grid.", job.get("grid") or {})}
         rd = RunDir(d)
         if row["status"] in ENDED and not rd.has_best():  # nothing to rank: say why
             row["status"] = "all failed"
