@@ -52,7 +52,7 @@ def data(ctx: SweepContext) -> dict[str, Any] | None:
 
 
 def title(d: dict[str, Any]) -> str:
-    return f"{d['words'].capitalize()} against {d['key']}"
+    return f"{d['score'].replace('_', ' ').capitalize()} against {d['key']}"
 
 
 def caption(d: dict[str, Any]) -> str:

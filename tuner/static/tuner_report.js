@@ -229,7 +229,8 @@
                hovertemplate: esc(d.key) + ' = %{x}<br>%{y:.6g}<extra>' + esc(s.name) + '</extra>'});
       tr.push({x: s.mx, y: s.my, mode: 'lines', name: esc(s.name), legendgroup: String(i), line: {color: color}});
     });
-    return plot(div, tr, baseLayout({height: 380, xaxis: {title: {text: esc(d.key)}},
+    return plot(div, tr, baseLayout({height: 380, showlegend: d.series.length > 1,
+                                     xaxis: {title: {text: esc(d.key)}},
                                      yaxis: {title: {text: esc(d.score.replace(/_/g, ' '))}}}));
   }
 
