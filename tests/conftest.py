@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -77,6 +78,12 @@ def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300, process: boo
         os.chdir(here)
     assert not check or code == 0, err.getvalue()
     return subprocess.CompletedProcess(["tuner", *args], code, out.getvalue(), err.getvalue())
+
+
+def readme_c_block(tag: str) -> str:
+    """The C program of the README that follows ``<!-- tag -->`` (what the export tests compile against)."""
+    text = (REPO / "README.md").read_text()
+    return re.search(rf"<!-- {tag} -->\n```c\n(.*?)```", text, re.S).group(1)
 
 
 def one_error_line(out: subprocess.CompletedProcess, *expected: str) -> str:

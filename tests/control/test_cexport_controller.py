@@ -19,7 +19,7 @@ import yaml
 from objectives.control.objective import ClosedLoopObjective
 from objectives.control.plants.cexport import CController, c_controller_names, c_trace, render_c_controller
 from objectives.csource import STRICT_FLAGS, compile_shared, find_compiler
-from tests.conftest import run_tuner
+from tests.conftest import readme_c_block, run_tuner
 
 ROOT = Path(__file__).resolve().parents[2]
 needs_cc = pytest.mark.skipif(find_compiler() is None, reason="no C compiler (cc, gcc or clang) on the PATH")
@@ -184,11 +184,6 @@ def motor_run(tmp_path_factory):
     return run_dir
 
 
-def _readme_example() -> str:
-    text = (ROOT / "README.md").read_text()
-    return re.search(r"<!-- controller-example -->\n```c\n(.*?)```", text, re.S).group(1)
-
-
 @needs_cc
 def test_export_c_controller_compiles_with_the_readme_example(motor_run, tmp_path):
     out = _tuner("export", motor_run, "--format", "c-controller", "--prefix", "MOTOR", "--out", tmp_path)
@@ -198,7 +193,7 @@ def test_export_c_controller_compiles_with_the_readme_example(motor_run, tmp_pat
     for k, v in best["params"].items():
         assert f"{k}: {v!r}" in header  # the searched values, exactly
     assert "antiwindup: 'backcalc'" in header and "rate limit 6000.0" in header
-    (tmp_path / "main.c").write_text(_readme_example())
+    (tmp_path / "main.c").write_text(readme_c_block("controller-example"))
     exe = tmp_path / "main"
     res = subprocess.run([*find_compiler(), *STRICT_FLAGS, "-O2", "-o", str(exe), str(tmp_path / "main.c"),
                           str(tmp_path / "motor.c"), "-lm"], capture_output=True, text=True)
