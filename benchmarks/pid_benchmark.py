@@ -110,7 +110,7 @@ def tune(name: str, seed: int, pop: int = POP, gens: int = GENS) -> tuple[dict[s
 def _score(problem: Any, p: Any) -> dict[str, float]:
     """The reference IAE and Ms of ``p = (K, Ti, Td)`` on ``problem`` (:class:`benchmarks.pid_optimum.Problem`)."""
     p = np.asarray(p, dtype=float)
-    return {"iae": problem.iae(p), "ms": problem.ms(p)}
+    return {"iae": problem.iae(p), "ms": problem.ms_loop(p)}
 
 
 def compare(optimum_iae: float, tuned: list[dict[str, float]], rules_at_limit: dict[str, dict[str, float]],
@@ -142,7 +142,7 @@ def run(smoke: bool = False, n_jobs: int = 1, **_: Any) -> dict[str, Any]:
     results, rows, walls, cpus = {}, [], [], []
     for name in names:
         pb = Problem(name)
-        rs = rules(name, pb.ms)
+        rs = rules(name, pb.ms_loop)
         at_limit = {r: {**_score(pb, v["limit"]), "knob": v["knob"], "published": _score(pb, v["pid"])}
                     for r, v in rs.items()}
         tuned = []
@@ -197,19 +197,51 @@ def run(smoke: bool = False, n_jobs: int = 1, **_: Any) -> dict[str, Any]:
     out = {"results": results, "markdown": "\n".join(md), "targets": targets,
            "budget": {"pop": pop, "gens": gens, "seeds": list(seeds)}}
     if not smoke:
+        from benchmarks import pid_robust
         from benchmarks.common import RESULTS_DIR
+
+        robust = pid_robust.run()
+        out["robust"] = robust["results"]
+        md += ["", "## Robust part", "", (pid_robust.__doc__ or "").split("\n\n", 1)[1].strip(), "",
+               robust["markdown"], "", "## The price of robustness", "", *tradeoff(Path(RESULTS_DIR))]
+        out["markdown"] = "\n".join(md)
 
         write_markdown(out, Path(RESULTS_DIR) / "pid_benchmark.md")
         (Path(RESULTS_DIR) / "pid_benchmark.json").write_text(json.dumps(
-            {"results": results, "targets": targets, "budget": out["budget"], "n_filter": N_FILTER},
-            indent=1, default=float) + "\n")
+            {"results": results, "robust": out["robust"], "targets": targets, "budget": out["budget"],
+             "n_filter": N_FILTER}, indent=1, default=float) + "\n")
     return out
+
+
+def tradeoff(results_dir: Path) -> list[str]:
+    """``configs/pid_ms_tradeoff.yaml`` swept (the load IAE against the Ms limit on P1 n=4, three seeds): its
+    sweep report's figure copied to ``pid_ms_tradeoff.png`` beside the results, and the Markdown with the
+    medians."""
+    import shutil
+
+    from tuner.plots import swept
+    from tuner.plots.context import SweepContext
+    from tuner.sweep import collect, run_sweep
+
+    config = Path(__file__).resolve().parents[1] / "configs" / "pid_ms_tradeoff.yaml"
+    with tempfile.TemporaryDirectory() as d:
+        t = time.perf_counter()
+        run_sweep(config, sweep_dir=Path(d) / "sw", jobs=2, quiet=True)
+        wall = time.perf_counter() - t
+        data = swept.data(SweepContext(Path(d) / "sw", collect(Path(d) / "sw")))
+        shutil.copy(Path(d) / "sw" / "figures" / swept.FILE, results_dir / "pid_ms_tradeoff.png")
+    (series,) = data["series"]
+    rows = [[f"{x:g}", f"{y:.4g}"] for x, y in zip(series["mx"], series["my"])]
+    return [f"`python -m tuner sweep configs/pid_ms_tradeoff.yaml` ({len(series['x'])} jobs, {wall:.0f} s wall on "
+            "2 processes): the load IAE of the PID tuned on P1 n=4 (PSO 20 x 150) against the Ms limit it must meet, "
+            "the median over seeds 1-3; the sweep report draws it (`tuner/plots/swept.py`).", "",
+            md_table(["Ms limit", "median load IAE"], rows), "", "![IAE against the Ms limit](pid_ms_tradeoff.png)"]
 
 
 def write_markdown(out: dict[str, Any], path: Path) -> Path:
     """``benchmarks/results/pid_benchmark.md``: the method (module docstring), the tables and the targets."""
     text = "# PID benchmark: tuner against the optimum and the rules at the limit\n\n" + \
-        (__doc__ or "").split("\n\n", 1)[1] + "\n" + out["markdown"] + "\n\n" + \
+        (__doc__ or "").split("\n\n", 1)[1] + "\n" + out["markdown"] + "\n\n## Targets\n\n" + \
         "\n".join(f"- {t['target']}: {t['value']} ({'pass' if t['pass'] else 'FAIL'})" for t in out["targets"]) + "\n"
     path.write_text(text)
     return path

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from benchmarks import pid_benchmark as pb
@@ -25,7 +26,7 @@ def test_rules_at_the_limit_meet_it_and_stay_as_published_when_they_already_do()
     """P1 n=4: each rule's PID at the limit has the reference Ms <= 1.4 (to the bisection's tolerance) and lies
     on the limit when the published one exceeds it; a knob of 1 keeps the published PID."""
     problem = Problem("P1 n=4")
-    rs = pb.rules("P1 n=4", problem.ms)
+    rs = pb.rules("P1 n=4", problem.ms_loop)
     assert set(rs) == {"AMIGO (lsq)", "AMIGO (area)", "SIMC"}
     for r in rs.values():
         ms_pub, ms_lim = problem.ms(r["pid"]), problem.ms(r["limit"])
@@ -34,6 +35,17 @@ def test_rules_at_the_limit_meet_it_and_stay_as_published_when_they_already_do()
             assert r["knob"] != 1.0 and ms_lim == pytest.approx(pb.MS_MAX, abs=1e-4)
         else:
             assert r["knob"] == 1.0 and r["limit"] == r["pid"]
+
+
+@pytest.mark.slow
+def test_an_unstable_rule_is_detuned_until_stable():
+    """P9 w0=5: AMIGO on the FOTD fit gives an unstable loop (its sensitivity peak on the grid looks harmless,
+    1.3); at the limit it is stable and meets Ms <= 1.4."""
+    problem = Problem("P9 w0=5")
+    r = pb.rules("P9 w0=5", problem.ms_loop)["AMIGO (lsq)"]
+    assert not problem.stable(np.asarray(r["pid"])) and problem.ms(np.asarray(r["pid"])) < 1.4
+    assert problem.stable(np.asarray(r["limit"])) and problem.ms_loop(np.asarray(r["limit"])) <= 1.4 + 1e-6
+    assert r["knob"] < 1.0 and np.isfinite(problem.iae(np.asarray(r["limit"])))
 
 
 @pytest.mark.slow
