@@ -460,7 +460,8 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     sw = load_sweep_from_dir(sweep_dir)
     df, summ, flat = write_sweep_tables(sweep_dir)
     check_not_link(sweep_dir / "figures")
-    drawn = draw(SWEEP_PLOTS, SweepContext(sweep_dir, df), sweep_dir / "figures")
+    drawn = draw(SWEEP_PLOTS, SweepContext(sweep_dir, df, ranked_by(df) if len(df) else RANKED_BY[-1]),
+                 sweep_dir / "figures")
     jobs_dir = sweep_dir / "jobs"
     versions = {}
     hashes = []

@@ -23,15 +23,13 @@ def data(ctx: SweepContext) -> dict[str, Any] | None:
     """``key`` (the first numeric grid key with at least :data:`MIN_VALUES` values), ``score`` (its column and
     words), ``series`` (one per variant and values of the other grid keys): ``[{name, x, y (every job), mx,
     my (median per x)}]``; None without such a key."""
-    from tuner.sweep import ranked_by
-
     done = ctx.done
     keys = [c for c in done.columns if c.startswith("grid.") and done[c].notna().all()
             and done[c].nunique() >= MIN_VALUES] if len(done) else []
     if not keys:
         return None
     key = keys[0]
-    col, words = ranked_by(ctx.jobs)
+    col, words = ctx.ranked_by
     others = [c for c in done.columns if c.startswith("grid.") and c != key]
     series = []
     variant = done["variant"].astype(str) if "variant" in done else pd.Series("", index=done.index)
