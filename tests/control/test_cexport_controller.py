@@ -185,6 +185,7 @@ def motor_run(tmp_path_factory):
 
 
 @needs_cc
+@pytest.mark.slow
 def test_export_c_controller_compiles_with_the_readme_example(motor_run, tmp_path):
     out = _tuner("export", motor_run, "--format", "c-controller", "--prefix", "MOTOR", "--out", tmp_path)
     assert "motor.h" in out.stderr and "motor.c" in out.stderr
@@ -203,6 +204,7 @@ def test_export_c_controller_compiles_with_the_readme_example(motor_run, tmp_pat
 
 
 @needs_cc
+@pytest.mark.slow
 def test_verify_c_closes_the_loop_next_to_the_model(motor_run):
     out = _tuner("verify-c", motor_run)
     m = re.search(r"fitness model (\S+), C (\S+) \(C - model (\S+)\)", out.stdout)
@@ -213,6 +215,7 @@ def test_verify_c_closes_the_loop_next_to_the_model(motor_run):
     assert "(float, -O2)" in out.stdout
 
 
+@pytest.mark.slow
 def test_a_c_format_of_the_other_kind_is_one_error_line(motor_run):
     out = _tuner("export", motor_run, "--format", "c-filter", "--out", motor_run / "x", check=False)
     assert out.returncode == 2 and out.stderr.startswith("error:") and len(out.stderr.strip().splitlines()) == 1
