@@ -72,9 +72,17 @@ def qrot(q, v):
 
 @njit(cache=True)
 def _qmul_kernel(p, q, out):
-    """Rows of ``out`` (N, 4): ``p[i] * q[i]``; a one-row ``p`` or ``q`` is used for every row."""
+    """Rows of ``out`` (N, 4): ``p[i] * q[i]``; a one-row ``p`` or ``q`` is used for every row (the products of
+    :func:`qmul`, term for term, written in place: no array per row)."""
     for i in range(out.shape[0]):
-        out[i] = qmul(p[i if p.shape[0] > 1 else 0], q[i if q.shape[0] > 1 else 0])
+        a = i if p.shape[0] > 1 else 0
+        b = i if q.shape[0] > 1 else 0
+        p0, p1, p2, p3 = p[a, 0], p[a, 1], p[a, 2], p[a, 3]
+        q0, q1, q2, q3 = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
+        out[i, 0] = p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3
+        out[i, 1] = p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2
+        out[i, 2] = p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1
+        out[i, 3] = p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0
 
 
 #: the uncached twin other kernels call (objectives.jit)
