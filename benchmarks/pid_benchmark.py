@@ -3,10 +3,11 @@ optimum and against the AMIGO and SIMC rules detuned to the same robustness limi
 
 The problem on each plant is :mod:`benchmarks.pid_plants`'s (the sampled loop, load-step IAE, Ms <= 1.4); its
 optimum is :mod:`benchmarks.pid_optimum`'s independent dense global search (stored with its method in
-``benchmarks/results/pid_optimum.json``). Per plant and seed (1-5), ``tuner.run`` tunes the PID (PSO,
-:data:`POP` x :data:`GENS` evaluations, serial); the result is scored by the independent code of
-:mod:`benchmarks.pid_optimum` (IAE of the sampled loop; Ms on 10^5 frequencies with its peaks zoomed), so
-neither the cost nor the constraint is the tuner's own reading:
+``benchmarks/results/pid_optimum.json``). Per plant and seed (1-5), ``tuner.run`` tunes the PID (PSO with its
+low-budget preset, :data:`POP` x :data:`GENS` evaluations, serial, started from AMIGO detuned to the limit:
+``init: amigo``); the result is scored by the independent code of :mod:`benchmarks.pid_optimum` (IAE of the
+sampled loop; Ms on 10^5 frequencies with its peaks zoomed), so neither the cost nor the constraint is the
+tuner's own reading:
 
 - **tuned / optimum**: the tuned IAE over the optimum's, median and worst over the seeds;
 - **Ms violations**: a tuned PID whose reference Ms exceeds 1.4 by more than :data:`MS_TOL` (the tuner reads
@@ -40,8 +41,9 @@ from benchmarks.pid_plants import MS_MAX, N_FILTER, PLANTS, box, continuous, pla
 
 __all__ = ["run", "rules", "tune", "compare", "POP", "GENS", "SEEDS", "MS_TOL"]
 
-#: the tuner's budget per tuning (PSO, serial): 3000 evaluations
-POP, GENS = 20, 150
+#: the tuner's budget per tuning (PSO with its low-budget preset, serial, started from AMIGO detuned to the
+#: limit): 1440 evaluations
+POP, GENS = 24, 60
 SEEDS = (1, 2, 3, 4, 5)
 #: how far above the limit a reference Ms counts as a violation
 MS_TOL = 1e-4
@@ -89,14 +91,15 @@ def _step(num: list[float], den: list[float], delay: float, h: float, dur: float
 
 
 def tune(name: str, seed: int, pop: int = POP, gens: int = GENS) -> tuple[dict[str, float], float, float]:
-    """The PID of plant ``name`` tuned by ``tuner.run`` (serial PSO, no report); its parameters, the wall and the
-    CPU time (s) of the whole run."""
+    """The PID of plant ``name`` tuned by ``tuner.run`` (serial PSO, low-budget preset, started from the AMIGO
+    rule on the method-of-areas fit detuned to the Ms limit: ``init: amigo``; no report); its parameters, the wall
+    and the CPU time (s) of the whole run."""
     from tuner.config import config_from_dict
     from tuner.run import run as tuner_run
 
-    raw = {"name": "pid-bench", "seed": seed, "objective": plant_section(name),
+    raw = {"name": "pid-bench", "seed": seed, "objective": {**plant_section(name), "init": {"rule": "amigo"}},
            "parameters": {k: {"low": lo, "high": hi, "scale": "log"} for k, (lo, hi) in box(name).items()},
-           "optimizer": {"method": "pso", "population": pop, "generations": gens},
+           "optimizer": {"method": "pso", "preset": "lowbudget", "population": pop, "generations": gens},
            "parallel": {"backend": "serial"}}
     with tempfile.TemporaryDirectory() as d:
         raw["output"] = d
@@ -176,7 +179,8 @@ def run(smoke: bool = False, n_jobs: int = 1, **_: Any) -> dict[str, Any]:
     ]
     load = os.getloadavg()[0]
     md = [f"Per plant: the optimum's load IAE, tuned / optimum over seeds {', '.join(map(str, seeds))} (median, "
-          f"worst; PSO {pop} x {gens} = {pop * gens} evaluations per tuning, serial, the whole `tuner.run` "
+          f"worst; PSO (low-budget preset) {pop} x {gens} = {pop * gens} evaluations per tuning from `init: amigo`, "
+          "serial, the whole `tuner.run` "
           "without its report), the largest reference Ms of the tuned PIDs and the violations above "
           f"{MS_MAX} + {MS_TOL:g}, the best rule at the limit (its IAE over the optimum's), the rules at the limit "
           "that beat the tuner on some seed, and the largest CPU time of one tuning (load average "
