@@ -1,6 +1,7 @@
 """Madgwick's population kernel (``backend: threads``): the shared driver
 :func:`~objectives.attitude.filters._bias_population.population_lanes` around
-:func:`~objectives.attitude.filters.madgwick.kernel.madgwick_kernel_inner`, compiled and cached as Madgwick's own kernel."""
+:func:`~objectives.attitude.filters.madgwick.kernel.madgwick_kernel_inner`, compiled and cached as Madgwick's own
+kernel."""
 
 from __future__ import annotations
 
