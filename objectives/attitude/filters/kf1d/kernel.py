@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from objectives.attitude.filters.layout import Layout
 from objectives.jit import uncached
 
 __all__ = ["C", "X", "MAHONY_C", "MADGWICK_C", "T", "kf1d_kernel", "mahony1d_kernel", "madgwick1d_kernel",
-           "tilt_state", "quat_from_tilt_kernel"]
+           "tilt_state", "quat_from_tilt_kernel", "change_starts"]
 
 _TWO_PI = 2.0 * math.pi
 
@@ -219,3 +220,17 @@ def quat_from_tilt_kernel(theta, out):
 
 #: the uncached twin other kernels call (objectives.jit)
 quat_from_tilt_inner = uncached(quat_from_tilt_kernel)
+
+
+@njit(cache=True)
+def change_starts(a, b):
+    """The indices where the pair ``(a[i], b[i])`` differs from the one before (0 first; NaN differs from
+    everything, as ``!=``): the starts of the piecewise-constant runs the AKF's fuzzy scale is held over."""
+    n = a.shape[0]
+    out = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        if i == 0 or a[i] != a[i - 1] or b[i] != b[i - 1]:
+            out[m] = i
+            m += 1
+    return out[:m]

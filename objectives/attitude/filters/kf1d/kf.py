@@ -11,7 +11,7 @@ import numpy as np
 from objectives.attitude.cexport.port import CField, CMember, CPort, RenderContext, c_array, c_literal
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters.base import G_SI, AttitudeFilter, FilterResult, KernelSetup
-from objectives.attitude.filters.kf1d.kernel import C, X, kf1d_kernel
+from objectives.attitude.filters.kf1d.kernel import C, X, change_starts, kf1d_kernel
 from objectives.attitude.filters.kf1d.population import POPULATION
 from objectives.attitude.filters.kf1d.tilt import TiltStream, quat_from_tilt, tilt_from_quat, tilt_inputs, up_sign
 from objectives.fuzzy import TRAP, TRI, SugenoFIS, grid_rules
@@ -269,12 +269,13 @@ class AKF1D(KF1D):
         The measures are piecewise constant (one value per packet), so the system is evaluated only
         where an input changes and held in between (the same numbers as evaluating every sample).
         """
-        inputs = np.stack([np.asarray(vib, dtype=float), np.asarray(ext, dtype=float)], axis=1)
-        n = inputs.shape[0]
+        vib = np.ascontiguousarray(vib, dtype=float)
+        ext = np.ascontiguousarray(ext, dtype=float)
+        n = vib.shape[0]
         if n == 0:
             return np.empty(0)
-        starts = np.flatnonzero(np.concatenate([[True], np.any(inputs[1:] != inputs[:-1], axis=1)]))
-        vals = np.atleast_1d(self.fis()(inputs[starts]))
+        starts = change_starts(vib, ext)
+        vals = np.atleast_1d(self.fis()(np.stack([vib[starts], ext[starts]], axis=1)))
         return np.ascontiguousarray(np.repeat(vals, np.diff(np.append(starts, n))))
 
     def _run(self, rec: Recording, q0: np.ndarray) -> FilterResult:
