@@ -45,7 +45,8 @@ TOP_KEYS = {
     "parallel": "{backend: serial|loky|dask|threads, n_jobs, address}",
     "output": "directory holding the run directories (default: runs)",
     "repeats": "number of runs of this job, seeds seed + 0 .. seed + repeats - 1 (default: 1)",
-    "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, "
+    "validation": "{cv: logo|kfold|dataset|none or {by, folds}, folds, budget_fraction, gap_warn_rel, "
+                  "gap_warn_abs, "
                   "select: {top_k, holdout, include_defaults}, chosen_on: text}",
 }
 
@@ -118,8 +119,10 @@ class SelectConfig:
 class ValidationConfig:
     """The ``validation:`` section (all optional; absent = no validation, the run as before).
 
-    cv : ``None`` (no CV), ``"logo"`` (the objective's own folds, e.g. BROAD's groups, else 5-fold) or
-        ``"kfold"`` (``folds`` folds): cross-validation after the run, written into the run directory.
+    cv : ``None`` (no CV), ``"logo"`` (the objective's own folds, e.g. BROAD's groups, else 5-fold),
+        ``"kfold"`` (``folds`` folds) or ``"dataset"`` (leave one dataset out: the objective's ``cv_folds(k,
+        by="dataset")``, e.g. the ``dataset:`` labels of its data sources): cross-validation after the run,
+        written into the run directory. YAML: ``cv: logo`` or ``cv: {by: dataset}`` (``{by: kfold, folds: 5}``).
     folds : folds of ``kfold`` (>= 2).
     budget_fraction : generations (and ``max_evals``) of each fold's tuning relative to the run's, in (0, 1].
     gap_warn_rel, gap_warn_abs : the gap (CV score - tuning score) is *large* when it exceeds
@@ -312,6 +315,9 @@ def _number(d: Mapping, key: str, f: Any, path: str, low: float, high: float, de
     return float(v)
 
 
+CV_KINDS = ("logo", "kfold", "dataset")
+
+
 def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     """The ``validation:`` section (see :class:`ValidationConfig`); errors name ``validation.<key>``."""
     if raw is None:
@@ -323,10 +329,23 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     if bad:
         raise ConfigError(f, f"validation.{bad[0]}", f"unknown key; allowed: {', '.join(allowed)}")
     cv = raw.get("cv")
+    raw = dict(raw)
+    if isinstance(cv, Mapping):  # cv: {by: logo | kfold | dataset, folds: k}
+        bad = sorted(set(cv) - {"by", "folds"})
+        if bad:
+            raise ConfigError(f, f"validation.cv.{bad[0]}", "unknown key; allowed: by, folds")
+        if "folds" in cv:
+            if "folds" in raw:
+                raise ConfigError(f, "validation.cv.folds", "given twice (also validation.folds); keep one")
+            raw["folds"] = cv["folds"]
+        if cv.get("by") not in CV_KINDS:
+            raise ConfigError(f, "validation.cv.by", f"expected one of {', '.join(CV_KINDS)}, got {cv.get('by')!r}")
+        cv = cv["by"]
     if cv is False or cv == "none":
         cv = None
-    if cv is not None and cv not in ("logo", "kfold"):
-        raise ConfigError(f, "validation.cv", f"expected logo, kfold or none, got {cv!r}")
+    if cv is not None and cv not in CV_KINDS:
+        raise ConfigError(f, "validation.cv", f"expected {', '.join(CV_KINDS)} or none (or {{by: ...}}), "
+                          f"got {cv!r}")
     folds = _get(raw, "folds", int, f, "validation.", default=None)
     if folds is not None and folds < 2:
         raise ConfigError(f, "validation.folds", f"must be >= 2, got {folds}")

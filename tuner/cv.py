@@ -44,7 +44,8 @@ from tuner.objective import hook
 from tuner.selection import plain_score, scored, tune_and_select
 from tuner.setup import LiveMap, build_objective, new_optimizer, worker_count
 
-__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score",
+__all__ = ["cv_by", "transfer_rows", "transfer_table", "FoldOutcome", "CVOutcome", "cross_validate", "write_cv",
+           "cv_texts", "scaled_budget", "plain_score",
            "scored", "scores_on_test_data"]
 
 
@@ -76,6 +77,7 @@ class CVOutcome:
     searched: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     test: dict[str, Any] = field(default_factory=dict)
+    by: str | None = None  # "dataset": each fold holds out one dataset (the transfer table)
 
     def _col(self, key: str) -> np.ndarray:
         return np.array([getattr(f, key) for f in self.folds], float)
@@ -139,6 +141,12 @@ def _procedure(cfg: RunConfig, objective: Any, evaluate: Callable) -> tuple[dict
     return tune_and_select(cfg, objective, lambda obj, cb: _tune(cfg, obj, evaluate, 0, cb))
 
 
+def cv_by(cfg: RunConfig, k: int | None) -> str | None:
+    """The grouping the objective's ``cv_folds`` is asked for besides ``k``: ``"dataset"`` with
+    ``validation: {cv: {by: dataset}}`` (leave one dataset out) unless an explicit ``k`` overrides it, else None."""
+    return "dataset" if k is None and cfg.validation.cv == "dataset" else None
+
+
 def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
                    progress: Callable[[str], None] | None = None, budget_fraction: float = 1.0,
                    full_params: dict[str, Any] | None = None) -> CVOutcome:
@@ -178,14 +186,15 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
     if folds_fn is None:
         raise ConfigError(cfg.source, "objective", f"{type(objective).__name__} has no cv_folds hook: "
                           "it cannot be cross-validated")
+    by = cv_by(cfg, k)
     try:
-        folds = list(folds_fn(k))
+        folds = list(folds_fn(k, by=by) if by else folds_fn(k))
     except ValueError as exc:
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
+        raise ConfigError(cfg.source, "validation.cv.by" if by else "objective", str(exc)) from None
     if len(folds) < 2:
         raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
     n_jobs, notes = worker_count(cfg, cfg.space(objective))
-    out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
+    out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free], by=by)
     defaults = defaults_baseline(objective, cfg.space(objective))  # fixed values wherever written
     for i, (name, train, test) in enumerate(folds):
         evaluate = LiveMap(cfg, n_jobs)
@@ -226,6 +235,35 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
                 f"{out.test['defaults']:.4g}")
     out.seconds = time.time() - t0
     return out
+
+
+def transfer_rows(out: CVOutcome) -> list[dict[str, Any]]:
+    """The transfer table of a leave-one-dataset-out CV (``out.by == "dataset"``; else ``[]``): one row per
+    dataset, ``{dataset, n, defaults, tuned, difference}``: the defaults and the parameters tuned on the other
+    datasets, both scored on this dataset's recordings, and tuned - defaults (negative: tuning carries over)."""
+    if out.by != "dataset":
+        return []
+    return [{"dataset": f.name, "n": f.n_test, "defaults": f.default_fitness, "tuned": f.cv_fitness,
+             "difference": f.cv_fitness - f.default_fitness} for f in out.folds]
+
+
+def transfer_table(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown lines of :func:`transfer_rows` (``[]`` without rows)."""
+    if not rows:
+        return []
+    worse = [r["dataset"] for r in rows if r["difference"] > 0]
+    return ["## Transfer between datasets", "",
+            "Each dataset held out once: tuned on the other datasets, scored on this one, beside the defaults "
+            "scored on the same recordings (difference = tuned - defaults; negative: the tuning carries over).", "",
+            "| dataset (held out) | n | defaults | tuned on the others | difference |", "|---|---|---|---|---|",
+            *(f"| {r['dataset']} | {r['n']} | {_fmt(r['defaults'])} | {_fmt(r['tuned'])} | "
+              f"{_fmt_signed(r['difference'])} |" for r in rows), "",
+            (f"Tuning on the other datasets is worse than the defaults on: {', '.join(worse)}." if worse
+             else "Tuning on the other datasets beats the defaults on every dataset."), ""]
+
+
+def _fmt_signed(v: float) -> str:
+    return "-" if math.isnan(v) else f"{v:+.4g}"
 
 
 def _fmt(v: Any) -> str:
@@ -315,4 +353,5 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
     if s["cv_mean"] > s["defaults_mean"]:
         lines += ["", "CV score worse than the defaults': tuning does not help on unseen recordings."]
     lines += [*(f"- {n}" for n in out.notes), ""]
+    lines += transfer_table(transfer_rows(out))
     return "\n".join(lines), buf.getvalue()

@@ -17,7 +17,7 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-__all__ = ["defaults_verdict", "optimistic_note"]
+__all__ = ["defaults_verdict", "optimistic_note", "transfer_line"]
 
 #: (tuned key, defaults key, what the scores are)
 _PAIRS = (("test_fitness", "defaults_test_fitness", "held-out"), ("cv_fitness", "defaults_cv_fitness", "CV"))
@@ -60,3 +60,14 @@ def optimistic_note(chosen_on: Any) -> str | None:
     return (f"the config's fixed options and search ranges were chosen on {chosen_on}, outside this run's "
             "validation: its CV re-tunes only the searched values per fold, so the CV score is optimistic "
             "for data those choices never saw")
+
+
+def transfer_line(validation: Mapping[str, Any] | None) -> str:
+    """One line of a leave-one-dataset-out CV's transfer table (``validation.json``'s ``cv.transfer``): each
+    dataset's tuned - defaults difference (negative: tuning on the other datasets carries over), or ``""``."""
+    rows = ((validation or {}).get("cv") or {}).get("transfer") or []
+    parts = []
+    for r in rows:
+        d = _num(r.get("difference"))
+        parts.append(f"{r.get('dataset')} {'-' if d is None else f'{d:+.4g}'}")
+    return ("transfer (tuned on the other datasets - defaults): " + ", ".join(parts)) if parts else ""
