@@ -131,6 +131,8 @@ class ValidationConfig:
     chosen_on : the data the config's fixed options and search ranges were chosen on by looking at it, when
         that is the run's own data; the report then says the CV (which re-tunes only the searched values) is
         optimistic (:func:`tuner.verdict.optimistic_note`). A declaration, not a setting: nothing else changes.
+    nested : with ``cv: {..., nested: {choose: {option: [a, b]}}}`` the CV chooses those fixed options inside
+        each fold (:mod:`tuner.nested`: the inner loop chooses, the outer scores).
     """
 
     cv: str | None = None
@@ -140,6 +142,7 @@ class ValidationConfig:
     gap_warn_abs: float | None = None
     select: SelectConfig | None = None
     chosen_on: str | None = None
+    nested: Mapping[str, tuple] | None = None  # cv: {nested: {choose: {option: [a, b]}}} (tuner.nested)
 
     @property
     def active(self) -> bool:
@@ -330,10 +333,13 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
         raise ConfigError(f, f"validation.{bad[0]}", f"unknown key; allowed: {', '.join(allowed)}")
     cv = raw.get("cv")
     raw = dict(raw)
-    if isinstance(cv, Mapping):  # cv: {by: logo | kfold | dataset, folds: k}
-        bad = sorted(set(cv) - {"by", "folds"})
+    nested = None
+    if isinstance(cv, Mapping):  # cv: {by: logo | kfold | dataset, folds: k, nested: {choose: {...}}}
+        bad = sorted(set(cv) - {"by", "folds", "nested"})
         if bad:
-            raise ConfigError(f, f"validation.cv.{bad[0]}", "unknown key; allowed: by, folds")
+            raise ConfigError(f, f"validation.cv.{bad[0]}", "unknown key; allowed: by, folds, nested")
+        if "nested" in cv:
+            nested = _parse_nested(cv["nested"], f)
         if "folds" in cv:
             if "folds" in raw:
                 raise ConfigError(f, "validation.cv.folds", "given twice (also validation.folds); keep one")
@@ -379,7 +385,33 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     if chosen_on is not None and (not isinstance(chosen_on, str) or not chosen_on.strip()):
         raise ConfigError(f, "validation.chosen_on", "expected a text naming the data the config's fixed options "
                           f"and ranges were chosen on (e.g. 'the 16 shared BROAD trials'), got {chosen_on!r}")
-    return ValidationConfig(cv, folds, frac, rel, gabs, select, chosen_on)
+    return ValidationConfig(cv, folds, frac, rel, gabs, select, chosen_on, nested)
+
+
+#: at most this many combinations of nested choices (each one more tuning per outer fold)
+MAX_NESTED = 16
+
+
+def _parse_nested(raw: Any, f: Any) -> dict[str, tuple]:
+    """``nested: {choose: {option: [a, b], ...}}`` -> ``{option: (a, b)}`` (errors name the key)."""
+    key = "validation.cv.nested"
+    if not isinstance(raw, Mapping) or set(raw) != {"choose"}:
+        raise ConfigError(f, key, f"expected {{choose: {{option: [value, value, ...]}}}}, got {raw!r}")
+    choose = raw["choose"]
+    if not isinstance(choose, Mapping) or not choose:
+        raise ConfigError(f, f"{key}.choose", f"expected a mapping of options to candidate lists, got {choose!r}")
+    out: dict[str, tuple] = {}
+    n = 1
+    for name, values in choose.items():
+        if not isinstance(values, (list, tuple)) or len(values) < 2 or len(set(map(repr, values))) != len(values):
+            raise ConfigError(f, f"{key}.choose.{name}", f"expected a list of >= 2 distinct candidate values, "
+                              f"got {values!r}")
+        out[str(name)] = tuple(values)
+        n *= len(values)
+    if n > MAX_NESTED:
+        raise ConfigError(f, f"{key}.choose", f"{n} combinations; at most {MAX_NESTED} (each is one more tuning "
+                          "per fold)")
+    return out
 
 
 def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir: Path | None = None) -> RunConfig:
