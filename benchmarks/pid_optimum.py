@@ -85,13 +85,22 @@ class Problem:
         cn = np.polyadd(np.polyadd(K * cd, ki * np.array([1.0, -ad])), bd * np.array([1.0, -2.0, 1.0]))
         return cn, cd
 
+    def _characteristic(self, p: np.ndarray) -> np.ndarray:
+        cn, cd = self.controller(p)
+        return np.polyadd(np.polymul(self.pd, cd), np.polymul(self.pn, cn))
+
+    def stable(self, p: np.ndarray) -> bool:
+        """Whether the closed loop of ``p`` is stable (every root of its characteristic polynomial inside the
+        unit circle)."""
+        return bool(np.max(np.abs(np.roots(self._characteristic(p)))) < 1.0)
+
     def iae(self, p: np.ndarray) -> float:
         """The IAE of the load step (inf for an unstable loop)."""
         from scipy.signal import lfilter
 
         cn, cd = self.controller(p)
-        a = np.polyadd(np.polymul(self.pd, cd), np.polymul(self.pn, cn))
-        if np.max(np.abs(np.roots(a))) >= 1.0:
+        a = self._characteristic(p)
+        if not self.stable(p):
             return math.inf
         b = np.polymul(self.pn, cd)
         b = np.r_[np.zeros(a.size - b.size), b]
@@ -102,6 +111,10 @@ class Problem:
         K, ki, ad, bd = self.pid(p)
         z = np.exp(1j * w * self.h)
         return 1.0 / np.abs(1.0 + (K + ki / (z - 1.0) + bd * (z - 1.0) / (z - ad)) * pr)
+
+    def ms_loop(self, p: np.ndarray) -> float:
+        """:meth:`ms` of a stable loop, inf for an unstable one (whose sensitivity peak says nothing)."""
+        return self.ms(p) if self.stable(p) else math.inf
 
     def ms(self, p: np.ndarray) -> float:
         """Ms on :data:`N_DENSE` frequencies, its three highest peaks zoomed (module docstring)."""

@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -47,19 +48,21 @@ def broad_dir() -> Path:
     return BROAD_DIR
 
 
-def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300,
-              process: bool = False) -> subprocess.CompletedProcess:
+def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300, process: bool = False,
+              check: bool = False) -> subprocess.CompletedProcess:
     """The command line ``tuner *args``, output captured as text, as a finished process.
 
     It runs in this process through :func:`tuner.cli.main` (stdout and stderr captured, the working
     directory changed for the call): a new interpreter would spend about 0.5 s importing numpy, numba and
     pandas for each call. ``python -m tuner`` runs in a subprocess when ``env`` is given (an environment is
     read at import) or ``process`` is set (what only a process shows: signals, exit status of the
-    interpreter, modules a command imports).
+    interpreter, modules a command imports). ``check``: assert exit status 0 (the message is stderr).
     """
     if env is not None or process:
-        return subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
-                              timeout=timeout, env=env)
+        res = subprocess.run([sys.executable, "-m", "tuner", *args], capture_output=True, text=True, cwd=cwd,
+                             timeout=timeout, env=env)
+        assert not check or res.returncode == 0, res.stderr
+        return res
     from tuner.cli import main
 
     out, err, here = io.StringIO(), io.StringIO(), os.getcwd()
@@ -73,7 +76,14 @@ def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300,
                 code = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
     finally:
         os.chdir(here)
+    assert not check or code == 0, err.getvalue()
     return subprocess.CompletedProcess(["tuner", *args], code, out.getvalue(), err.getvalue())
+
+
+def readme_c_block(tag: str) -> str:
+    """The C program of the README that follows ``<!-- tag -->`` (what the export tests compile against)."""
+    text = (REPO / "README.md").read_text()
+    return re.search(rf"<!-- {tag} -->\n```c\n(.*?)```", text, re.S).group(1)
 
 
 def one_error_line(out: subprocess.CompletedProcess, *expected: str) -> str:

@@ -31,9 +31,9 @@ from tuner.verdict import defaults_verdict
 __all__ = ["export", "FORMATS", "C_SOURCE", "provenance", "export_c", "verify_c", "objective_formats", "export_own"]
 
 #: the format name of the tuned system itself as C99 source (the objective's ``export_c`` hook), and the names it
-#: is also accepted under
+#: is also accepted under, each for the one kind of deployment it names (``Deployment.kind``)
 C_SOURCE = "c-source"
-C_SOURCE_ALIASES = ("c-filter",)
+C_SOURCE_ALIASES = {"c-filter": "filter", "c-controller": "closed_loop"}
 
 
 def _build(run_dir: Path) -> tuple[Any, str]:
@@ -177,9 +177,13 @@ def _deployed_objective(run_dir: Path, data_file: str | Path | None = None,
     return objective, load_deployment(run_dir)
 
 
-def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None = None) -> dict[str, str]:
+def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None = None,
+             fmt: str = C_SOURCE) -> dict[str, str]:
     """``{filename: text}``: the C source of the run's deployed system (the objective's ``export_c`` hook: a
-    filter, a controller), its header led by the run's provenance (run, fitness, optimiser, data, commit)."""
+    filter, a controller), its header led by the run's provenance (run, fitness, optimiser, data, commit).
+
+    ``fmt``: :data:`C_SOURCE`, or one of :data:`C_SOURCE_ALIASES`, which also requires its kind of deployment
+    (``c-controller`` of a filter run is a ConfigError naming the config's objective)."""
     from tuner.config import ConfigError
     from tuner.rundir import RunDir
 
@@ -189,6 +193,12 @@ def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None 
     fn = hook(objective, "export_c")
     if fn is None:
         raise ConfigError(run_dir / "config.yaml", "objective", "this objective has no C export (hook export_c)")
+    want = C_SOURCE_ALIASES.get(fmt)
+    if want is not None and dep.kind != want:
+        other = [k for k, v in C_SOURCE_ALIASES.items() if v == dep.kind]
+        raise ConfigError(run_dir / "config.yaml", "objective",
+                          f"--format {fmt} exports a {want.replace('_', '-')} objective's result; this run's is "
+                          f"{dep.kind!r}: use --format {other[0] if other else C_SOURCE}")
     doc = provenance(run_dir, objective)
     if prefix is None:
         prefix = c_prefix(RunDir(run_dir).meta().name or run_dir.name)
@@ -198,7 +208,7 @@ def export_c(run_dir: str | Path, precision: str = "double", prefix: str | None 
     try:
         return dict(fn(dict(dep.values), precision, c_prefix(prefix), "\n".join(lines)))
     except ValueError as exc:
-        raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
+        raise _hook_error(run_dir, exc) from None
 
 
 def objective_formats(run_dir: str | Path) -> dict[str, str]:
@@ -261,4 +271,16 @@ def verify_c(run_dir: str | Path, data_file: str | Path | None = None, precision
         return {"name": dep.name, **dict(fn(dict(dep.values), precision, tuple(opt))),
                 **({"warnings": warnings} if warnings else {})}
     except ValueError as exc:
-        raise ConfigError(run_dir / "best.yaml", "deployment", str(exc)) from None
+        raise _hook_error(run_dir, exc) from None
+
+
+def _hook_error(run_dir: Path, exc: ValueError) -> Exception:
+    """A C hook's ValueError as a ConfigError: one naming a key of the config's objective (``objective.x: ...``,
+    e.g. a controller without a C port) names the config, any other the deployed values of ``best.yaml``."""
+    from tuner.config import ConfigError
+
+    text = str(exc)
+    key, sep, rest = text.partition(": ")
+    if sep and key.startswith("objective.") and " " not in key:
+        return ConfigError(run_dir / "config.yaml", key, rest)
+    return ConfigError(run_dir / "best.yaml", "deployment", text)

@@ -285,7 +285,8 @@ def _flat(prefix: str, d: dict[str, Any]) -> dict[str, Any]:
 
 
 def collect(sweep_dir: Path) -> Any:
-    """One row per job: ids, seed, status, best fitness, train/test scores, parameters, metrics."""
+    """One row per job: ids (``method``: the variant and the grid values; ``variant``: its variant alone), seed,
+    status, the numeric grid values (``grid.<key>``), best fitness, train/test scores, parameters, metrics."""
     import pandas as pd
 
     sweep_dir = Path(sweep_dir)
@@ -293,8 +294,8 @@ def collect(sweep_dir: Path) -> Any:
     rows = []
     for job in sw["jobs"]:
         d = sweep_dir / "jobs" / job["id"]
-        row: dict[str, Any] = {"job": job["id"], "method": job["method"], "seed": job["seed"],
-                               "status": _job_status(d)}
+        row: dict[str, Any] = {"job": job["id"], "method": job["method"], "variant": job.get("variant") or "",
+                               "seed": job["seed"], "status": _job_status(d), **_flat("grid.", job.get("grid") or {})}
         rd = RunDir(d)
         if row["status"] in ENDED and not rd.has_best():  # nothing to rank: say why
             row["status"] = "all failed"
@@ -459,7 +460,8 @@ def write_sweep_report(sweep_dir: str | Path, live: bool = False) -> Path:
     sw = load_sweep_from_dir(sweep_dir)
     df, summ, flat = write_sweep_tables(sweep_dir)
     check_not_link(sweep_dir / "figures")
-    drawn = draw(SWEEP_PLOTS, SweepContext(sweep_dir, df), sweep_dir / "figures")
+    drawn = draw(SWEEP_PLOTS, SweepContext(sweep_dir, df, ranked_by(df) if len(df) else RANKED_BY[-1]),
+                 sweep_dir / "figures")
     jobs_dir = sweep_dir / "jobs"
     versions = {}
     hashes = []

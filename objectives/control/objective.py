@@ -156,6 +156,25 @@ class ClosedLoopObjective:
         look-up tables (LUT1-3, thesis eq. 2.32); ``None`` for a controller without any."""
         return self.loop.export_tables({**self.fixed, **dict(params or {})})
 
+    def export_c(self, params: Mapping[str, Any], precision: str, prefix: str, comment: str) -> dict[str, str]:
+        """The deployed controller as C99 (``tuner export --format c-controller``): the generic loop's PID
+        family and state feedback (:mod:`objectives.control.plants.cexport`); ValueError naming
+        ``objective.controller`` for a controller without a C port."""
+        return self._c_loop().export_c(self.values(params), precision, prefix, comment)
+
+    def verify_c(self, params: Mapping[str, Any], precision: str, opt: tuple[str, ...]) -> dict[str, Any]:
+        """The exported controller compiled and its loop closed next to the model (``tuner verify-c``)."""
+        return self._c_loop().verify_c(self.values(params), precision, opt)
+
+    def _c_loop(self) -> Any:
+        from objectives.control.plants.cexport import c_controller_names
+
+        if self.controller not in c_controller_names():  # the ports are the generic loop's
+            where = f" (plant {self.loop.family})" if self.loop.family != "siso" else ""
+            raise ValueError(f"objective.controller: {self.controller!r}{where} has no C port; the controllers with "
+                             f"one: {', '.join(c_controller_names())}")
+        return self.loop
+
     # --- evaluation -----------------------------------------------------------------------------
     def coeffs(self, params: Mapping[str, Any] | None = None) -> np.ndarray:
         """The kernel's coefficient array of ``params`` (``ValueError`` if the design cannot be built)."""

@@ -16,17 +16,14 @@ import yaml
 from objectives.attitude.cexport.build import STRICT_FLAGS, find_compiler
 from objectives.attitude.data.broad import default_broad_dir
 from tests.attitude.cexport_cases import needs_cc
-from tests.conftest import run_tuner
+from tests.conftest import readme_c_block, run_tuner
 
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {**os.environ, "NUMBA_CACHE_DIR": str(ROOT / ".cache" / "numba")}
 
 
 def _tuner(*args, env=None, check=True):
-    out = run_tuner(*args, cwd=ROOT, env=env)  # in this process unless an environment is given
-    if check:
-        assert out.returncode == 0, out.stderr
-    return out
+    return run_tuner(*args, cwd=ROOT, env=env, check=check)  # in this process unless an environment is given
 
 
 def _run(tmp: Path, config: Path, *sets: str) -> Path:
@@ -51,11 +48,6 @@ def bench_run(tmp_path_factory):
     return _run(tmp, tmp / "c.yaml")
 
 
-def _firmware_example() -> str:
-    text = (ROOT / "README.md").read_text()
-    return re.search(r"<!-- firmware-example -->\n```c\n(.*?)```", text, re.S).group(1)
-
-
 @needs_cc
 def test_export_compiles_with_the_readme_example(bench_run, tmp_path):
     out = _tuner("export", bench_run, "--format", "c-filter", "--prefix", "EKF1", "--out", tmp_path)
@@ -66,7 +58,7 @@ def test_export_compiles_with_the_readme_example(bench_run, tmp_path):
     assert f"rho: {best['params']['rho']!r}" in header  # the searched value, exactly
     for key in ("huber_deg: 5.0", "acc_gate: 0.3", "gyro_sample: 'current'", "mag_rejection: True"):
         assert key in header  # the fixed values
-    (tmp_path / "main.c").write_text(_firmware_example())
+    (tmp_path / "main.c").write_text(readme_c_block("firmware-example"))
     exe = tmp_path / "main"
     res = subprocess.run([*find_compiler(), *STRICT_FLAGS, "-O2", "-o", str(exe), str(tmp_path / "main.c"),
                           str(tmp_path / "ekf1.c"), "-lm"], capture_output=True, text=True)

@@ -1,6 +1,7 @@
 """Slow reference of the ``realtime`` filter: the ``vqf`` package's pure-Python implementation (``PyVQF``, the
 published reference of Laidig & Seel 2023, one sample per call in NumPy), with the project's two additions
-(``mag_first_at_rest``, ``mag_recover_tau_s``) written into a subclass's magnetometer step.
+(``mag_first_at_rest``, ``mag_recover_tau_s``) written into a subclass's magnetometer step (PyVQF detects rest on
+the accelerometer only with the rest bias on: the cases with ``mag_first_at_rest`` keep it on).
 
 Used by tests/attitude/test_realtime.py to check the numba kernel sample by sample.
 """
@@ -38,7 +39,7 @@ def reference_run(values: dict, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarra
             if m[0] == 0.0 and m[1] == 0.0 and m[2] == 0.0:
                 return
             st, p, ts = self._state, self._params, self._coeffs.magTs
-            first_rest_ok = first_at_rest and st.magRefNorm == 0.0
+            first_rest_ok = first_at_rest and st.magRefNorm == 0.0 and st.restDetected
             h = self.quatRotate(self.getQuat6D(), m)
             if p.magDistRejectionEnabled:
                 nd = np.array([math.sqrt(h.dot(h)), -math.asin(h[2] / math.sqrt(h.dot(h)))])

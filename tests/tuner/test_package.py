@@ -219,6 +219,8 @@ def test_wheel_installs_and_runs_in_a_fresh_virtualenv(tmp_path):
             "tuner/data/configs/examples/imu.csv"} <= set(names)  # the README's own-CSV example, whole
     # the C export's shared parts and the filter units' ports
     assert {"objectives/attitude/cexport/templates/common.c", "objectives/attitude/filters/ekf/port.c"} <= set(names)
+    assert {f"objectives/control/plants/ctemplates/{n}" for n in ("controller.h", "pid.c", "sf.c", "api.c")} <= \
+        set(names)  # the controllers' C export
     assert not any(n.startswith(("tests/", "configs/", "benchmarks/")) for n in names)
     env["PYTHONDONTWRITEBYTECODE"] = "1"  # the linked dependencies are read, never written
     venv = tmp_path / "venv"

@@ -196,3 +196,21 @@ def test_the_script_draws_a_sweep_and_a_dashboard(tmp_path):
     data = _page_data((root / "index.html").read_text())["dashboard"]
     assert len(data["runs"]) == 3 and isinstance(data["log"], bool)
     assert np.isfinite([r["best"] for r in data["runs"] if r["kind"] == "job"]).all()
+
+
+@needs_plotly
+@pytest.mark.slow
+def test_the_script_draws_the_score_against_a_swept_value(tmp_path):
+    """A sweep over a number (three values, two seeds): the interactive page draws its swept slot, one marker
+    trace and one median line per series, every job a point."""
+    base = {"name": "s", "seed": 1, "objective": {"kind": "function", "function": "sphere", "dim": 2},
+            "optimizer": {"method": "pso", "population": 4, "generations": 2}, "parallel": {"backend": "serial"}}
+    doc = {"sweep": {"name": "grid", "base": base, "grid": {"optimizer.generations": [1, 2, 3]}, "seeds": [1, 2]}}
+    (tmp_path / "sweep.yaml").write_text(json.dumps(doc))
+    assert run_tuner("sweep", tmp_path / "sweep.yaml", "--dir", tmp_path / "sw", "-q").returncode == 0
+    res = _draw(tmp_path / "sw" / "report.html", tmp_path)
+    assert "swept" in res["names"] and res["errors"] == [] and ["swept", True] in res["rendered"]
+    call = next(c for c in res["calls"] if c["plot"] == "swept")
+    assert call["traces"] == 2 and call["points"] == [6, 3]  # every job, then the three medians
+    data = _page_data((tmp_path / "sw" / "report.html").read_text())["swept"]
+    assert data["key"] == "optimizer.generations" and data["series"][0]["mx"] == [1.0, 2.0, 3.0]

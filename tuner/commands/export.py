@@ -15,7 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("run_dir")
     p.add_argument("--format", default="yaml", metavar="FORMAT",
                    help=f"{', '.join(FORMATS)} (default yaml); {C_SOURCE}: C99 header + source of the tuned system "
-                        f"itself, e.g. the filter (see --precision, --out; {', '.join(C_SOURCE_ALIASES)}: the same); "
+                        f"itself, the filter or the controller (see --precision, --out; "
+                        f"{', '.join(C_SOURCE_ALIASES)}: the same for that kind of run); "
                         "or a format of the run's objective's own, e.g. ros2-params / ros1-params (the ROS node's "
                         "parameter file of a filter a ROS node runs)")
     p.add_argument("--precision", default="double", choices=["double", "float"], help=f"{C_SOURCE}: arithmetic")
@@ -53,7 +54,7 @@ def run(a: argparse.Namespace) -> int:
             raise UsageError(f"--prefix {a.prefix!r}: names C identifiers, not for --format {a.format}")
         return _emit(export_own(run_dir, a.format), a.output)
     if source:
-        files = export_c(run_dir, a.precision, a.prefix)
+        files = export_c(run_dir, a.precision, a.prefix, a.format)
         Path(a.out).mkdir(parents=True, exist_ok=True)
         for name, text in files.items():
             (Path(a.out) / name).write_text(text)

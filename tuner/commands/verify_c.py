@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
 from tuner.commands.common import UsageError
@@ -31,9 +32,17 @@ def run(a: argparse.Namespace) -> int:
           f"fitness model {py.fitness:.6g}, C {c.fitness:.6g} (C - model {c.fitness - py.fitness:.3g}); "
           f"time model {out['seconds']['python']:.2f} s, C {out['seconds']['c']:.2f} s")
     angles = out.get("max_angle_rad") or {}
+    diffs = out.get("max_abs_diff") or {}  # a closed loop: the trajectories of the model and of the C
     for rec, m in py.recordings.items():
-        vals = "  ".join(f"{k} model {v:.6g} C {c.recordings[rec][k]:.6g} ({c.recordings[rec][k] - v:+.2g})"
-                         for k, v in m.items() if isinstance(v, (int, float)) and k.endswith("deg"))
+        keys = [k for k, v in m.items() if isinstance(v, (int, float)) and (k.endswith("deg") or diffs)]
+        vals = "  ".join(f"{k} model {m[k]:.6g} C {c.recordings[rec][k]:.6g}" + (
+            f" ({c.recordings[rec][k] - m[k]:+.2g})" if math.isfinite(c.recordings[rec][k] - m[k]) else "")
+            for k in keys)
         angle = f"max angle {angles[rec]:.3g} rad  " if rec in angles else ""
-        print(f"  {rec}: {angle}{vals}")
+        diff = f"max |C - model| {diffs[rec]:.3g} (states, outputs, commands)  " if rec in diffs else ""
+        print(f"  {rec}: {angle}{diff}{vals}")
+    if out.get("agrees") is False:
+        print(f"error: the C's closed loop leaves the model's by more than {out.get('tolerance', 0):.3g} (relative)",
+              file=sys.stderr)
+        return 1
     return 0 if not (py.failed or c.failed) else 1

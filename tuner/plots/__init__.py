@@ -37,6 +37,7 @@ from tuner.plots import (
     responses,
     slices,
     sweep_convergence,
+    swept,
 )
 from tuner.render import md_escape, md_path
 
@@ -45,7 +46,7 @@ __all__ = ["RUN_PLOTS", "SWEEP_PLOTS", "Drawn", "register", "draw", "figures_md"
 #: a run report's plots, in the order the report shows them
 RUN_PLOTS: list[Any] = [repeats, convergence, importance, slices, parcoords, contour]
 #: a sweep report's plots
-SWEEP_PLOTS: list[Any] = [sweep_convergence, final_fitness, errors_by_method, responses, best_parameters]
+SWEEP_PLOTS: list[Any] = [sweep_convergence, final_fitness, swept, errors_by_method, responses, best_parameters]
 _FACE = ("NAME", "FILE", "data", "title", "caption", "figure", "slot")
 
 

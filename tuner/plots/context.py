@@ -122,11 +122,13 @@ class RunContext:
 
 @dataclass
 class SweepContext:
-    """One sweep's plot inputs: its directory and its jobs (:func:`tuner.sweep.collect`: one row per job with
-    ``job``, ``method``, ``status``, ``best_fitness``, scores, ``param.*``)."""
+    """One sweep's plot inputs: its directory, its jobs (:func:`tuner.sweep.collect`: one row per job with
+    ``job``, ``method``, ``status``, ``best_fitness``, scores, ``param.*``, ``grid.*``) and the score it ranks by
+    (``(column, words)``, :func:`tuner.sweep.ranked_by`)."""
 
     sweep_dir: Path
     jobs: pd.DataFrame
+    ranked_by: tuple[str, str] = ("best_fitness", "train score")
 
     @cached_property
     def done(self) -> pd.DataFrame:

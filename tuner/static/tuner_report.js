@@ -30,6 +30,10 @@
     return String(v);
   }
 
+  /* matplotlib's tab10: the colour of the i-th method, as in the PNGs (tuner.figures.method_color) */
+  var COLORS = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#7f7f7f',
+                '#bcbd22', '#17becf'];
+
   var CONFIG = {responsive: true, displaylogo: false, modeBarButtonsToRemove: ['sendDataToCloud']};
 
   function baseLayout(extra) {
@@ -216,8 +220,22 @@
     return draw(0).then(function () { div.setAttribute('data-rendered', '1'); });
   }
 
+  function swept(div, d) {  /* a sweep's score against a swept grid value: every job, the medians joined */
+    var tr = [];
+    d.series.forEach(function (s, i) {
+      var color = COLORS[i % COLORS.length];
+      tr.push({x: s.x, y: s.y, mode: 'markers', name: esc(s.name), legendgroup: String(i), showlegend: false,
+               marker: {size: 7, color: color, line: {width: 0.5, color: '#222'}},
+               hovertemplate: esc(d.key) + ' = %{x}<br>%{y:.6g}<extra>' + esc(s.name) + '</extra>'});
+      tr.push({x: s.mx, y: s.my, mode: 'lines', name: esc(s.name), legendgroup: String(i), line: {color: color}});
+    });
+    return plot(div, tr, baseLayout({height: 380, showlegend: d.series.length > 1,
+                                     xaxis: {title: {text: esc(d.key)}},
+                                     yaxis: {title: {text: esc(d.score.replace(/_/g, ' '))}}}));
+  }
+
   var PLOTS = {convergence: convergence, slices: slices, parcoords: parcoords, importance: importance,
-               contour: contour, traces: timeseries};
+               contour: contour, traces: timeseries, swept: swept};
 
   /* --- runs dashboard ------------------------------------------------------------------------- */
   var COLS = [['name', 'name'], ['kind', 'kind'], ['objective', 'objective'], ['target', 'filter / controller'],

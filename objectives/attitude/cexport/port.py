@@ -18,13 +18,13 @@ A unit with a C port sets ``c_port = CPort(...)`` on its class (beside its kerne
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from objectives.attitude.filters.layout import Layout
 from objectives.attitude.filters.robust import ACC_STATE, MAG_COEF, MAG_STATE, REST_COEF, REST_STATE
+from objectives.csource import CField, c_array, c_literal, choice_enum, decl_fields
 
 __all__ = ["CField", "CMember", "CPort", "RenderContext", "decl_fields", "choice_enum", "c_literal", "c_array",
            "ROBUST_MEMBERS", "SHARED_PARTS"]
@@ -32,17 +32,6 @@ __all__ = ["CField", "CMember", "CPort", "RenderContext", "decl_fields", "choice
 #: the shared parts a port may list in ``parts`` (files of ``cexport/templates/``), in the order they are
 #: concatenated: a piece two ports need is written once, in the first part both get
 SHARED_PARTS = ("robust.c", "bias_prologue.c", "trig.c", "angle.c", "node.c")
-
-
-@dataclass(frozen=True)
-class CField:
-    """One member of the ``PFX_params`` struct: C type (``real`` or ``int``), name (``q0[4]`` for an array),
-    value, doc."""
-
-    ctype: str
-    name: str
-    value: Any
-    doc: str
 
 
 @dataclass(frozen=True)
@@ -124,69 +113,6 @@ class CPort:
     def declaration(self, flt: Any) -> Any:
         """The declaration ``PFX_params`` is made of."""
         return self.decl if self.decl is not None else type(flt).decl
-
-
-def c_literal(x: Any, ctype: str = "real") -> str:
-    """``x`` as a C literal of ``ctype`` (``real``: a double literal, ``INFINITY`` for inf; a list: an
-    initialiser ``{...}``); the renderer turns double literals into float ones for ``precision="float"``."""
-    if isinstance(x, list):
-        return "{" + ", ".join(c_literal(e, ctype) for e in x) + "}"
-    if ctype == "int":
-        return str(int(x))
-    x = float(x)
-    if math.isinf(x):
-        return "INFINITY" if x > 0 else "-INFINITY"
-    s = repr(x)
-    return s if ("." in s or "e" in s) else s + ".0"
-
-
-def c_array(a: Any, ctype: str = "real") -> str:
-    """A nested C initialiser ``{{...}, ...}`` of an array of any dimension."""
-    import numpy as np
-
-    a = np.asarray(a)
-    if a.ndim == 1:
-        return "{" + ", ".join(c_literal(x, ctype) for x in a.tolist()) + "}"
-    return "{" + ", ".join(c_array(x, ctype) for x in a) + "}"
-
-
-def _doc(p: Any) -> str:
-    unit = f", {p.unit}" if p.unit and p.unit != "1" else ""
-    return f"{p.doc}{unit}".replace("*/", "* /")
-
-
-def choice_enum(name: str, choices: Sequence[Any]) -> list[tuple[str, int]]:
-    """``[(NAME_CHOICE, index)]`` of a choice parameter's values (C identifiers, upper case)."""
-    return [(f"{name}_{str(c)}".upper().replace("-", "_").replace(" ", "_"), i) for i, c in enumerate(choices)]
-
-
-def decl_fields(decl: Any, values: dict, skip: Sequence[str] = ()) -> list[CField]:
-    """The ``PFX_params`` members of ``decl``'s parameters (less ``init`` and ``skip``), with ``values``.
-
-    A bool is an ``int`` 0/1, an integer option an ``int``, a choice an ``int`` indexing ``choices`` (enum
-    :func:`choice_enum` in the header), anything else a ``real`` in the declaration's unit.
-    """
-    out = []
-    for p in decl.params:
-        if p.name in ("init", *skip):
-            continue
-        v = values[p.name]
-        if p.kind == "any" or v is None:
-            raise ValueError(f"c-filter: parameter {p.name!r} ({p.kind}, value {v!r}) has no C type; the port leaves "
-                             "it out (skip) or derives what the C needs from it (fields)")
-        if isinstance(p.default, bool):
-            out.append(CField("int", p.name, bool(v), _doc(p)))
-        elif p.choices:
-            names = ", ".join(f"{i} {c}" for i, c in enumerate(p.choices))
-            out.append(CField("int", p.name, p.choices.index(v), f"{_doc(p)} ({names})"))
-        elif p.integer:
-            out.append(CField("int", p.name, int(v), _doc(p)))
-        else:
-            x = float(v)
-            if math.isnan(x):
-                raise ValueError(f"c-filter: {p.name} is NaN")
-            out.append(CField("real", p.name, x, _doc(p)))
-    return out
 
 
 #: the members ``robust.c`` reads and writes (the robust blocks' coefficients and states, the sample time the

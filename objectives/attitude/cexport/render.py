@@ -16,6 +16,7 @@ import numpy as np
 from objectives.attitude.cexport.port import CField, CMember, CPort, RenderContext, c_literal, choice_enum, decl_fields
 from objectives.attitude.filters.base import own
 from objectives.attitude.filters.layout import Layout
+from objectives.csource import c_identifier
 
 __all__ = ["render_c_filter", "c_identifier", "c_port", "c_filter_names", "params_fields", "layout_enum"]
 
@@ -24,14 +25,6 @@ _INIT = {"accmag": 0, "broad": 1, "given": 2}
 _FLOAT_LIT = re.compile(r"(?<![\w.])(\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+|\.\d+(?:[eE][-+]?\d+)?)(?![\w.])")
 #: the streaming functions' definitions in the ports, made static (run.c defines the exported names)
 _API_DEF = re.compile(r"^void PFX_(init|update|quaternion|set_quaternion)\(", re.MULTILINE)
-
-
-def c_identifier(prefix: str) -> str:
-    """``prefix`` as a C identifier prefix (letters, digits, underscores; not starting with a digit)."""
-    p = re.sub(r"\W", "_", str(prefix))
-    if not p or p[0].isdigit():
-        raise ValueError(f"prefix must be a C identifier (letters, digits, _; no leading digit), got {prefix!r}")
-    return p
 
 
 def c_filter_names() -> list[str]:

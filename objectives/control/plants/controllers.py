@@ -80,6 +80,10 @@ class LoopController(Declared):
     #: the loop these controllers run in (objectives.control.controllers)
     family: ClassVar[str] = "siso"
     needs_inner: ClassVar[bool] = False
+    #: its PID blocks in the C export (:mod:`.cexport`), in the kernel's order: per block the C expressions of
+    #: its ideal form ``K, Ti, Td`` and its output limits over the declared values (``p->NAME``); the common
+    #: values (``b``, ``c``, ``N``, ``antiwindup``, ``Tt_s``) are read as :func:`pid_coeffs` reads them
+    C_BLOCKS: ClassVar[tuple[tuple[str, str, str, str, str], ...]] = ()
 
     @classmethod
     def declaration_for(cls, plant: Any) -> ParamSet:
@@ -136,6 +140,7 @@ class PID2DOF(LoopController):
 
     name = "pid2dof"
     kind = KIND_PID
+    C_BLOCKS = (("p->K", "p->Ti_s", "p->Td_s", "p->u_min", "p->u_max"),)
     decl = ParamSet("controller 'pid2dof'", (
         Param("K", 1.0, (1e-3, 1e3), "log", unit="u/y", allowed=POSITIVE, doc="proportional gain"),
         Param("Ti_s", 1.0, (1e-3, 1e3), "log", unit="s", allowed=Interval(0.0, low_open=True, allow_inf=True),
@@ -167,6 +172,8 @@ class PID2DOFParallel(PID2DOF):
     """Two-degree-of-freedom PID in parallel form ``Kp, Ki, Kd`` (converted to the ideal form)."""
 
     name = "pid2dof_par"
+    C_BLOCKS = (("p->Kp", "(p->Ki == 0 ? (PFX_real)INFINITY : p->Kp / p->Ki)", "p->Kd / p->Kp", "p->u_min",
+                 "p->u_max"),)
     decl = ParamSet("controller 'pid2dof_par'", (
         Param("Kp", 1.0, (1e-3, 1e3), "log", unit="u/y", allowed=POSITIVE, doc="proportional gain"),
         Param("Ki", 1.0, (1e-3, 1e3), "log", unit="u/(y s)", allowed=NONNEG, doc="integral gain (0: none)"),
@@ -191,6 +198,8 @@ class PIDCascade(LoopController):
     name = "pid_cascade"
     kind = KIND_CASCADE
     needs_inner = True
+    C_BLOCKS = (("p->K_o", "p->Ti_o_s", "p->Td_o_s", "p->r_i_min", "p->r_i_max"),
+                ("p->K_i", "p->Ti_i_s", "p->Td_i_s", "p->u_min", "p->u_max"))
     decl = ParamSet("controller 'pid_cascade'", (
         Param("K_o", 1.0, (1e-3, 1e3), "log", unit="r_i/y", allowed=POSITIVE, doc="outer proportional gain"),
         Param("Ti_o_s", math.inf, unit="s", allowed=Interval(0.0, low_open=True, allow_inf=True),

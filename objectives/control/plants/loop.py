@@ -403,6 +403,23 @@ class SISOLoop(LoopYaml):
         return ItemRunner(models.plants, [c.sig for c in self.cases], [c.win for c in self.cases], self.ctrl.kind, real)
 
     @property
+    def realism(self) -> Any:
+        """The actuator and sensor options (:class:`~.scenario.Realism`)."""
+        return self._real
+
+    def export_c(self, values: Mapping[str, Any], precision: str, prefix: str, comment: str) -> dict[str, str]:
+        """The controller of ``values`` as C99 (:mod:`.cexport`)."""
+        from objectives.control.plants.cexport import export_c_controller
+
+        return export_c_controller(self, dict(values), precision, prefix, comment)
+
+    def verify_c(self, values: Mapping[str, Any], precision: str, opt: tuple[str, ...]) -> dict[str, Any]:
+        """That C compiled and its loop closed next to the kernel's (:mod:`.cexport`)."""
+        from objectives.control.plants.cexport import verify_c_controller
+
+        return verify_c_controller(self, dict(values), precision, opt)
+
+    @property
     def uncertainty_block(self) -> Any:
         """The parsed ``uncertainty`` block (:class:`~.uncertainty.Uncertainty`) or None."""
         return self._unc

@@ -88,7 +88,10 @@ DECL = ParamSet("realtime", (
           "tau_mag_s multiplier after the rejection time; recovery speed of the rejection budget", _REF,
           Interval(1.0)),
     Param("mag_first_at_rest", False, doc="accept the first field after mag_new_first_s of stable norm and dip "
-          "also at rest (VQF: only while rotating faster than mag_new_min_gyr_dps)"),
+          "also while at rest (the rest detector's rest, with or without rest_bias; VQF: only while rotating "
+          "faster than mag_new_min_gyr_dps, which still counts); never at rest nor rotating that fast, no field "
+          "is accepted: the heading keeps its fast start and the gyro, and after mag_max_rejection_s follows the "
+          "field at 1/mag_rejection_factor of its gain"),
     Param("mag_recover_tau_s", 0.0, (1.0, 60.0), "log", "s", "heading time constant while the rejection budget "
           "recovers after a disturbance (fast re-convergence; 0: tau_mag_s)", allowed=NONNEG),
 ))

@@ -195,6 +195,8 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
     motion_bias = c[C.MOTION_BIAS] != 0.0
     rest_bias = c[C.REST_BIAS] != 0.0
     mag_rej = c[C.MAG_REJ] != 0.0
+    # the first field at rest: the rest detector runs on the accelerometer too, with or without the rest bias
+    first_at_rest = mag_rej and use_mag and c[C.MAG_FIRST_AT_REST] != 0.0
     clip = c[C.BIAS_CLIP]
     x = np.empty(9)
     y = np.empty(9)
@@ -230,7 +232,7 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         # --- accelerometer
         a0, a1, a2 = acc[i, 0], acc[i, 1], acc[i, 2]
         if not (a0 == 0.0 and a1 == 0.0 and a2 == 0.0):
-            if rest_bias:
+            if rest_bias or first_at_rest:
                 if _rest_deviation_sq(s, S.REST_ACC_LP, a0, a1, a2, x, y, c, dt) >= c[C.REST_TH_ACC] ** 2:
                     s[S.REST_T] = 0.0
                     s[S.REST] = 0.0
@@ -328,11 +330,12 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                     else:
                         s[S.MAG_UNDIST_T] = 0.0
                         s[S.MAG_DIST] = 1.0
-                    # a new homogeneous field is accepted after mag_new_s of rotation in it
+                    # a new homogeneous field is accepted after mag_new_s of rotation in it; the first one also
+                    # after mag_new_first_s at rest (mag_first_at_rest)
                     cn = s[S.MAG_CAND_NORM]
                     if abs(nd - cn) < c[C.MAG_NORM_TH] * cn and abs(dip - s[S.MAG_CAND_DIP]) < c[C.MAG_DIP_TH]:
                         gl = math.sqrt(s[S.REST_GYR] ** 2 + s[S.REST_GYR + 1] ** 2 + s[S.REST_GYR + 2] ** 2)
-                        if gl >= c[C.MAG_NEW_MIN_GYR] or (c[C.MAG_FIRST_AT_REST] != 0.0 and ref_n == 0.0):
+                        if gl >= c[C.MAG_NEW_MIN_GYR] or (first_at_rest and ref_n == 0.0 and s[S.REST] != 0.0):
                             s[S.MAG_CAND_T] += dt
                         s[S.MAG_CAND_NORM] += kref * (nd - s[S.MAG_CAND_NORM])
                         s[S.MAG_CAND_DIP] += kref * (dip - s[S.MAG_CAND_DIP])

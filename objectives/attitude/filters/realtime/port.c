@@ -171,6 +171,8 @@ static void rt_step(const real *c, real *s, int *lpf, const real *gyr, const rea
 {
     real dt = c[C_DT], clip_r = c[C_BIAS_CLIP];
     int rest_bias = c[C_REST_BIAS] != 0.0, motion_bias = c[C_MOTION_BIAS] != 0.0, mag_rej = c[C_MAG_REJ] != 0.0;
+    /* the first field at rest: the rest detector runs on the accelerometer too, with or without the rest bias */
+    int first_at_rest = mag_rej && c[C_USE_MAG] != 0.0 && c[C_MAG_FIRST_AT_REST] != 0.0;
     real x[9], y[9], r[9], e[3], w[3], q[4], p6[4], u[3], h[3], d0, d1, d2, un, ang, ex, ey, ez, en, qw;
     int j;
     /* gyroscope: rest detection, strapdown integration */
@@ -198,7 +200,7 @@ static void rt_step(const real *c, real *s, int *lpf, const real *gyr, const rea
     }
     /* accelerometer: inclination correction from the low-passed inertial-frame acc, gyro bias */
     if (!(acc[0] == 0.0 && acc[1] == 0.0 && acc[2] == 0.0)) {
-        if (rest_bias) {
+        if (rest_bias || first_at_rest) {
             rt_lp(s, lpf + LP_REST_ACC_LP, S_REST_ACC_LP, 3, acc, y, c + C_REST_LP, c[C_REST_TAU], dt);
             d0 = acc[0] - y[0]; d1 = acc[1] - y[1]; d2 = acc[2] - y[2];
             if (d0 * d0 + d1 * d1 + d2 * d2 >= c[C_REST_TH_ACC] * c[C_REST_TH_ACC]) {
@@ -289,7 +291,7 @@ static void rt_step(const real *c, real *s, int *lpf, const real *gyr, const rea
             if (fabs(nd - cn) < c[C_MAG_NORM_TH] * cn && fabs(dip - s[S_MAG_CAND_DIP]) < c[C_MAG_DIP_TH]) {
                 real gl = SQRT(s[S_REST_GYR] * s[S_REST_GYR] + s[S_REST_GYR + 1] * s[S_REST_GYR + 1]
                                  + s[S_REST_GYR + 2] * s[S_REST_GYR + 2]);
-                if (gl >= c[C_MAG_NEW_MIN_GYR] || (c[C_MAG_FIRST_AT_REST] != 0.0 && refn == 0.0))
+                if (gl >= c[C_MAG_NEW_MIN_GYR] || (first_at_rest && refn == 0.0 && s[S_REST] != 0.0))
                     s[S_MAG_CAND_T] += dt;
                 s[S_MAG_CAND_NORM] += kref * (nd - s[S_MAG_CAND_NORM]);
                 s[S_MAG_CAND_DIP] += kref * (dip - s[S_MAG_CAND_DIP]);
