@@ -45,7 +45,8 @@ TOP_KEYS = {
     "parallel": "{backend: serial|loky|dask|threads, n_jobs, address}",
     "output": "directory holding the run directories (default: runs)",
     "repeats": "number of runs of this job, seeds seed + 0 .. seed + repeats - 1 (default: 1)",
-    "validation": "{cv: logo|kfold|none, folds, budget_fraction, gap_warn_rel, gap_warn_abs, "
+    "validation": "{cv: logo|kfold|dataset|none or {by, folds}, folds, budget_fraction, gap_warn_rel, "
+                  "gap_warn_abs, "
                   "select: {top_k, holdout, include_defaults}, chosen_on: text}",
 }
 
@@ -118,8 +119,10 @@ class SelectConfig:
 class ValidationConfig:
     """The ``validation:`` section (all optional; absent = no validation, the run as before).
 
-    cv : ``None`` (no CV), ``"logo"`` (the objective's own folds, e.g. BROAD's groups, else 5-fold) or
-        ``"kfold"`` (``folds`` folds): cross-validation after the run, written into the run directory.
+    cv : ``None`` (no CV), ``"logo"`` (the objective's own folds, e.g. BROAD's groups, else 5-fold),
+        ``"kfold"`` (``folds`` folds) or ``"dataset"`` (leave one dataset out: the objective's ``cv_folds(k,
+        by="dataset")``, e.g. the ``dataset:`` labels of its data sources): cross-validation after the run,
+        written into the run directory. YAML: ``cv: logo`` or ``cv: {by: dataset}`` (``{by: kfold, folds: 5}``).
     folds : folds of ``kfold`` (>= 2).
     budget_fraction : generations (and ``max_evals``) of each fold's tuning relative to the run's, in (0, 1].
     gap_warn_rel, gap_warn_abs : the gap (CV score - tuning score) is *large* when it exceeds
@@ -128,6 +131,8 @@ class ValidationConfig:
     chosen_on : the data the config's fixed options and search ranges were chosen on by looking at it, when
         that is the run's own data; the report then says the CV (which re-tunes only the searched values) is
         optimistic (:func:`tuner.verdict.optimistic_note`). A declaration, not a setting: nothing else changes.
+    nested : with ``cv: {..., nested: {choose: {option: [a, b]}}}`` the CV chooses those fixed options inside
+        each fold (:mod:`tuner.nested`: the inner loop chooses, the outer scores).
     """
 
     cv: str | None = None
@@ -137,6 +142,7 @@ class ValidationConfig:
     gap_warn_abs: float | None = None
     select: SelectConfig | None = None
     chosen_on: str | None = None
+    nested: Mapping[str, tuple] | None = None  # cv: {nested: {choose: {option: [a, b]}}} (tuner.nested)
 
     @property
     def active(self) -> bool:
@@ -312,6 +318,9 @@ def _number(d: Mapping, key: str, f: Any, path: str, low: float, high: float, de
     return float(v)
 
 
+CV_KINDS = ("logo", "kfold", "dataset")
+
+
 def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     """The ``validation:`` section (see :class:`ValidationConfig`); errors name ``validation.<key>``."""
     if raw is None:
@@ -323,10 +332,26 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     if bad:
         raise ConfigError(f, f"validation.{bad[0]}", f"unknown key; allowed: {', '.join(allowed)}")
     cv = raw.get("cv")
+    raw = dict(raw)
+    nested = None
+    if isinstance(cv, Mapping):  # cv: {by: logo | kfold | dataset, folds: k, nested: {choose: {...}}}
+        bad = sorted(set(cv) - {"by", "folds", "nested"})
+        if bad:
+            raise ConfigError(f, f"validation.cv.{bad[0]}", "unknown key; allowed: by, folds, nested")
+        if "nested" in cv:
+            nested = _parse_nested(cv["nested"], f)
+        if "folds" in cv:
+            if "folds" in raw:
+                raise ConfigError(f, "validation.cv.folds", "given twice (also validation.folds); keep one")
+            raw["folds"] = cv["folds"]
+        if cv.get("by") not in CV_KINDS:
+            raise ConfigError(f, "validation.cv.by", f"expected one of {', '.join(CV_KINDS)}, got {cv.get('by')!r}")
+        cv = cv["by"]
     if cv is False or cv == "none":
         cv = None
-    if cv is not None and cv not in ("logo", "kfold"):
-        raise ConfigError(f, "validation.cv", f"expected logo, kfold or none, got {cv!r}")
+    if cv is not None and cv not in CV_KINDS:
+        raise ConfigError(f, "validation.cv", f"expected {', '.join(CV_KINDS)} or none (or {{by: ...}}), "
+                          f"got {cv!r}")
     folds = _get(raw, "folds", int, f, "validation.", default=None)
     if folds is not None and folds < 2:
         raise ConfigError(f, "validation.folds", f"must be >= 2, got {folds}")
@@ -360,7 +385,33 @@ def parse_validation(raw: Any, f: Any) -> ValidationConfig:
     if chosen_on is not None and (not isinstance(chosen_on, str) or not chosen_on.strip()):
         raise ConfigError(f, "validation.chosen_on", "expected a text naming the data the config's fixed options "
                           f"and ranges were chosen on (e.g. 'the 16 shared BROAD trials'), got {chosen_on!r}")
-    return ValidationConfig(cv, folds, frac, rel, gabs, select, chosen_on)
+    return ValidationConfig(cv, folds, frac, rel, gabs, select, chosen_on, nested)
+
+
+#: at most this many combinations of nested choices (each one more tuning per outer fold)
+MAX_NESTED = 16
+
+
+def _parse_nested(raw: Any, f: Any) -> dict[str, tuple]:
+    """``nested: {choose: {option: [a, b], ...}}`` -> ``{option: (a, b)}`` (errors name the key)."""
+    key = "validation.cv.nested"
+    if not isinstance(raw, Mapping) or set(raw) != {"choose"}:
+        raise ConfigError(f, key, f"expected {{choose: {{option: [value, value, ...]}}}}, got {raw!r}")
+    choose = raw["choose"]
+    if not isinstance(choose, Mapping) or not choose:
+        raise ConfigError(f, f"{key}.choose", f"expected a mapping of options to candidate lists, got {choose!r}")
+    out: dict[str, tuple] = {}
+    n = 1
+    for name, values in choose.items():
+        if not isinstance(values, (list, tuple)) or len(values) < 2 or len(set(map(repr, values))) != len(values):
+            raise ConfigError(f, f"{key}.choose.{name}", f"expected a list of >= 2 distinct candidate values, "
+                              f"got {values!r}")
+        out[str(name)] = tuple(values)
+        n *= len(values)
+    if n > MAX_NESTED:
+        raise ConfigError(f, f"{key}.choose", f"{n} combinations; at most {MAX_NESTED} (each is one more tuning "
+                          "per fold)")
+    return out
 
 
 def config_from_dict(raw: Mapping[str, Any], source: str = "<config>", base_dir: Path | None = None) -> RunConfig:

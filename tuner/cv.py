@@ -44,7 +44,8 @@ from tuner.objective import hook
 from tuner.selection import plain_score, scored, tune_and_select
 from tuner.setup import LiveMap, build_objective, new_optimizer, worker_count
 
-__all__ = ["FoldOutcome", "CVOutcome", "cross_validate", "write_cv", "cv_texts", "scaled_budget", "plain_score",
+__all__ = ["cv_by", "transfer_rows", "transfer_table", "FoldOutcome", "CVOutcome", "cross_validate", "write_cv",
+           "cv_texts", "scaled_budget", "plain_score",
            "scored", "scores_on_test_data"]
 
 
@@ -76,6 +77,7 @@ class CVOutcome:
     searched: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     test: dict[str, Any] = field(default_factory=dict)
+    by: str | None = None  # "dataset": each fold holds out one dataset (the transfer table)
 
     def _col(self, key: str) -> np.ndarray:
         return np.array([getattr(f, key) for f in self.folds], float)
@@ -139,6 +141,12 @@ def _procedure(cfg: RunConfig, objective: Any, evaluate: Callable) -> tuple[dict
     return tune_and_select(cfg, objective, lambda obj, cb: _tune(cfg, obj, evaluate, 0, cb))
 
 
+def cv_by(cfg: RunConfig, k: int | None) -> str | None:
+    """The grouping the objective's ``cv_folds`` is asked for besides ``k``: ``"dataset"`` with
+    ``validation: {cv: {by: dataset}}`` (leave one dataset out) unless an explicit ``k`` overrides it, else None."""
+    return "dataset" if k is None and cfg.validation.cv == "dataset" else None
+
+
 def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
                    progress: Callable[[str], None] | None = None, budget_fraction: float = 1.0,
                    full_params: dict[str, Any] | None = None) -> CVOutcome:
@@ -178,38 +186,59 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
     if folds_fn is None:
         raise ConfigError(cfg.source, "objective", f"{type(objective).__name__} has no cv_folds hook: "
                           "it cannot be cross-validated")
+    by = cv_by(cfg, k)
     try:
-        folds = list(folds_fn(k))
+        folds = list(folds_fn(k, by=by) if by else folds_fn(k))
     except ValueError as exc:
-        raise ConfigError(cfg.source, "objective", str(exc)) from None
+        raise ConfigError(cfg.source, "validation.cv.by" if by else "objective", str(exc)) from None
     if len(folds) < 2:
         raise ConfigError(cfg.source, "objective", f"cross-validation needs >= 2 folds, got {len(folds)}")
     n_jobs, notes = worker_count(cfg, cfg.space(objective))
-    out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free])
+    out = CVOutcome(cfg.name, [], None, notes=notes, searched=[p.name for p in cfg.space(objective).free], by=by)
     defaults = defaults_baseline(objective, cfg.space(objective))  # fixed values wherever written
-    for i, (name, train, test) in enumerate(folds):
-        evaluate = LiveMap(cfg, n_jobs)
+    nested = cfg.validation.nested
+    if nested:
+        declared = hook(objective, "default_space")
+        known = {p.name for p in cfg.space(objective).params} | (
+            {p.name for p in declared().params} if declared is not None else set())
+        unknown = [n for n in nested if n not in known]
+        if unknown:
+            raise ConfigError(cfg.source, f"validation.cv.nested.choose.{unknown[0]}",
+                              f"not a parameter of this job; allowed: {', '.join(sorted(known))}")
+
+    def procedure(c: RunConfig, obj: Any) -> tuple[dict[str, Any], float, dict[str, Any]]:
+        evaluate = LiveMap(c, n_jobs)
         try:
-            params, train_fit, sel = _procedure(cfg, train, evaluate)
+            return _procedure(c, obj, evaluate)
         finally:
             evaluate.close()
+
+    def nested_procedure(obj: Any) -> tuple[dict[str, Any], float, dict[str, Any]]:
+        """The config's procedure, after the inner loop's choice of the nested options (if any)."""
+        if not nested:
+            return procedure(cfg, obj)
+        from tuner.nested import choose
+
+        choice, ccfg, record = choose(cfg, obj, procedure, say)
+        params, fit, sel = procedure(ccfg, obj)
+        return params, fit, {**sel, "nested": record}
+
+    for i, (name, train, test) in enumerate(folds):
+        params, train_fit, sel = nested_procedure(train)
         cv_fit, failed, held = scored(test, params) if params else (math.inf, "no successful evaluation", ())
         de_fit, _, held_d = scored(test, defaults) if defaults is not None else (math.nan, "", ())
         held = held or held_d
         out.folds.append(FoldOutcome(str(name), max(len(held), 1), params, train_fit, cv_fit, de_fit, failed, sel,
                                      held))
         say(f"fold {i + 1}/{len(folds)} {name}: tuned {train_fit:.4g}, held out {cv_fit:.4g}, defaults {de_fit:.4g}"
-            + (f"; chosen on inner fold {sel['holdout']}: {sel['chosen']}" if sel else ""))
+            + (f"; chosen on inner fold {sel['holdout']}: {sel['chosen']}" if sel.get("holdout") else "")
+            + (f"; nested choice {sel['nested']['chosen']}" if sel.get("nested") else ""))
     if full or full_params is not None:
         sel = {}
         if full_params is not None:
             params, train_fit = dict(full_params), math.nan
         else:
-            evaluate = LiveMap(cfg, n_jobs)
-            try:
-                params, train_fit, sel = _procedure(cfg, objective, evaluate)
-            finally:
-                evaluate.close()
+            params, train_fit, sel = nested_procedure(objective)
         # its score on all data as the folds count it (held-out scores weighted by recordings), so the
         # gap compares like with like whatever aggregation or prior the tuning used
         sc = [(plain_score(test, params), n) for (_, _, test), n in zip(folds, [f.n_test for f in out.folds])] \
@@ -219,13 +248,48 @@ def cross_validate(cfg: RunConfig, k: int | None = None, full: bool = True,
                                selection=sel, recordings=tuple(r for f in out.folds for r in f.recordings))
         say(("all data: the run's best" if full_params is not None else f"all data: tuned {train_fit:.4g}")
             + f", scored as the folds {plain:.4g}" + (f"; chosen on fold {sel['holdout']}: {sel['chosen']}"
-                                                      if sel else ""))
+                                                      if sel.get("holdout") else "")
+            + (f"; nested choice {sel['nested']['chosen']}" if sel.get("nested") else ""))
         out.test = scores_on_test_data(objective, params, defaults)
         if out.test:
             say(f"test recordings (never in the folds): tuned {out.test['tuned']:.4g}, defaults "
                 f"{out.test['defaults']:.4g}")
     out.seconds = time.time() - t0
     return out
+
+
+def transfer_rows(out: CVOutcome) -> list[dict[str, Any]]:
+    """The transfer table of a leave-one-dataset-out CV (``out.by == "dataset"``; else ``[]``): one row per
+    dataset, ``{dataset, n, defaults, tuned, difference}``: the defaults and the parameters tuned on the other
+    datasets, both scored on this dataset's recordings, and tuned - defaults (negative: tuning carries over)."""
+    if out.by != "dataset":
+        return []
+    return [{"dataset": f.name, "n": f.n_test, "defaults": f.default_fitness, "tuned": f.cv_fitness,
+             "difference": f.cv_fitness - f.default_fitness} for f in out.folds]
+
+
+def transfer_table(rows: list[dict[str, Any]]) -> list[str]:
+    """Markdown lines of :func:`transfer_rows` (``[]`` without rows)."""
+    if not rows:
+        return []
+    worse = [r["dataset"] for r in rows if r["difference"] > 0]
+    return ["## Transfer between datasets", "",
+            "Each dataset held out once: tuned on the other datasets, scored on this one, beside the defaults "
+            "scored on the same recordings (difference = tuned - defaults; negative: the tuning carries over).", "",
+            "| dataset (held out) | n | defaults | tuned on the others | difference |", "|---|---|---|---|---|",
+            *(f"| {r['dataset']} | {r['n']} | {_fmt(r['defaults'])} | {_fmt(r['tuned'])} | "
+              f"{_fmt_signed(r['difference'])} |" for r in rows), "",
+            (f"Tuning on the other datasets is worse than the defaults on: {', '.join(worse)}." if worse
+             else "Tuning on the other datasets beats the defaults on every dataset."), ""]
+
+
+def _fmt_signed(v: float) -> str:
+    return "-" if math.isnan(v) else f"{v:+.4g}"
+
+
+def _choice(choice: dict[str, Any]) -> str:
+    """``a=1, b=x`` of a nested choice (``""`` without one)."""
+    return ", ".join(f"{k}={v}" for k, v in choice.items())
 
 
 def _fmt(v: Any) -> str:
@@ -256,14 +320,15 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["fold", "n_test", "train_fitness", "cv_fitness", "defaults_fitness", "failed", "chosen",
-                "inner_holdout", "recordings", *names])
+                "inner_holdout", "nested_choice", "recordings", *names])
     for f in rows:
         w.writerow([f.name, f.n_test, f.train_fitness, f.cv_fitness, f.default_fitness, f.failed,
-                    f.selection.get("chosen", ""), f.selection.get("holdout", ""), ";".join(f.recordings),
+                    f.selection.get("chosen", ""), f.selection.get("holdout", ""),
+                    _choice((f.selection.get("nested") or {}).get("chosen") or {}), ";".join(f.recordings),
                     *[f.params.get(n, "") for n in names]])
     t = out.test
     if t:  # the job's test: recordings, never in a fold: the tuning on all data and the defaults scored on them
-        w.writerow(["test", t["n"], "", t["tuned"], t["defaults"], t["failed"], "", "", ";".join(t["recordings"]),
+        w.writerow(["test", t["n"], "", t["tuned"], t["defaults"], t["failed"], "", "", "", ";".join(t["recordings"]),
                     *[out.full.params.get(n, "") if out.full else "" for n in names]])
     s = out.summary()
     with_sel = any(f.selection for f in rows)
@@ -273,8 +338,12 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
         if not with_sel:
             return ""
         s = f.selection
-        return (f"{s.get('chosen', '')} ({s.get('holdout', '')}: {_fmt(s.get('holdout_fitness', math.nan))})"
-                if s else "") + " | "
+        text = (f"{s.get('chosen', '')} ({s.get('holdout', '')}: {_fmt(s.get('holdout_fitness', math.nan))})"
+                if s.get("holdout") else "")
+        if s.get("nested"):  # tuner.nested: the options the inner loop chose for this fold
+            n = s["nested"]
+            text += ("; " if text else "") + f"options {_choice(n['chosen'])} ({n['holdout']})"
+        return text + " | "
 
     lines = [f"# Cross-validation of {out.name}", "",
              f"{len(out.folds)} folds, {out.seconds:.0f} s. Each fold: tuned on the other folds, scored on the "
@@ -315,4 +384,5 @@ def cv_texts(out: CVOutcome, validation: ValidationConfig | None = None) -> tupl
     if s["cv_mean"] > s["defaults_mean"]:
         lines += ["", "CV score worse than the defaults': tuning does not help on unseen recordings."]
     lines += [*(f"- {n}" for n in out.notes), ""]
+    lines += transfer_table(transfer_rows(out))
     return "\n".join(lines), buf.getvalue()

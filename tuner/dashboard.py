@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from tuner.verdict import defaults_verdict
+from tuner.verdict import defaults_verdict, transfer_line
 
 __all__ = ["collect_runs", "write_dashboard", "find_dashboard", "MARKER", "MAX_DEPTH"]
 
@@ -89,15 +89,17 @@ def _run_row(root: Path, d: Path, kind: str) -> dict[str, Any]:
          "params": best.get("params") or {}, "metrics": best.get("metrics") or {}}
     obj = cfg.get("objective") or {}
     ev = best.get("evaluation") or {}
-    val = {}
+    val, transfer = {}, ""
     try:
         val = (rd.validation() or {}).get("cv") or {}
+        transfer = transfer_line({"cv": val})
     except Exception:  # noqa: BLE001 - a damaged validation.json only loses the CV columns
         pass
     row.update({
         "objective": " ".join(str(obj[k]) for k in ("kind", "metric") if k in obj),
         "target": str(obj.get("filter") or obj.get("controller") or obj.get("function") or obj.get("callable") or ""),
-        "status": f"{s['status']}; tuned worse than defaults" if defaults_verdict(ev) else s["status"],
+        "status": (f"{s['status']}; tuned worse than defaults" if defaults_verdict(ev) else s["status"])
+                  + (f"; {transfer}" if transfer else ""),
         "best": _num(s["best_fitness"]),
         "cv": _num(ev.get("cv_fitness", val.get("cv_score"))), "gap": _num(ev.get("cv_gap", val.get("gap"))),
         "n_evals": s["n_evals"], "wall_s": _num(s["wall_s"]), "date": (s["created"] or "")[:19],

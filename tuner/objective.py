@@ -153,9 +153,11 @@ class TunableObjective(Objective, Protocol):
         """``(rate in Hz, note)`` that per-sample parameters assume (``None`` with the reason if unknown);
         ``tuner export`` writes it into every format."""
 
-    def cv_folds(self, k: int | None = None) -> list[tuple[str, Any, Any]]:
+    def cv_folds(self, k: int | None = None, by: str | None = None) -> list[tuple[str, Any, Any]]:
         """Cross-validation folds for ``tuner cv``: ``[(name, train_objective, test_objective)]``, each
-        objective on part of the data (e.g. leave one recording group out; ``k`` folds if given)."""
+        objective on part of the data (e.g. leave one recording group out; ``k`` folds if given). ``by``
+        is passed only when the config asks for it (``validation: {cv: {by: dataset}}``): leave one dataset
+        out, a ``ValueError`` naming what is missing when the data has fewer than two datasets."""
 
     def evaluate_batch(self, params_list: Sequence[Mapping[str, Any]], n_threads: int,
                        seeds: Sequence[int] | None = None) -> list[Any] | None:

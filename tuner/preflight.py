@@ -171,9 +171,11 @@ def check_cv_folds(cfg: RunConfig, objective: Any) -> None:
         raise ConfigError(cfg.source, "validation.cv", f"{type(objective).__name__} has no held-out folds (no "
                                                        "cv_folds hook): it cannot be cross-validated; remove it")
     try:
-        n = len(list(fn(v.folds if v.cv == "kfold" else None)))
+        k = v.folds if v.cv == "kfold" else None
+        n = len(list(fn(k, by="dataset") if v.cv == "dataset" else fn(k)))
     except ValueError as exc:
-        raise ConfigError(cfg.source, "validation.folds" if v.cv == "kfold" else "validation.cv",
+        key = {"kfold": "validation.folds", "dataset": "validation.cv.by"}.get(v.cv, "validation.cv")
+        raise ConfigError(cfg.source, key,
                           f"{exc}; the cross-validation after the run needs it") from None
     if n < 2:
         raise ConfigError(cfg.source, "validation", f"the objective gives {n} fold(s) here; cross-validation "

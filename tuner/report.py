@@ -219,6 +219,14 @@ def _validation_md(val: dict[str, Any]) -> list[str]:
         md += ["## Generalisation", "", f"Cross-validation of this job ([cv.md](cv.md)); the gap is large when "
                f"{md_escape(cv.get('gap_rule', ''))}; {DEFAULTS_MEANING}.", "", _rows_table(rows, ["item", "value"], 4),
                ""]
+        tr = cv.get("transfer") or []
+        if tr:  # validation: {cv: {by: dataset}}: each dataset held out once
+            md += ["### Transfer between datasets", "", "Each dataset held out: the defaults and the parameters tuned "
+                   "on the other datasets, scored on its recordings (difference = tuned - defaults).", "",
+                   _rows_table([[md_escape(r["dataset"]), r["n"], r["defaults"], r["tuned"],
+                                 (f"{r['difference']:+.4g}" if isinstance(r["difference"], (int, float))
+                                  and r["difference"] == r["difference"] else "-")] for r in tr],
+                               ["dataset", "n", "defaults", "tuned on the others", "difference"], 4), ""]
     sel = val.get("selection") or {}
     if sel:
         rows = [[c["eval"], c["tuning_fitness"], c["holdout_fitness"],

@@ -49,7 +49,7 @@ from pathlib import Path
 from typing import Any
 
 from tuner.config import ConfigError, RunConfig
-from tuner.cv import cross_validate, cv_texts
+from tuner.cv import cross_validate, cv_texts, transfer_rows
 from tuner.objective import hook
 from tuner.records import Best, RunError, plain
 from tuner.rundir import RunDir
@@ -89,6 +89,8 @@ def _cv(cfg: RunConfig, rd: RunDir, params: dict[str, Any], progress: Callable[[
            "cv_fold_worst": s["cv_fold_worst"], "seconds": round(time.time() - t0, 1),
            "per_fold": {f.name: f.cv_fitness for f in out.folds},
            "per_fold_recordings": {f.name: list(f.recordings) for f in out.folds}}
+    if out.by:  # leave one dataset out: the transfer table (each dataset: defaults, tuned, difference)
+        doc["transfer"] = transfer_rows(out)
     if out.test:  # the job's test: recordings, never in a fold, keep their own held-out score
         doc.update(test_score=out.test["tuned"], defaults_test_score=out.test["defaults"],
                    test_recordings=out.test["recordings"])

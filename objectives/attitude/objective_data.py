@@ -188,7 +188,7 @@ class FilterData:
         return mask
 
     # --- cross-validation (tuner cv) -----------------------------------------------------------------
-    def cv_folds(self, k: int | None = None) -> list[tuple[str, Any, Any]]:
+    def cv_folds(self, k: int | None = None, by: str | None = None) -> list[tuple[str, Any, Any]]:
         """Folds over the objective's tuning recordings: ``(name, tune on, held out)``.
 
         ``test:`` recordings are never pooled into the folds: they keep their own held-out score, which
@@ -199,7 +199,8 @@ class FilterData:
         otherwise, or with ``k``, recordings are assigned round-robin to ``k`` folds (default ``min(5, n)``).
         The tuning side keeps the objective's metric, options and prior; the held-out side keeps the metric
         without the aggregation options (each held-out recording counts once, as in the plain metric), and
-        the engine scores it with ``score`` (no prior).
+        the engine scores it with ``score`` (no prior). With ``by="dataset"`` each dataset (the data
+        sources' ``dataset:`` labels, :func:`objectives.attitude.data.loaders.dataset_label`) is held out once.
         """
         from objectives.attitude.objective_options import recording_groups
         from objectives.attitude.trials import check_unique_names, kfold_folds, logo_folds
@@ -211,7 +212,15 @@ class FilterData:
             raise ValueError(f"objective.data{'.train' if self.test_specs else ''}: cross-validation needs >= 2 "
                              f"tuning recordings, got {len(recs)} (test recordings are never pooled into folds)")
         groups: dict[str, str] | None = None
-        if k is None:
+        if by is not None:
+            if by != "dataset":
+                raise ValueError(f"unknown grouping {by!r}; allowed: dataset")
+            groups = {r.name: str(r.meta.get("dataset", "default")) for r in recs}
+            if len(set(groups.values())) < 2:
+                raise ValueError(f"leaving one dataset out needs >= 2 datasets; every tuning recording is in "
+                                 f"dataset {next(iter(groups.values()))!r} (label the data sources with "
+                                 "`dataset: NAME`)")
+        elif k is None:
             try:
                 groups = recording_groups(recs, "broad")
             except ValueError:

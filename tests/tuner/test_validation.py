@@ -31,7 +31,7 @@ def _raw(tmp_path, validation=None, **extra):
 
 
 @pytest.mark.parametrize("section, key, what", [
-    ({"cv": "loo"}, "validation.cv", "logo, kfold or none"),
+    ({"cv": "loo"}, "validation.cv", "logo, kfold, dataset or none"),
     ({"cv": "kfold"}, "validation.folds", "needs the number of folds"),
     ({"cv": "logo", "folds": 3}, "validation.folds", "only used with cv: kfold"),
     ({"cv": "kfold", "folds": 1}, "validation.folds", ">= 2"),

@@ -14,6 +14,7 @@ from tuner.rundir import RunDir
 from tuner.runinfo import fmt, run_summary, scores, tuned_system
 from tuner.spread import spread_lines
 from tuner.sweep import show_sweep
+from tuner.verdict import transfer_line
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -72,6 +73,12 @@ def _show_scores(path: Path, fit: float | None, evaluation: dict, params: dict) 
         print(f"cv:         {fmt(sc['cv_fitness'])}" + (f" (defaults {fmt(d)})" if d is not None else "")
               + (f"; tuning score {fmt(sc['tuning_score'])}" if "tuning_score" in sc else "")
               + (f", gap {gap:+.3g}" + (" LARGE" if sc.get("cv_gap_large") else "") if gap is not None else ""))
+    try:
+        transfer = transfer_line(RunDir(path).validation())
+    except Exception:  # noqa: BLE001 - a damaged validation.json only loses the transfer line
+        transfer = ""
+    if transfer:
+        print(f"            {transfer}")
     searched = [k for k in params if k in t["searched"]] or [k for k in params if k not in t["fixed"]]
     for title, items in (("searched:", [(k, params[k]) for k in searched]), ("fixed:", list(t["fixed"].items()))):
         if items:

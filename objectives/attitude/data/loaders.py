@@ -12,19 +12,22 @@ A data spec is a one-key mapping (the YAML ``data:`` list holds such items)::
 ``broad``, ``csv`` and ``rosbag`` also take ``start_s`` / ``stop_s`` (seconds from the first sample) to cut the
 recording; a window is named after its file and its bounds (``imu@10s-70s``, :func:`window_name`) unless
 the spec states a ``name``, so windows of one file have distinct names. Relative paths are resolved
-against ``base_dir`` (the directory of the config file).
+against ``base_dir`` (the directory of the config file). Every kind also takes ``dataset: NAME``, the label of
+the dataset the recordings belong to (default: the kind, e.g. ``broad``); it goes into ``meta["dataset"]`` and
+``validation: {cv: {by: dataset}}`` leaves one dataset out at a time.
 Errors are :class:`RecordingError` naming the spec item and the key.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from objectives.attitude.data.recording import Recording, RecordingError
 
-__all__ = ["load_recording", "load_recordings", "window_name", "KINDS"]
+__all__ = ["dataset_label", "load_recording", "load_recordings", "window_name", "KINDS"]
 
 KINDS = ("broad", "csv", "rosbag", "synthetic")
 _CUT = ("start_s", "stop_s")
@@ -150,7 +153,30 @@ def _load_rosbag(opts: dict, base_dir: Path) -> Recording:
     return _cut(rec, "rosbag", opts, rename="name" not in opts)
 
 
+def dataset_label(spec: Mapping[str, Any]) -> tuple[dict[str, Any], str]:
+    """``(spec without its dataset key, the label)``: a source's ``dataset:`` label (a non-empty string), by
+    default the source's kind (``broad``, ``csv``, ``rosbag``, ``synthetic``), so recordings of one kind share
+    a dataset unless labelled."""
+    kind, opts = _split(spec)
+    label = opts.pop("dataset", kind)
+    if not isinstance(label, str) or not label.strip():
+        raise RecordingError(f"data spec {kind!r}: 'dataset' must be a non-empty text naming the dataset "
+                             f"(e.g. 'lab_b'), got {label!r}")
+    return {kind: opts}, label.strip()
+
+
+def _labelled(rec: Recording, label: str) -> Recording:
+    return replace(rec, meta={**rec.meta, "dataset": label})
+
+
 def load_recording(spec: Mapping[str, Any], base_dir: str | Path = ".") -> Recording:
+    """The one :class:`Recording` a data spec describes (see the module docstring); its ``meta["dataset"]`` is
+    the spec's ``dataset:`` label (:func:`dataset_label`)."""
+    spec, label = dataset_label(spec)
+    return _labelled(_load_one(spec, base_dir), label)
+
+
+def _load_one(spec: Mapping[str, Any], base_dir: str | Path = ".") -> Recording:
     """The one :class:`Recording` a data spec describes (see the module docstring).
 
     Parameters
@@ -199,9 +225,10 @@ def load_recordings(spec: Mapping[str, Any], base_dir: str | Path = ".") -> list
     BROAD index (``trials.json``, e.g. ``undisturbed``).
     """
     base_dir = Path(base_dir)
+    spec, label = dataset_label(spec)
     kind, opts = _split(spec)
     if kind != "broad" or "trials" not in opts:
-        return [load_recording(spec, base_dir)]
+        return [_labelled(_load_one(spec, base_dir), label)]
     from objectives.attitude.data.broad import broad_groups, broad_trials
 
     if "trial" in opts:
@@ -230,4 +257,5 @@ def load_recordings(spec: Mapping[str, Any], base_dir: str | Path = ".") -> list
             f"data spec 'broad': 'trials' must be a non-empty list, 'all' or a group, got {trials!r}"
         )
     directory = directory.resolve()  # already resolved against base_dir: do not resolve twice
-    return [load_recording({"broad": {**opts, "dir": str(directory), "trial": t}}, base_dir) for t in names]
+    return [_labelled(_load_one({"broad": {**opts, "dir": str(directory), "trial": t}}, base_dir), label)
+            for t in names]
