@@ -181,7 +181,8 @@ def select_best(cfg: RunConfig, rd: RunDir, best: Best, names: list[str],
 def inner_split(sel: SelectConfig, objective: Any, source: str = "<config>") -> tuple[str, Any, Any]:
     """``(fold name, tuning side, held-out side)`` of ``objective`` by the ``select`` rule inside a CV fold:
     the fold named ``holdout`` when the objective's own folds have it, else fold 0 of ``round(1 / f)``-fold
-    with ``f = holdout`` (a number) or :data:`FALLBACK_FRACTION` (a name this part of the data lacks)."""
+    with ``f = holdout`` (a number) or :data:`FALLBACK_FRACTION` (a name this part of the data lacks; then
+    fewer folds, down to 2, when the part has too few recordings for ``round(1 / f)``)."""
     key = "validation.select.holdout"
     fn = hook(objective, "cv_folds")
     if fn is None:
@@ -191,11 +192,20 @@ def inner_split(sel: SelectConfig, objective: Any, source: str = "<config>") -> 
             match = [f for f in fn(None) if str(f[0]) == sel.holdout]
             if match:
                 return str(match[0][0]), match[0][1], match[0][2]
-        frac = sel.holdout if not isinstance(sel.holdout, str) else FALLBACK_FRACTION
-        name, train, test = list(fn(max(2, round(1.0 / frac))))[0]
+        if not isinstance(sel.holdout, str):
+            name, train, test = list(fn(max(2, round(1.0 / sel.holdout))))[0]
+            return str(name), train, test
     except ValueError as exc:
         raise ConfigError(source, key, str(exc)) from None
-    return str(name), train, test
+    # a name this part lacks: the fallback fraction, with fewer folds when the part is small
+    err = None
+    for k in range(max(2, round(1.0 / FALLBACK_FRACTION)), 1, -1):
+        try:
+            name, train, test = list(fn(k))[0]
+            return str(name), train, test
+        except ValueError as exc:
+            err = err or exc
+    raise ConfigError(source, key, str(err))
 
 
 def tune_and_select(cfg: RunConfig, objective: Any, tune: Callable[[Any, Callable], Any]

@@ -152,3 +152,27 @@ def test_inner_split_errors_name_the_key(tmp_path, kind):
     with pytest.raises(ConfigError) as err:
         inner_split(cfg.validation.select, Tiny(), cfg.source)
     assert err.value.key == "validation.select.holdout" and "need 2 <= k" in err.value.message
+
+
+def test_inner_split_falls_back_to_fewer_folds_on_a_small_part(tmp_path, kind):
+    """A fold whose tuning part lacks the named group and holds fewer recordings than 1 / 0.25 is split
+    into as many folds as it has recordings (here 3), not refused."""
+    seen = []
+
+    class Three(GroupedObjective):
+        def cv_folds(self, k=None):
+            seen.append(k)
+            if k is None:
+                return [("a", None, None), ("b", None, None), ("c", None, None)]
+            if not 2 <= k <= 3:
+                raise ValueError(f"cv: need 2 <= k <= 3 (recordings), got k={k}")
+            return [(f"fold-{i}", f"train{i}of{k}", f"test{i}of{k}") for i in range(k)]
+
+    from tuner.validation import inner_split
+
+    cfg = config_from_dict(_raw(tmp_path, kind, {"holdout": "hold"}), source="job.yaml")
+    assert inner_split(cfg.validation.select, Three(), cfg.source) == ("fold-0", "train0of3", "test0of3")
+    assert seen == [None, 4, 3]
+    cfg = config_from_dict(_raw(tmp_path, kind, {"holdout": 0.25}), source="job.yaml")
+    with pytest.raises(ConfigError):  # an explicit fraction is not bent
+        inner_split(cfg.validation.select, Three(), cfg.source)
