@@ -43,7 +43,7 @@ from tuner.selection import select_best
 from tuner.setup import LiveMap, new_optimizer, run_config, worker_count
 from tuner.setup import build as _build  # the old name, used by benchmarks
 from tuner.space import Space
-from tuner.validation import validate_run
+from tuner.validation import cv_deploys_defaults, validate_run
 
 __all__ = ["RunResult", "run", "resume", "atomic_write", "read_meta", "load_best", "new_meta", "resolved_config",
            "RunError"]
@@ -333,6 +333,15 @@ class Run:
         # the defaults' scores, the CV into the run directory: their numbers into best's evaluation
         self.best = validate_run(self.cfg, self.rd, self.best, selection, self.progress, self.objective,
                                  self.base_space)
+        dflt = cv_deploys_defaults(self.cfg, self.best, self.objective, self.base_space)
+        if dflt is not None:  # the CV says tuning does worse held out than the defaults: deploy them
+            ev = dict(dflt.evaluation)
+            self.best = dflt
+            extra = self._finalize()  # their deployment and the objective's report step
+            self.best = dataclasses.replace(self.best, evaluation=plain({**ev, **self.best.evaluation}))
+            if self.progress:
+                self.progress(f"cross-validation: the defaults score {ev['defaults_cv_fitness']:.4g} on the held-out "
+                              f"folds, the tuning {ev['cv_fitness']:.4g}: the run deploys the defaults")
         self.rd.write_best(self.best)
         return extra
 

@@ -32,6 +32,11 @@ which sweeps show as each method's defaults row. ``tuner cv RUN_DIR`` does the
     held-out score than every tuned candidate); ``best.yaml`` then holds the defaults with their tuning
     fitness and ``found.eval = -1`` (no evaluation of the history).
 
+When the cross-validation says the procedure scores worse on the held-out folds than the defaults on the same
+folds, the run deploys the defaults (:func:`cv_deploys_defaults`; the defaults are a candidate unless
+``select: {include_defaults: false}``): ``best.yaml`` then holds them, with ``cv_deploys_defaults: true``, and
+the run says so in one line (:mod:`tuner.verdict`).
+
 Cross-validation with ``select`` (:func:`tuner.cv.cross_validate`) repeats the whole procedure in every
 fold: the fold's tuning recordings are split again by :func:`inner_split` (the named fold when the fold's
 recordings hold it, else the fraction: ``holdout`` if a number, else :data:`FALLBACK_FRACTION`), tuned on
@@ -66,6 +71,7 @@ from tuner.selection import (  # re-exported: the selection procedure's home is 
 from tuner.setup import run_config
 
 __all__ = ["selection_split", "tuning_objective", "select_best", "validate_run", "cv_run_dir", "inner_split",
+           "cv_deploys_defaults",
            "defaults_candidate", "tune_and_select", "defaults_scores", "FALLBACK_FRACTION"]
 
 def _cv(cfg: RunConfig, rd: RunDir, params: dict[str, Any], progress: Callable[[str], None] | None,
@@ -175,6 +181,30 @@ def validate_run(cfg: RunConfig, rd: RunDir, best: Best, selection: dict[str, An
             rd.write_validation({"cv": cv, **({"selection": selection} if selection else {})})
             return _record(rd, best, None, selection, write_best=False)
     return _record(rd, best, cv, selection, write_best=False)
+
+
+def cv_deploys_defaults(cfg: RunConfig, best: Best, objective: Any, space: Any) -> Best | None:
+    """The defaults as the run's :class:`Best` when its cross-validation says the tuning procedure scores worse on
+    the held-out folds than the defaults on the same folds (``cv_fitness > defaults_cv_fitness``, both finite),
+    else None. The defaults are a candidate as in the held-out selection (``select.include_defaults``, on by
+    default and without a ``select`` block); when that selection chose them already there is nothing to change.
+    The returned record holds the defaults with their tuning fitness (``defaults_fitness``), ``found.eval = -1``
+    and ``cv_deploys_defaults: true`` in its evaluation (the run's finish makes their deployment and report)."""
+    sel = cfg.validation.select
+    if cfg.validation.cv is None or (sel is not None and not sel.include_defaults):
+        return None
+    ev = best.evaluation
+    cv_fit, dflt_fit = ev.get("cv_fitness"), ev.get("defaults_cv_fitness")
+    if not all(isinstance(x, (int, float)) and math.isfinite(x) for x in (cv_fit, dflt_fit)) or cv_fit <= dflt_fit:
+        return None
+    if isinstance(ev.get("selection"), dict) and ev["selection"].get("defaults_chosen"):
+        return None
+    dflt = defaults_candidate(objective, space if space is not None else cfg.space(objective))
+    fit = ev.get("defaults_fitness")
+    if dflt is None or not isinstance(fit, (int, float)) or not math.isfinite(fit):
+        return None
+    return Best({**best.params, **dflt[0]}, float(fit), {}, -1, -1, -1, best.run,
+                plain({**ev, "cv_deploys_defaults": True}))
 
 
 def cv_run_dir(run_dir: str | Path, k: int | None = None, progress: Callable[[str], None] | None = None,

@@ -7,8 +7,9 @@ run's ``best.yaml`` evaluation (:mod:`tuner.validation`): ``test_fitness`` again
 (held-out recordings) and ``cv_fitness`` against ``defaults_cv_fitness`` (the same folds for both). When the
 tuned side is worse in either, the run says so in one line, in the terminal at its end, ``tuner show``, the
 report's warnings, the dashboard and ``tuner export``; the line also says what is deployed: the defaults, when
-the held-out selection (``validation: {select: ...}``, which includes the defaults by default) chose them,
-else the tuned values. Lower is better, as everywhere in the engine. Imports nothing, so every reader can use it.
+the held-out selection (``validation: {select: ...}``, which includes the defaults by default) or the run's
+cross-validation (``cv_deploys_defaults``) chose them, else the tuned values. Lower is better, as everywhere
+in the engine. Imports nothing, so every reader can use it.
 """
 
 from __future__ import annotations
@@ -45,9 +46,11 @@ def defaults_verdict(evaluation: Mapping[str, Any] | None) -> str | None:
             worse.append(f"{what} {t:.4g} vs defaults {d:.4g}")
     sel = evaluation.get("selection")
     chosen = isinstance(sel, Mapping) and bool(sel.get("defaults_chosen"))
+    by_cv = bool(evaluation.get("cv_deploys_defaults"))
     if not worse:
         return _defaults_chosen_line(sel) if chosen else None
     deployed = ("the run deploys the defaults (the held-out selection chose them)" if chosen else
+                "the run deploys the defaults (the cross-validation chose them)" if by_cv else
                 "best.yaml holds the tuned values; `validation: {select: {}}` deploys the defaults when they "
                 "score better held out")
     return f"tuned is worse than the defaults on data the search did not see ({'; '.join(worse)}): {deployed}"

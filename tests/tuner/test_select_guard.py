@@ -176,3 +176,54 @@ def test_inner_split_falls_back_to_fewer_folds_on_a_small_part(tmp_path, kind):
     cfg = config_from_dict(_raw(tmp_path, kind, {"holdout": 0.25}), source="job.yaml")
     with pytest.raises(ConfigError):  # an explicit fraction is not bent
         inner_split(cfg.validation.select, Three(), cfg.source)
+
+
+SPREAD = (("p0", "g1", 0.0), ("p1", "g1", 0.0), ("q0", "g2", 0.6), ("q1", "g2", 0.6), ("r0", "g3", 0.3),
+          ("r1", "g3", 0.3))
+
+
+class SpreadObjective(GroupedObjective):
+    """Groups with optima 0.0, 0.6 and 0.3 (the default): every fold's tuning moves off the default towards the
+    two groups it sees, so on the held-out group it does worse than the default (CV 0.135 vs 0.06 in closed form),
+    although the tuning on all data lands near the default."""
+
+    def __init__(self, recs=SPREAD):
+        super().__init__(recs)
+
+
+spread_kind = kind_fixture("spread_kind", "spread_test", SpreadObjective)
+
+
+def _cv_raw(tmp_path, kind, **select):
+    raw = _raw(tmp_path, kind, None, cv="logo")
+    raw["optimizer"] = {"method": "random", "population": 40, "generations": 2}
+    if select:
+        raw["validation"]["select"] = select
+    else:
+        raw["validation"].pop("select")
+    return raw
+
+
+def test_the_run_deploys_the_defaults_when_its_cv_says_tuning_does_worse(tmp_path, spread_kind):
+    from tuner.verdict import defaults_verdict
+
+    res = run(config_from_dict(_cv_raw(tmp_path, spread_kind)), quiet=True)
+    best = RunDir(res.run_dir).best()
+    ev = best.evaluation
+    assert ev["cv_fitness"] == pytest.approx(0.135, abs=0.02) and ev["defaults_cv_fitness"] == pytest.approx(0.06)
+    assert ev["cv_deploys_defaults"] is True and best.params["x"] == 0.3 and best.eval == -1
+    assert best.fitness == pytest.approx(SpreadObjective()({"x": 0.3}))  # the defaults' tuning fitness
+    line = defaults_verdict(ev)
+    assert "the run deploys the defaults (the cross-validation chose them)" in line and "CV" in line
+    assert "cross-validation chose them" in (res.run_dir / "report.md").read_text()
+
+
+def test_without_defaults_as_a_candidate_the_cv_only_warns(tmp_path, spread_kind):
+    from tuner.verdict import defaults_verdict
+
+    res = run(config_from_dict(_cv_raw(tmp_path, spread_kind, top_k=3, holdout=0.5, include_defaults=False)),
+              quiet=True, report=False)
+    best = RunDir(res.run_dir).best()
+    assert "cv_deploys_defaults" not in best.evaluation and best.eval >= 0
+    assert best.evaluation["cv_fitness"] > best.evaluation["defaults_cv_fitness"]
+    assert "best.yaml holds the tuned values" in defaults_verdict(best.evaluation)
