@@ -24,10 +24,10 @@ then with a block on the blocks' states, :func:`initial_state`) and the blocks' 
 :data:`ROBUST_AT` (:func:`with_robust`); the shared per-sample prologue is :func:`robust_sample`. The units' C
 ports share their state members (:data:`C_MEMBERS`, sized from :data:`S`) and parts (:data:`C_PARTS`).
 
-Each filter keeps its own short loop over :func:`sample_inputs`: the loops differ in the update's gains
-and in where and how the bias output is written (Madgwick before its update, ``b + offset``; Mahony after
-it, ``offset - I``). One loop for both would take the update as a function argument, outside the inlining
-the rules of :mod:`objectives.jit` rely on, for about eight shared lines.
+Both kernels run one loop, :func:`bias_kernel_loop`, with their own update and gains: numba inlines the loop
+into each kernel body and the update into the loop (both ``inline="always"``), so each kernel compiles as
+when the loop was written out in it. The loops differed only in where and how the bias output is written
+(Madgwick before its update, ``b + offset``; Mahony after it, ``offset - I``), now the loop's ``bias_after``.
 """
 
 from __future__ import annotations
@@ -65,6 +65,7 @@ from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_array
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
            "with_robust", "robust_coef", "initial_state", "bias_setup", "robust_sample", "sample_inputs", "robust_on",
+           "bias_kernel_loop",
            "ROBUST_AT", "COEF_LEN", "STATE_LEN", "ROBUST_NAMES", "RC", "S", "C_PARTS", "C_MEMBERS"]
 
 # --- layouts: the state, and the robust blocks' part of the coefficient array -------------------------------
@@ -241,6 +242,33 @@ def read_mag(mag, i, use_mag):
     if use_mag:
         return read_unit(mag, i)
     return 0.0, 0.0, 0.0, False
+
+
+@njit(inline="always")
+def bias_kernel_loop(update, bias_after, gains, gyr, acc, mag, coef, state, out, bias_out, use_mag_coef):
+    """A kernel over whole arrays from its per-sample ``update`` (module docstring), inlined into each kernel body.
+
+    ``update(q0, q1, q2, q3, b0, b1, b2, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, gains)`` returns
+    the new quaternion and bias from the previous ones and the inputs of :func:`sample_inputs`; ``gains`` is
+    the filter's tuple of coefficients it takes, ``use_mag_coef`` its ``USE_MAG`` coefficient. The arrays
+    are the kernels' (``state`` read and written: q and bias, then the blocks' states). When ``bias_out`` has
+    a row per sample it gets the bias used at each: the bias before the update plus the rest bias (``b +
+    offset``), or with ``bias_after`` the rest bias less the updated state (``offset - I``).
+    """
+    robust = robust_on(coef, state)
+    use_mag, write_bias = io_flags(use_mag_coef, gyr, mag, bias_out)
+    q0, q1, q2, q3, b0, b1, b2 = sc.load_q_bias(state)
+    for i in range(gyr.shape[0]):
+        gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm = sample_inputs(
+            robust, coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3)
+        if write_bias and not bias_after:
+            sc.write_vec(bias_out, i, b0 + ox, b1 + oy, b2 + oz)
+        q0, q1, q2, q3, b0, b1, b2 = update(q0, q1, q2, q3, b0, b1, b2, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz,
+                                            mag_ok, gm, gains)
+        if write_bias and bias_after:
+            sc.write_vec(bias_out, i, ox - b0, oy - b1, oz - b2)
+        sc.write_q(out, i, q0, q1, q2, q3)
+    sc.store_q_bias(state, q0, q1, q2, q3, b0, b1, b2)
 
 
 def run_bias_kernel(kernel: Any, setup: KernelSetup, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,
