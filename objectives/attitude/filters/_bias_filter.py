@@ -248,12 +248,32 @@ def read_mag(mag, i, use_mag):
 def bias_kernel_loop(update, bias_after, gains, gyr, acc, mag, coef, state, out, bias_out, use_mag_coef):
     """A kernel over whole arrays from its per-sample ``update`` (module docstring), inlined into each kernel body.
 
-    ``update(q0, q1, q2, q3, b0, b1, b2, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, gains)`` returns
-    the new quaternion and bias from the previous ones and the inputs of :func:`sample_inputs`; ``gains`` is
-    the filter's tuple of coefficients it takes, ``use_mag_coef`` its ``USE_MAG`` coefficient. The arrays
-    are the kernels' (``state`` read and written: q and bias, then the blocks' states). When ``bias_out`` has
-    a row per sample it gets the bias used at each: the bias before the update plus the rest bias (``b +
-    offset``), or with ``bias_after`` the rest bias less the updated state (``offset - I``).
+    Parameters
+    ----------
+    update : a unit's per-sample recursion (``inline="always"``)
+        ``update(q0, q1, q2, q3, b0, b1, b2, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, gains)``:
+        the new quaternion and bias state from the previous ones and the inputs of :func:`sample_inputs`.
+    bias_after : bool
+        Where ``bias_out`` is written (below).
+    gains : tuple of float
+        The coefficients ``update`` takes, read from ``coef`` by the kernel.
+    gyr, acc, mag : (N, 3) float64
+        rad/s, any unit, any unit (both normalised per sample); ``mag`` may be (0, 3) for the IMU version.
+    coef : (C.LEN,) or (COEF_LEN,) float64
+        The unit's layout ``C``; with a robust block on, the blocks' flags and coefficients from index
+        :data:`ROBUST_AT` (:func:`with_robust`).
+    state : (S.MAG,) or (STATE_LEN,) float64
+        Read and written (layout :data:`S`): the sensor-to-earth quaternion (NWU) and the unit's bias state,
+        then the robust blocks' states when they are on; in: before the first sample, out: after the last
+        (for streaming).
+    out : (N, 4) float64
+        Written: the estimate after each sample's update.
+    bias_out : (N, 3) or (0, 3) float64
+        Written when it has a row per sample: the gyro bias used at each sample, rad/s: the bias state before
+        the update plus the rest bias of ``rest_bias`` (``b + offset``), or with ``bias_after`` the rest bias
+        less the updated state (``offset - I``).
+    use_mag_coef : float
+        The unit's ``USE_MAG`` coefficient (0: the IMU version).
     """
     robust = robust_on(coef, state)
     use_mag, write_bias = io_flags(use_mag_coef, gyr, mag, bias_out)

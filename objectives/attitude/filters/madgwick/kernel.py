@@ -105,26 +105,11 @@ def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, 
 
 @njit
 def madgwick_kernel_inner(gyr, acc, mag, coef, state, out, bias_out):
-    """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
-
-    Parameters
-    ----------
-    gyr, acc, mag : (N, 3) float64
-        rad/s, any unit (normalised), any unit (normalised); ``mag`` may be (0, 3) for IMU only.
-    coef : (C.LEN,) or (COEF_LEN,) float64
-        Layout :data:`C`: ``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k``
-        the field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1); with a robust block on, the blocks'
-        flags and coefficients from index ``ROBUST_AT`` (:func:`~objectives.attitude.filters._bias_filter.with_robust`).
-    state : (7,) or (STATE_LEN,) float64
-        Read and written: the sensor-to-earth quaternion (NWU) and the gyro bias estimate ``omega_b``
-        (rad/s), then the robust blocks' states when they are on; in: before the first sample, out:
-        after the last (for streaming).
-    out : (N, 4) float64
-        Written: the estimate after each sample's update.
-    bias_out : (N, 3) or (0, 3) float64
-        Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample (plus the
-        rest bias of ``rest_bias``).
-    """
+    """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49): the arrays of
+    :func:`~objectives.attitude.filters._bias_filter.bias_kernel_loop`, with ``coef`` in layout :data:`C`
+    (``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k`` the field-scale factor
+    of ``VARIANTS``, ``use_mag`` 0 or 1) and as the bias state the gyro bias estimate ``omega_b`` (eq. 48),
+    written to ``bias_out`` as used at each sample."""
     gains = (coef[C.DT], coef[C.BETA], coef[C.ZETA], coef[C.FIELD_K])
     bias_kernel_loop(_update, False, gains, gyr, acc, mag, coef, state, out, bias_out, coef[C.USE_MAG])
 

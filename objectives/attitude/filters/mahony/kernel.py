@@ -78,25 +78,10 @@ def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my,
 
 @njit
 def mahony_kernel_inner(gyr, acc, mag, coef, state, out, bias_out):
-    """Mahony filter over whole arrays (see module docstring).
-
-    Parameters
-    ----------
-    gyr, acc, mag : (N, 3) float64
-        rad/s, any unit, any unit; ``mag`` may be (0, 3) for the IMU version.
-    coef : (C.LEN,) or (COEF_LEN,) float64
-        Layout :data:`C`: ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag``
-        (0/1); with a robust block on, the blocks' flags and coefficients from index ``ROBUST_AT``
-        (:func:`~objectives.attitude.filters._bias_filter.with_robust`).
-    state : (7,) or (STATE_LEN,) float64
-        Read and written: the sensor-to-earth quaternion (NWU) and the integral ``I`` (rad/s), then the
-        robust blocks' states when they are on; in: before the first sample, out: after the last.
-    out : (N, 4) float64
-        Written: estimate after each sample.
-    bias_out : (N, 3) or (0, 3) float64
-        Written when not empty: gyro bias estimate ``b = -I`` used at each sample (plus the rest bias of
-        ``rest_bias``), rad/s.
-    """
+    """Mahony filter over whole arrays (module docstring): the arrays of
+    :func:`~objectives.attitude.filters._bias_filter.bias_kernel_loop`, with ``coef`` in layout :data:`C`
+    (``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` 0 or 1) and as the bias
+    state the integral ``I`` (rad/s), the gyro bias estimate ``b = -I`` after each sample's update."""
     # the bias used at a sample: the integral after its update, plus the rest bias (bias_after)
     bias_kernel_loop(_update, True, (coef[C.DT], coef[C.KP], coef[C.KI]), gyr, acc, mag, coef, state, out, bias_out,
                      coef[C.USE_MAG])
