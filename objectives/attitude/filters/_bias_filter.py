@@ -38,7 +38,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numba import njit
 
-from objectives.attitude.cexport.port import ROBUST_MEMBERS, CMember
+from objectives.attitude.cexport.port import ROBUST_MEMBERS, CMember, CPort
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import _scalar as sc
 from objectives.attitude.filters._scalar import read_unit
@@ -64,6 +64,7 @@ from objectives.attitude.filters.stream import StateStream
 from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
+           "bias_options", "bias_c_port",
            "with_robust", "robust_coef", "initial_state", "bias_setup", "robust_sample", "sample_inputs", "robust_on",
            "bias_kernel_loop",
            "ROBUST_AT", "COEF_LEN", "STATE_LEN", "ROBUST_NAMES", "RC", "S", "C_PARTS", "C_MEMBERS"]
@@ -98,6 +99,17 @@ ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_nor
                 "rest_bias_tau_s", "mag_ref_start")
 #: rest detection on unit accelerometer vectors: VQF's 0.5 m/s^2 relative to g
 _REST_TH_ACC = 0.5 / 9.81
+
+
+def bias_c_port(package: str, **options: Any) -> CPort:
+    """The C port of the unit ``package``: its ``port.c`` after the shared parts (:data:`C_PARTS`), the state
+    :data:`C_MEMBERS`; ``options`` as :class:`~objectives.attitude.cexport.port.CPort` takes them."""
+    return CPort((package, "port.c"), C_PARTS, C_MEMBERS, **options)
+
+
+def bias_options(rejected: str) -> tuple[Param, ...]:
+    """The options both filters declare after their own gains: ``use_mag``, then :func:`robust_options`."""
+    return (Param("use_mag", True, doc="MARG (true) or IMU (false)"), *robust_options(rejected))
 
 
 def robust_options(rejected: str) -> tuple[Param, ...]:
