@@ -218,7 +218,7 @@ def test_sine_and_cosine_without_libm(tmp_path):
     from objectives.attitude.filters.ekf import EKF
 
     src = render_c_filter(EKF(), rate_hz=100.0, prefix="T")["t.c"]
-    a = src.index("static void sincos_")
+    a = src.index("static void sincos_", src.index("#else", src.index("#ifdef T_LIBM_TRIG")))  # the series
     b = src.index("\n}\n", a) + 3
     (tmp_path / "s.c").write_text("#include <math.h>\ntypedef double real;\n" + src[a:b]
                                   + "\nvoid sc(double a, double *s, double *c);\n"
@@ -245,3 +245,26 @@ def test_a_fast_math_build_leaves_this_process_with_subnormal_numbers(bench, tmp
     c = build(flt, tmp_path, 1.0 / bench.dt, "double", ("-O2", "-ffast-math"), init="given")
     run_c(c, flt, bench, bench.quat[0])
     assert tiny / 2 > 0 and tiny * 0.5 == np.float64(2.2250738585072014e-308) / 8
+
+
+@pytest.mark.parametrize("case", ["lcf_tau", "ccf_robust", "realtime_vqf", "realtime_tuned"])
+def test_with_libm_trig_the_port_runs_the_kernels_operations(case, bench, tmp_path):
+    """``-DPREFIX_LIBM_TRIG`` swaps the series for libm's sin and cos, the kernel's own: then the port computes
+    the kernel's numbers, bit for bit where the output needs no frame change (realtime works in ENU) and to the
+    rounding of the output's frame change otherwise; the series differs from libm by up to 1 ulp per call."""
+    flt = type(CONFIGS[case]())(**{**CONFIGS[case]().values, "init": "truth"})
+    ref = flt.run(bench)
+    err = {}
+    for opt in (("-O2",), ("-O2", "-DT1_LIBM_TRIG")):
+        c = build(flt, tmp_path, 1.0 / bench.dt, "double", opt, init="given")
+        err[opt[-1]] = np.abs(ref - run_c(c, flt, bench, bench.quat[0])).max()
+    if case.startswith("realtime"):
+        assert err["-DT1_LIBM_TRIG"] == 0.0 and err["-O2"] > 0.0, err
+    else:
+        assert err["-DT1_LIBM_TRIG"] < 1e-15 and err["-DT1_LIBM_TRIG"] <= err["-O2"], err
+    files = render_c_filter(flt, rate_hz=200.0, precision="float", prefix="T2")  # float: sinf and cosf
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    res = subprocess.run([*find_compiler(), *STRICT_FLAGS, "-Wdouble-promotion", "-DT2_LIBM_TRIG", "-O2", "-c",
+                          str(tmp_path / "t2.c"), "-o", str(tmp_path / "t2.o")], capture_output=True, text=True)
+    assert res.returncode == 0 and not res.stderr, res.stderr

@@ -163,6 +163,8 @@ def render_c_filter(flt: Any, *, rate_hz: float, g: float = 9.80665, init: str =
            f"#define EXP {'expf' if fl else 'exp'}",
            f"#define ASIN {'asinf' if fl else 'asin'}",
            f"#define ATAN2 {'atan2f' if fl else 'atan2'}",
+           f"#define SIN {'sinf' if fl else 'sin'}",
+           f"#define COS {'cosf' if fl else 'cos'}",
            "#define ISNAN_(x) isnan(x)",
            f"#define WORK_FRAME {({'ENU': 0, 'NED': 1}).get(work, 2)} /* {work} */",
            f"#define NWU_TO_WORK {_quat_literal(frame_rotation('NWU', work))}",

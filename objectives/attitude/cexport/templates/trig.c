@@ -1,4 +1,13 @@
-/* ---- sine and cosine without libm's sin/cos ------------------------------------------------------ */
+/* ---- sine and cosine without libm's sin/cos (or with them: PFX_LIBM_TRIG) ------------------------------ */
+#ifdef PFX_LIBM_TRIG
+/* compiled with -DPFX_LIBM_TRIG: libm's sin and cos, the numba kernel's own (with the same libm the C then
+   computes what the kernel computes, operation for operation; libm's sin and cos cost more than the series) */
+static void sincos_(real a, real *s, real *c)
+{
+    *s = SIN(a);
+    *c = COS(a);
+}
+#else
 /* sin(a), cos(a): a reduced by the nearest multiple k of pi/2 (pi/2 split in two parts, as fdlibm's
    pio2_1 + pio2_1t, so the reduction is exact to ~1e-20 for the angles filters see), then fdlibm's minimax
    polynomials on |r| <= pi/4 and the quadrant's swap and signs (within 1 ulp of libm's sin and cos) */
@@ -41,3 +50,4 @@ static void sincos_(real a, real *s, real *c)
         *c = sn;
     }
 }
+#endif
