@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from objectives.control.controllers import get_controller
+from objectives.control.design import evaluate_loop
 from objectives.control.plants import loop_class, plant_kind
 from tuner.deployment import Deployment
 from tuner.objective import Evaluation
@@ -185,10 +186,7 @@ class ClosedLoopObjective:
         return self.loop.simulate(params)
 
     def __call__(self, params: Mapping[str, Any]) -> Evaluation:
-        try:
-            return self.loop.evaluate(params)
-        except ValueError as exc:  # a design that cannot be built (e.g. Riccati without solution)
-            return Evaluation.failed(f"controller design failed: {exc}")
+        return evaluate_loop(self.loop, params)  # a design that cannot be built: a failed evaluation
 
     def evaluate_batch(self, params_list: list[Mapping[str, Any]], n_threads: int) -> list[Any] | None:
         """A population in one kernel on ``n_threads`` threads, equal to ``[self(p) for p in params_list]``

@@ -7,6 +7,7 @@ import pytest
 
 from objectives.attitude.batch import batchable
 from objectives.attitude.objective import FilterObjective
+from tests.serial import serial_outcomes
 from tuner.config import config_from_dict
 from tuner.evaluate import Evaluator
 from tuner.objective import Evaluation
@@ -33,18 +34,6 @@ def _same(batch, serial):
             assert isinstance(b, Evaluation) and b == s  # fitness and every metric bit for bit
 
 
-def _serial(obj, params):
-    """What the serial path gives each candidate: its evaluation or the exception it raises."""
-    return [_call(obj, p) for p in params]
-
-
-def _call(obj, p):
-    try:
-        return obj(p)
-    except Exception as exc:
-        return exc
-
-
 @pytest.mark.parametrize("flt, fixed, extra", [
     ("madgwick", {}, {}),
     ("madgwick", {"use_mag": False, "zeta": 0.01}, {"metric": "euler_rmse_mean"}),
@@ -64,8 +53,8 @@ def test_batch_equals_serial_bit_for_bit(flt, fixed, extra):
     obj = FilterObjective(flt, extra.pop("data", [BENCH, BENCH2]), fixed=dict(fixed), **extra)
     params = _candidates(obj, 7)
     assert batchable(obj)
-    _same(obj.evaluate_batch(params, 2), _serial(obj, params))
-    _same(obj.evaluate_batch(params[:3], 1), _serial(obj, params[:3]))
+    _same(obj.evaluate_batch(params, 2), serial_outcomes(obj, params))
+    _same(obj.evaluate_batch(params[:3], 1), serial_outcomes(obj, params[:3]))
 
 
 @pytest.mark.parametrize("flt, key", [("madgwick", "beta"), ("mahony", "Kp")])
@@ -77,7 +66,7 @@ def test_candidates_with_and_without_robust_blocks_share_a_batch(flt, key):
     params = [{key: 0.3}, {key: 0.3, "mag_rejection": True}, {key: 0.2, "rest_bias": True, "acc_lp_tau_s": 2.0},
               {key: 0.3, "mag_rejection": "yes"}, {key: 0.5}]
     got = obj.evaluate_batch(params, 2)
-    _same(got, _serial(obj, params))
+    _same(got, serial_outcomes(obj, params))
     assert isinstance(got[3], ValueError) and "mag_rejection" in str(got[3])
     assert got[2].fitness != obj({key: 0.2}).fitness  # the blocks are on in that pair
 
@@ -86,7 +75,7 @@ def test_a_bad_candidate_fails_alone_with_the_serial_message():
     obj = FilterObjective("madgwick", [BENCH], prior={"strength": 1.0})
     params = [{"beta": 0.05}, {"beta": -1.0}, {"beta": 0.2}]
     got = obj.evaluate_batch(params, 2)
-    ref = _serial(obj, params)
+    ref = serial_outcomes(obj, params)
     assert isinstance(got[1], ValueError) and "beta" in str(got[1])
     _same(got, ref)
     assert got[0].metrics["prior_penalty"] >= 0
@@ -184,7 +173,7 @@ def test_threads_backend_uses_the_kernel_for_the_filter_objective():
     with Evaluator(obj, "threads", n_jobs=2) as ev:
         recs = ev(params)
         assert ev.notes == []
-    _same([r.evaluation for r in recs], _serial(obj, params))
+    _same([r.evaluation for r in recs], serial_outcomes(obj, params))
 
 
 @pytest.mark.slow
@@ -201,7 +190,7 @@ def test_a_runaway_error_fails_in_the_batch_as_serially():
     # (objectives.attitude.divergence); the population kernel must flag it too, not score it
     obj = FilterObjective("ekf", [BENCH, BENCH2], q0="truth")
     params = _candidates(obj, 7)
-    ref = _serial(obj, params)
+    ref = serial_outcomes(obj, params)
     runaway = [i for i, e in enumerate(ref) if isinstance(e, Evaluation) and "grows without bound" in e.error]
     assert runaway, "no runaway candidate: the check below would prove nothing"
     got = obj.evaluate_batch(params, 2)

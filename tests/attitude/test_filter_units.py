@@ -32,6 +32,7 @@ from objectives.attitude.filters.layout import Layout
 from objectives.attitude.filters.registry import unregister_filter
 from tests.attitude.cexport_cases import angle, run_c
 from tests.import_graph import import_circles, import_edges
+from tests.serial import serial_outcomes
 
 needs_cc = pytest.mark.skipif(find_compiler() is None, reason="no C compiler (cc, gcc or clang) on the PATH")
 TOL_RAD = 1e-9
@@ -163,12 +164,7 @@ def test_a_toy_unit_registered_from_the_tests_runs_in_the_objective_and_the_popu
     assert batchable(obj)
     params = obj.default_space().decode_batch(np.random.default_rng(0).random((5, obj.default_space().dim)))
     params.append({"gain": -1.0})  # refused by the declaration: a failure, in the batch as serially
-    serial = []
-    for p in params:
-        try:
-            serial.append(obj(p))
-        except ValueError as exc:
-            serial.append(exc)
+    serial = serial_outcomes(obj, params)
     got = obj.evaluate_batch(params, 2)
     assert [type(g) for g in got] == [type(s) for s in serial]
     assert got[:-1] == serial[:-1] and str(got[-1]) == str(serial[-1])

@@ -89,6 +89,19 @@ def test_product_composes_rotations(pt, qt, v):
     np.testing.assert_allclose(Q.qrot(Q.qmul(p, q), v), Q.qrot(p, Q.qrot(q, v)), atol=1e-11)
 
 
+@FAST
+@given(quat4, quat4)
+def test_the_scalar_kernels_product_is_the_hamilton_product(pt, qt):
+    """``_scalar.qmul``, the one product the realtime, Valenti and UKF kernels inline, on any two quaternions
+    (not only unit ones) against the reference's matrix form, and on the basis (i j = k, j i = -k)."""
+    from objectives.attitude.filters._scalar import qmul
+
+    p, q = np.array(pt), np.array(qt)
+    np.testing.assert_allclose(qmul(*p, *q), ref.hamilton(p, q), rtol=0, atol=1e-15)
+    assert qmul(0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0) == (0.0, 0.0, 0.0, 1.0)
+    assert qmul(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0) == (0.0, 0.0, 0.0, -1.0)
+
+
 # --- against references ---------------------------------------------------------------------------
 
 def test_rotmat_is_the_sandwich_product_and_orthonormal():

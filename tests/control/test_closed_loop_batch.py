@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 import yaml
 
+from objectives.control.design import evaluate_loop, failed_design
 from objectives.control.objective import ClosedLoopObjective
 from tuner.config import config_from_dict
 from tuner.objective import Evaluation
@@ -59,6 +60,21 @@ def test_fallen_and_undesignable_candidates_fail_as_in_serial():
     assert got == ref
     assert ref[1].status == "failed" and ref[1].error.startswith("controller design failed")
     assert ref[2].status == "failed" and "fell" in ref[2].error and ref[2].metrics["status_code"] == 1.0
+
+
+@pytest.mark.slow
+def test_a_report_scores_an_undesignable_candidate_as_the_run_does():
+    """The reports' score of the start and the tuned values (``design.evaluate_loop``) is the objective's
+    evaluation, a controller that cannot be designed (a negative input weight) included."""
+    doc = _doc("wmp_lqr.yaml")
+    obj = ClosedLoopObjective.from_config(doc["objective"], CONFIGS)
+    good = _candidates(doc, 1)[0]
+    bad = {**good, "r_u1": -1.0}
+    assert evaluate_loop(obj.loop, good) == obj(good)
+    with pytest.raises(ValueError) as why:
+        obj.loop.evaluate(bad)
+    assert evaluate_loop(obj.loop, bad) == obj(bad) == failed_design(why.value)
+    assert obj(bad).status == "failed" and obj(bad).error == f"controller design failed: {why.value}"
 
 
 def _history(rd):

@@ -148,21 +148,17 @@ def test_a_run_with_init_starts_at_the_rule_and_config_errors_are_one_line(tmp_p
     import yaml
 
     from tests.conftest import one_error_line, run_tuner
+    from tests.control.jobs import pi_job
 
     obj = _fotd_job(rule="simc", fit="lsq")
     start = obj.defaults
-    job = {"name": "init", "seed": 3,
-           "objective": {"kind": "closed_loop", "plant": {"tf": {"num": [1.0], "den": [5.0, 1.0]}, "delay_s": 1.0},
-                         "controller": "pid2dof", "period_s": 0.05,
-                         "fixed": {"N": 10.0, "b": 1.0, "c": 0.0, "antiwindup": "none", "Td_s": 0.0},
-                         "scenario": {"duration_s": 20.0, "reference": [], "load": [{"t": 0.0, "value": 1.0}]},
-                         "requirements": {"max_ms": 1.4}, "init": {"rule": "simc", "fit": "lsq"}},
-           "parameters": {"K": {"low": 0.05, "high": 50.0, "scale": "log"},
-                          "Ti_s": {"low": 0.1, "high": 30.0, "scale": "log"}},
-           "optimizer": {"method": "pso", "population": 4, "generations": 1},
-           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
-    path = tmp_path / "job.yaml"
-    path.write_text(yaml.safe_dump(job))
+    path, job = pi_job(tmp_path, "init", {
+        "kind": "closed_loop", "plant": {"tf": {"num": [1.0], "den": [5.0, 1.0]}, "delay_s": 1.0},
+        "controller": "pid2dof", "period_s": 0.05, "fixed": {"N": 10.0, "b": 1.0, "c": 0.0, "antiwindup": "none",
+                                                             "Td_s": 0.0},
+        "scenario": {"duration_s": 20.0, "reference": [], "load": [{"t": 0.0, "value": 1.0}]},
+        "requirements": {"max_ms": 1.4}, "init": {"rule": "simc", "fit": "lsq"}},
+        K=(0.05, 50.0), Ti_s=(0.1, 30.0), population=4, generations=1, seed=3)
     assert run_tuner("run", str(path), "--no-report").returncode == 0
     run = next((tmp_path / "runs").iterdir())
     with open(run / "history.csv") as fh:

@@ -18,6 +18,7 @@ from objectives.control.objective import ClosedLoopObjective
 from objectives.control.plants import PLANTS, plant_kind, register_plant, unregister_plant
 from objectives.control.plants.base import Plant, PlantKind, SteppedPlant
 from objectives.control.plants.kernels import _loop_nl
+from tests.control.jobs import pi_job
 from tuner.cli import main
 
 KEY = "toy_first_order"
@@ -98,16 +99,10 @@ def test_the_toy_plant_is_a_plant_and_its_loop_equals_the_lti_kind(toy):
 
 
 def test_a_pid_is_tuned_on_the_toy_plant_from_yaml(toy, tmp_path, capsys):
-    job = {"name": "toy", "seed": 1,
-           "objective": {"kind": "closed_loop", "plant": {KEY: {"K": 2.0, "tau_s": 0.5}}, "controller": "pid2dof",
-                         "period_s": 0.01, "scenario": SCENARIO, "actuator": {"u_min": -5.0, "u_max": 5.0},
-                         "fixed": {"Td_s": 0.0}, "cost": {"iae": 1.0}},
-           "parameters": {"K": {"low": 0.1, "high": 20.0, "scale": "log"},
-                          "Ti_s": {"low": 0.02, "high": 5.0, "scale": "log"}},
-           "optimizer": {"method": "pso", "population": 8, "generations": 6},
-           "parallel": {"backend": "serial"}, "output": str(tmp_path / "runs")}
-    path = tmp_path / "toy.yaml"
-    path.write_text(yaml.safe_dump(job))
+    path, job = pi_job(tmp_path, "toy", {
+        "kind": "closed_loop", "plant": {KEY: {"K": 2.0, "tau_s": 0.5}}, "controller": "pid2dof", "period_s": 0.01,
+        "scenario": SCENARIO, "actuator": {"u_min": -5.0, "u_max": 5.0}, "fixed": {"Td_s": 0.0}, "cost": {"iae": 1.0}},
+        K=(0.1, 20.0), Ti_s=(0.02, 5.0), population=8, generations=6)
     assert main(["run", str(path), "--no-report"]) == 0
     run = next((tmp_path / "runs").iterdir())
     best = yaml.safe_load((run / "best.yaml").read_text())

@@ -6,6 +6,7 @@ import time
 import numpy as np
 import pytest
 
+from tests.serial import serial_outcomes
 from tuner.config import ConfigError, config_from_dict
 from tuner.evaluate import Evaluator, TimedObjective
 from tuner.loop import SeededCall, evaluation_seed, minimize
@@ -46,13 +47,7 @@ class Batched(Plain):
             raise RuntimeError("broken hook")
         if self.hang_above is not None and any(p["a"] > self.hang_above for p in params_list):
             time.sleep(3600)
-        out = []
-        for p in params_list:
-            try:
-                out.append(_value(p))
-            except ValueError as exc:
-                out.append(exc)
-        return out
+        return serial_outcomes(_value, params_list)
 
 
 class SeededBatched:

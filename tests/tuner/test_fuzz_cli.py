@@ -24,6 +24,7 @@ import shutil
 import signal
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -224,6 +225,38 @@ def _call(argv: list[str], seconds: float | None = None) -> tuple[int, str]:
     return code, err.getvalue()
 
 
+@contextlib.contextmanager
+def stop_timer() -> Iterator[None]:
+    """The stop timer's handler (:class:`_Alarm`) on SIGALRM for the block; after it, the previous handler and
+    no timer left running."""
+    old = signal.signal(signal.SIGALRM, _Alarm.handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGALRM, old)
+        signal.setitimer(signal.ITIMER_REAL, 0)
+
+
+def iterations(box: Path, monkeypatch, stream: str = "") -> Iterator[tuple[int, random.Random]]:
+    """The fuzzing loop of both tests: ``(i, rng)`` for every iteration ``i`` within the test's half of the budget
+    (:data:`BUDGET_S`), or for iteration ``TUNER_FUZZ_ONLY`` alone, ``rng`` drawn from ``SEED``, ``stream`` and
+    ``i``; before each, ``box`` is a fresh sandbox (empty ``work`` and ``out`` folders) and the working
+    directory. When the budget is spent the count is printed, and at least 8 iterations must have run (unless
+    one was replayed)."""
+    only = os.environ.get("TUNER_FUZZ_ONLY")
+    t0, i = time.monotonic(), 0
+    while (time.monotonic() - t0 < BUDGET_S) if only is None else i <= int(only):
+        if only is None or i == int(only):
+            shutil.rmtree(box, ignore_errors=True)
+            (box / "work").mkdir(parents=True)
+            (box / "out").mkdir()
+            monkeypatch.chdir(box)
+            yield i, random.Random(f"{SEED}-{stream}{i}")
+        i += 1
+    print(f"fuzz {SEED}-{stream}*: {i} iterations in {time.monotonic() - t0:.0f} s")
+    assert only is not None or i >= 8, f"only {i} iterations in {BUDGET_S:g} s"  # (a loaded machine)
+
+
 @pytest.fixture(scope="module")
 def materials(tmp_path_factory):
     """A finished run, an interrupted run and a finished two-job sweep, built once and copied per iteration."""
@@ -262,22 +295,12 @@ def check_tmp_empty(tmp: Path, what: str) -> None:
 
 
 def test_fuzz_every_subcommand(tmp_path, materials, monkeypatch, private_tmp):
-    old = signal.signal(signal.SIGALRM, _Alarm.handler)
     victim = tmp_path / "victim.txt"
     victim.write_text("keep me\n")
     box = tmp_path / "box"
-    only = os.environ.get("TUNER_FUZZ_ONLY")
-    t0, i, seen = time.monotonic(), 0, {0: 0, 1: 0, 2: 0}
-    try:
-        while (time.monotonic() - t0 < BUDGET_S) if only is None else i <= int(only):
-            if only is not None and i != int(only):
-                i += 1
-                continue
-            rng = random.Random(f"{SEED}-{i}")
-            shutil.rmtree(box, ignore_errors=True)
-            (box / "work").mkdir(parents=True)
-            (box / "out").mkdir()
-            monkeypatch.chdir(box)
+    seen = {0: 0, 1: 0, 2: 0}
+    with stop_timer():
+        for i, rng in iterations(box, monkeypatch):
             run_dir = box / "work" / "run"
             shutil.copytree(materials / "run", run_dir, symlinks=True)
             sweep_dir = box / "work" / "sweep"
@@ -313,9 +336,4 @@ def test_fuzz_every_subcommand(tmp_path, materials, monkeypatch, private_tmp):
                 f"iteration {i}: tuner {argv} wrote beside the sandbox"
             check_tmp_empty(private_tmp, f"iteration {i}: tuner {argv}")
             seen[code] += 1
-            i += 1
-    finally:
-        signal.signal(signal.SIGALRM, old)
-        signal.setitimer(signal.ITIMER_REAL, 0)
-    print(f"fuzz: {i} iterations in {time.monotonic() - t0:.0f} s, exits {seen}")
-    assert only is not None or i >= 8, f"only {i} iterations in {BUDGET_S:g} s"  # (a loaded machine)
+    print(f"fuzz: exits {seen}")

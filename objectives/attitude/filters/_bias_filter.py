@@ -24,10 +24,10 @@ then with a block on the blocks' states, :func:`initial_state`) and the blocks' 
 :data:`ROBUST_AT` (:func:`with_robust`); the shared per-sample prologue is :func:`robust_sample`. The units' C
 ports share their state members (:data:`C_MEMBERS`, sized from :data:`S`) and parts (:data:`C_PARTS`).
 
-Each filter keeps its own short loop over :func:`sample_inputs`: the loops differ in the update's gains
-and in where and how the bias output is written (Madgwick before its update, ``b + offset``; Mahony after
-it, ``offset - I``). One loop for both would take the update as a function argument, outside the inlining
-the rules of :mod:`objectives.jit` rely on, for about eight shared lines.
+Both kernels run one loop, :func:`bias_kernel_loop`, with their own update and gains: numba inlines the loop
+into each kernel body and the update into the loop (both ``inline="always"``), so each kernel compiles as
+when the loop was written out in it. The loops differed only in where and how the bias output is written
+(Madgwick before its update, ``b + offset``; Mahony after it, ``offset - I``), now the loop's ``bias_after``.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numba import njit
 
-from objectives.attitude.cexport.port import ROBUST_MEMBERS, CMember
+from objectives.attitude.cexport.port import ROBUST_MEMBERS, CMember, CPort
 from objectives.attitude.data.recording import Recording
 from objectives.attitude.filters import _scalar as sc
 from objectives.attitude.filters._scalar import read_unit
@@ -64,7 +64,9 @@ from objectives.attitude.filters.stream import StateStream
 from objectives.params import POSITIVE, Param, ParamSet, check_number, imu_arrays, unit_quaternion
 
 __all__ = ["BiasKernelFilter", "run_bias_kernel", "batch_on_arrays", "io_flags", "read_mag", "robust_options",
+           "bias_options", "bias_c_port",
            "with_robust", "robust_coef", "initial_state", "bias_setup", "robust_sample", "sample_inputs", "robust_on",
+           "bias_kernel_loop",
            "ROBUST_AT", "COEF_LEN", "STATE_LEN", "ROBUST_NAMES", "RC", "S", "C_PARTS", "C_MEMBERS"]
 
 # --- layouts: the state, and the robust blocks' part of the coefficient array -------------------------------
@@ -97,6 +99,17 @@ ROBUST_NAMES = ("acc_lp_tau_s", "mag_rejection", "mag_max_rejection_s", "mag_nor
                 "rest_bias_tau_s", "mag_ref_start")
 #: rest detection on unit accelerometer vectors: VQF's 0.5 m/s^2 relative to g
 _REST_TH_ACC = 0.5 / 9.81
+
+
+def bias_c_port(package: str, **options: Any) -> CPort:
+    """The C port of the unit ``package``: its ``port.c`` after the shared parts (:data:`C_PARTS`), the state
+    :data:`C_MEMBERS`; ``options`` as :class:`~objectives.attitude.cexport.port.CPort` takes them."""
+    return CPort((package, "port.c"), C_PARTS, C_MEMBERS, **options)
+
+
+def bias_options(rejected: str) -> tuple[Param, ...]:
+    """The options both filters declare after their own gains: ``use_mag``, then :func:`robust_options`."""
+    return (Param("use_mag", True, doc="MARG (true) or IMU (false)"), *robust_options(rejected))
 
 
 def robust_options(rejected: str) -> tuple[Param, ...]:
@@ -241,6 +254,53 @@ def read_mag(mag, i, use_mag):
     if use_mag:
         return read_unit(mag, i)
     return 0.0, 0.0, 0.0, False
+
+
+@njit(inline="always")
+def bias_kernel_loop(update, bias_after, gains, gyr, acc, mag, coef, state, out, bias_out, use_mag_coef):
+    """A kernel over whole arrays from its per-sample ``update`` (module docstring), inlined into each kernel body.
+
+    Parameters
+    ----------
+    update : a unit's per-sample recursion (``inline="always"``)
+        ``update(q0, q1, q2, q3, b0, b1, b2, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, gains)``:
+        the new quaternion and bias state from the previous ones and the inputs of :func:`sample_inputs`.
+    bias_after : bool
+        Where ``bias_out`` is written (below).
+    gains : tuple of float
+        The coefficients ``update`` takes, read from ``coef`` by the kernel.
+    gyr, acc, mag : (N, 3) float64
+        rad/s, any unit, any unit (both normalised per sample); ``mag`` may be (0, 3) for the IMU version.
+    coef : (C.LEN,) or (COEF_LEN,) float64
+        The unit's layout ``C``; with a robust block on, the blocks' flags and coefficients from index
+        :data:`ROBUST_AT` (:func:`with_robust`).
+    state : (S.MAG,) or (STATE_LEN,) float64
+        Read and written (layout :data:`S`): the sensor-to-earth quaternion (NWU) and the unit's bias state,
+        then the robust blocks' states when they are on; in: before the first sample, out: after the last
+        (for streaming).
+    out : (N, 4) float64
+        Written: the estimate after each sample's update.
+    bias_out : (N, 3) or (0, 3) float64
+        Written when it has a row per sample: the gyro bias used at each sample, rad/s: the bias state before
+        the update plus the rest bias of ``rest_bias`` (``b + offset``), or with ``bias_after`` the rest bias
+        less the updated state (``offset - I``).
+    use_mag_coef : float
+        The unit's ``USE_MAG`` coefficient (0: the IMU version).
+    """
+    robust = robust_on(coef, state)
+    use_mag, write_bias = io_flags(use_mag_coef, gyr, mag, bias_out)
+    q0, q1, q2, q3, b0, b1, b2 = sc.load_q_bias(state)
+    for i in range(gyr.shape[0]):
+        gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm = sample_inputs(
+            robust, coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3)
+        if write_bias and not bias_after:
+            sc.write_vec(bias_out, i, b0 + ox, b1 + oy, b2 + oz)
+        q0, q1, q2, q3, b0, b1, b2 = update(q0, q1, q2, q3, b0, b1, b2, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz,
+                                            mag_ok, gm, gains)
+        if write_bias and bias_after:
+            sc.write_vec(bias_out, i, ox - b0, oy - b1, oz - b2)
+        sc.write_q(out, i, q0, q1, q2, q3)
+    sc.store_q_bias(state, q0, q1, q2, q3, b0, b1, b2)
 
 
 def run_bias_kernel(kernel: Any, setup: KernelSetup, gyr: np.ndarray, acc: np.ndarray, mag: np.ndarray,

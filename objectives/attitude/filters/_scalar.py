@@ -1,4 +1,5 @@
-"""Scalar building blocks shared by the numba filter kernels (Madgwick, Mahony, complementary).
+"""Scalar building blocks shared by the numba filter kernels (Madgwick, Mahony, complementary, realtime,
+Valenti, the UKFs).
 
 Each helper works on plain floats and returns a tuple of floats (and a bool), and is compiled with
 ``inline="always"``: numba inlines it into the calling kernel before type inference, so the kernel
@@ -15,7 +16,7 @@ import math
 
 from numba import njit
 
-__all__ = ["read_vec", "read_rate", "sq_norm_ok", "unit", "read_unit", "rotate_sensor_to_earth"]
+__all__ = ["read_vec", "read_rate", "sq_norm_ok", "unit", "read_unit", "rotate_sensor_to_earth", "qmul"]
 
 @njit(cache=True, inline="always")
 def read_vec(a, i):
@@ -72,6 +73,15 @@ def rotate_sensor_to_earth(q0, q1, q2, q3, x, y, z):
     hz = (2.0 * x * (q1 * q3 - q0 * q2) + 2.0 * y * (q2 * q3 + q0 * q1)
           + z * (1.0 - 2.0 * (q1 * q1 + q2 * q2)))
     return hx, hy, hz
+
+
+@njit(cache=True, inline="always")
+def qmul(a0, a1, a2, a3, b0, b1, b2, b3):
+    """The Hamilton product ``a (x) b`` of two quaternions given by their components (w, x, y, z)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
 
 
 @njit(cache=True, inline="always")

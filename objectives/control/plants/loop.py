@@ -47,6 +47,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from objectives.control.design import failed_design
 from objectives.control.plants.base import PlantKind
 from objectives.control.plants.batch import ItemRunner
 from objectives.control.plants.cost import aggregation_from_spec, combine, cost_from_spec, cost_of_stats
@@ -275,7 +276,7 @@ class SISOLoop(LoopYaml):
                 cps.append(self.coeffs(p))
                 where.append(i)
             except ValueError as exc:
-                out[i] = Evaluation.failed(f"controller design failed: {exc}")
+                out[i] = failed_design(exc)
         if cps:
             stats = self._runner.run(np.array(cps), n_threads)
             for j, i in enumerate(where):

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.design import evaluate_loop
 from objectives.control.figure import new_figure, save_figure
 from objectives.control.plants.requirements import REQUIREMENTS, metric_words
 from objectives.control.plants.robustness import Assessment, assess, saturation_only, small_signal_method
@@ -42,21 +43,12 @@ from objectives.control.plants.tables import (
     saturation_notes,
     text_table,
 )
-from tuner.objective import Evaluation
 from tuner.safe_io import write_atomic
 
 __all__ = ["write_report", "plot_responses", "plot_bode"]
 
 #: at most this many other models drawn thin in the figures
 _MAX_MODELS_DRAWN = 24
-
-
-def _score(loop: Any, params: dict[str, Any]) -> Evaluation:
-    """The objective's evaluation of ``params`` (a design that cannot be built fails, as in a run)."""
-    try:
-        return loop.evaluate(params)
-    except ValueError as exc:
-        return Evaluation.failed(f"controller design failed: {exc}")
 
 
 def plot_responses(loop: Any, runs: dict[str, dict[str, Any]], path: pathlib.Path) -> pathlib.Path:
@@ -213,7 +205,7 @@ def _gains_md(loop: Any, best: dict[str, Any]) -> list[str]:
 def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: dict[str, Any]) -> dict[str, Any]:
     fig_dir = run_dir / "figures"
     runs = {"defaults": init, "tuned": best}
-    ev0, ev1 = _score(loop, init), _score(loop, best)
+    ev0, ev1 = evaluate_loop(loop, init), evaluate_loop(loop, best)
     out: dict[str, Any] = {"initial_status": ev0.status}
     if ev0.status == "ok":
         out["initial_fitness"] = ev0.fitness

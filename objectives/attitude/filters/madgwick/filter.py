@@ -29,14 +29,8 @@ where it defines the behaviour and never producing NaN from one bad sample:
 
 from __future__ import annotations
 
-from objectives.attitude.cexport.port import CField, CPort
-from objectives.attitude.filters._bias_filter import (
-    C_MEMBERS,
-    C_PARTS,
-    BiasKernelFilter,
-    batch_on_arrays,
-    robust_options,
-)
+from objectives.attitude.cexport.port import CField
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays, bias_c_port, bias_options
 from objectives.attitude.filters.madgwick.kernel import VARIANTS, coefficients, madgwick_kernel
 from objectives.attitude.filters.madgwick.population import POPULATION
 from objectives.params import NONNEG, Param, ParamSet
@@ -50,8 +44,7 @@ DECL = ParamSet("madgwick", (
           allowed=NONNEG),
     Param("variant", "paper", choices=tuple(VARIANTS), doc="'paper' or 'original_c' (2010 C code field scale)",
           eq="report eqs. 45-46"),
-    Param("use_mag", True, doc="MARG (true) or IMU (false)"),
-    *robust_options("a rejected field drops the magnetometer's gradient (eq. 34), the gravity gradient stays"),
+    *bias_options("a rejected field drops the magnetometer's gradient (eq. 34), the gravity gradient stays"),
 ))
 
 
@@ -90,7 +83,7 @@ def _c_fields(v: dict, ctx) -> list[CField]:
 
 
 #: the C port (port.c, ported from kernel.py; the prologue and robust blocks of the shared parts)
-C_PORT = CPort((__package__, "port.c"), C_PARTS, C_MEMBERS, skip=("variant",), fields=_c_fields)
+C_PORT = bias_c_port(__package__, skip=("variant",), fields=_c_fields)
 
 
 class Madgwick(BiasKernelFilter, kernel=madgwick_kernel, coef=coefficients, bias_param="zeta"):

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters import _scalar as sc
-from objectives.attitude.filters._bias_filter import io_flags, robust_on, sample_inputs, with_robust
+from objectives.attitude.filters._bias_filter import bias_kernel_loop, with_robust
 from objectives.attitude.filters.layout import Layout
 
 __all__ = ["C", "VARIANTS", "coefficients", "madgwick_kernel", "madgwick_kernel_inner"]
@@ -31,12 +31,12 @@ C = Layout("C", (("DT", 1, "sample time, s"),
 
 
 @njit(cache=True, inline="always")
-def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, dt, beta, zeta,
-            k):
+def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, gains):
     """One sample of the filter from the estimate ``q`` and bias ``b``: the new ``(q, b)`` (report eqs. 11-13,
     25-34, 42-49); ``gm`` scales the magnetometer's error (1: the paper; below 1: a field block a finds
-    disturbed). The kernel's one recursion, with the robust blocks on or off.
+    disturbed), ``gains`` is ``(dt, beta, zeta, k)``. The kernel's one recursion, with the robust blocks on or off.
     """
+    dt, beta, zeta, k = gains
     # eq. 49: bias-compensated rate
     gx -= bx_
     gy -= by_
@@ -105,39 +105,13 @@ def _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx, 
 
 @njit
 def madgwick_kernel_inner(gyr, acc, mag, coef, state, out, bias_out):
-    """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49).
-
-    Parameters
-    ----------
-    gyr, acc, mag : (N, 3) float64
-        rad/s, any unit (normalised), any unit (normalised); ``mag`` may be (0, 3) for IMU only.
-    coef : (C.LEN,) or (COEF_LEN,) float64
-        Layout :data:`C`: ``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k``
-        the field-scale factor (see ``VARIANTS``), ``use_mag`` (0 or 1); with a robust block on, the blocks'
-        flags and coefficients from index ``ROBUST_AT`` (:func:`~objectives.attitude.filters._bias_filter.with_robust`).
-    state : (7,) or (STATE_LEN,) float64
-        Read and written: the sensor-to-earth quaternion (NWU) and the gyro bias estimate ``omega_b``
-        (rad/s), then the robust blocks' states when they are on; in: before the first sample, out:
-        after the last (for streaming).
-    out : (N, 4) float64
-        Written: the estimate after each sample's update.
-    bias_out : (N, 3) or (0, 3) float64
-        Written when not empty: the gyro bias estimate ``omega_b`` (eq. 48) used at each sample (plus the
-        rest bias of ``rest_bias``).
-    """
-    robust = robust_on(coef, state)
-    dt, beta, zeta, k = coef[C.DT], coef[C.BETA], coef[C.ZETA], coef[C.FIELD_K]
-    use_mag, write_bias = io_flags(coef[C.USE_MAG], gyr, mag, bias_out)
-    q0_, q1, q2, q3, bx_, by_, bz_ = sc.load_q_bias(state)
-    for i in range(gyr.shape[0]):
-        gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm = sample_inputs(
-            robust, coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
-        if write_bias:
-            sc.write_vec(bias_out, i, bx_ + ox, by_ + oy, bz_ + oz)
-        q0_, q1, q2, q3, bx_, by_, bz_ = _update(q0_, q1, q2, q3, bx_, by_, bz_, gx, gy, gz, ax, ay, az, acc_ok, mx,
-                                                 my, mz, mag_ok, gm, dt, beta, zeta, k)
-        sc.write_q(out, i, q0_, q1, q2, q3)
-    sc.store_q_bias(state, q0_, q1, q2, q3, bx_, by_, bz_)
+    """Madgwick filter over whole arrays (report eqs. 11-13, 25-34, 42-49): the arrays of
+    :func:`~objectives.attitude.filters._bias_filter.bias_kernel_loop`, with ``coef`` in layout :data:`C`
+    (``dt`` s, ``beta`` rad/s (eq. 33), ``zeta`` rad/s^2 per unit error (eq. 48), ``k`` the field-scale factor
+    of ``VARIANTS``, ``use_mag`` 0 or 1) and as the bias state the gyro bias estimate ``omega_b`` (eq. 48),
+    written to ``bias_out`` as used at each sample."""
+    gains = (coef[C.DT], coef[C.BETA], coef[C.ZETA], coef[C.FIELD_K])
+    bias_kernel_loop(_update, False, gains, gyr, acc, mag, coef, state, out, bias_out, coef[C.USE_MAG])
 
 
 @njit(cache=True)

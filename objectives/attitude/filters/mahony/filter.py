@@ -29,14 +29,7 @@ non-finite: treated as zero rate (orientation held, correction still applied).
 
 from __future__ import annotations
 
-from objectives.attitude.cexport.port import CPort
-from objectives.attitude.filters._bias_filter import (
-    C_MEMBERS,
-    C_PARTS,
-    BiasKernelFilter,
-    batch_on_arrays,
-    robust_options,
-)
+from objectives.attitude.filters._bias_filter import BiasKernelFilter, batch_on_arrays, bias_c_port, bias_options
 from objectives.attitude.filters.mahony.kernel import coefficients, mahony_kernel
 from objectives.attitude.filters.mahony.population import POPULATION
 from objectives.params import NONNEG, Param, ParamSet
@@ -49,8 +42,7 @@ DECL = ParamSet("mahony", (
     Param("Kp", 0.5, (1e-2, 10.0), "log", "rad/s", "proportional gain", "TAC 2008 eq. 32 (k_P)", NONNEG),
     Param("Ki", 0.0, (1e-5, 1.0), "log", "rad/s^2", "integral gain (gyro bias)", "TAC 2008 eq. 32 (k_I)",
           NONNEG),
-    Param("use_mag", True, doc="MARG (true) or IMU (false)"),
-    *robust_options("a rejected field drops the magnetometer's error term m x w_hat, the gravity term stays"),
+    *bias_options("a rejected field drops the magnetometer's error term m x w_hat, the gravity term stays"),
 ))
 
 
@@ -80,7 +72,7 @@ def mahony_batch(gyr, acc, mag, dt: float, q0, kp: float = 0.5, ki: float = 0.0,
 
 
 #: the C port (port.c, ported from kernel.py; the prologue and robust blocks of the shared parts)
-C_PORT = CPort((__package__, "port.c"), C_PARTS, C_MEMBERS)
+C_PORT = bias_c_port(__package__)
 
 
 class Mahony(BiasKernelFilter, kernel=mahony_kernel, coef=coefficients, bias_param="Ki"):

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters import _scalar as sc
-from objectives.attitude.filters._bias_filter import io_flags, robust_on, sample_inputs, with_robust
+from objectives.attitude.filters._bias_filter import bias_kernel_loop, with_robust
 from objectives.attitude.filters.layout import Layout
 
 __all__ = ["C", "coefficients", "mahony_kernel", "mahony_kernel_inner"]
@@ -27,12 +27,13 @@ C = Layout("C", (("DT", 1, "sample time, s"),
 
 
 @njit(cache=True, inline="always")
-def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, dt, kp, ki):
+def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm, gains):
     """One sample from the estimate ``q`` and integral ``I``: the new ``(q, I)`` (module docstring: predicted
     gravity and field directions, the cross-product error, PI feedback, first-order integration); ``gm``
-    scales the magnetometer's error term (1: the C code; below 1: a field block a finds disturbed). The
-    kernel's one recursion, with the robust blocks on or off.
+    scales the magnetometer's error term (1: the C code; below 1: a field block a finds disturbed), ``gains``
+    is ``(dt, kp, ki)``. The kernel's one recursion, with the robust blocks on or off.
     """
+    dt, kp, ki = gains
     if acc_ok:
         # predicted gravity direction v_hat = R(q)^T (0, 0, 1)
         vx = 2.0 * (q1 * q3 - q0_ * q2)
@@ -77,38 +78,13 @@ def _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my,
 
 @njit
 def mahony_kernel_inner(gyr, acc, mag, coef, state, out, bias_out):
-    """Mahony filter over whole arrays (see module docstring).
-
-    Parameters
-    ----------
-    gyr, acc, mag : (N, 3) float64
-        rad/s, any unit, any unit; ``mag`` may be (0, 3) for the IMU version.
-    coef : (C.LEN,) or (COEF_LEN,) float64
-        Layout :data:`C`: ``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag``
-        (0/1); with a robust block on, the blocks' flags and coefficients from index ``ROBUST_AT``
-        (:func:`~objectives.attitude.filters._bias_filter.with_robust`).
-    state : (7,) or (STATE_LEN,) float64
-        Read and written: the sensor-to-earth quaternion (NWU) and the integral ``I`` (rad/s), then the
-        robust blocks' states when they are on; in: before the first sample, out: after the last.
-    out : (N, 4) float64
-        Written: estimate after each sample.
-    bias_out : (N, 3) or (0, 3) float64
-        Written when not empty: gyro bias estimate ``b = -I`` used at each sample (plus the rest bias of
-        ``rest_bias``), rad/s.
-    """
-    robust = robust_on(coef, state)
-    dt, kp, ki = coef[C.DT], coef[C.KP], coef[C.KI]
-    use_mag, write_bias = io_flags(coef[C.USE_MAG], gyr, mag, bias_out)
-    q0_, q1, q2, q3, ix, iy, iz = sc.load_q_bias(state)
-    for i in range(gyr.shape[0]):
-        gx, gy, gz, ox, oy, oz, ax, ay, az, acc_ok, mx, my, mz, mag_ok, gm = sample_inputs(
-            robust, coef, state, gyr, acc, mag, i, use_mag, q0_, q1, q2, q3)
-        q0_, q1, q2, q3, ix, iy, iz = _update(q0_, q1, q2, q3, ix, iy, iz, gx, gy, gz, ax, ay, az, acc_ok, mx, my,
-                                              mz, mag_ok, gm, dt, kp, ki)
-        if write_bias:  # the bias used at this sample: the integral after its update, plus the rest bias
-            sc.write_vec(bias_out, i, ox - ix, oy - iy, oz - iz)
-        sc.write_q(out, i, q0_, q1, q2, q3)
-    sc.store_q_bias(state, q0_, q1, q2, q3, ix, iy, iz)
+    """Mahony filter over whole arrays (module docstring): the arrays of
+    :func:`~objectives.attitude.filters._bias_filter.bias_kernel_loop`, with ``coef`` in layout :data:`C`
+    (``dt`` s, ``Kp`` rad/s per unit error, ``Ki`` rad/s^2 per unit error, ``use_mag`` 0 or 1) and as the bias
+    state the integral ``I`` (rad/s), the gyro bias estimate ``b = -I`` after each sample's update."""
+    # the bias used at a sample: the integral after its update, plus the rest bias (bias_after)
+    bias_kernel_loop(_update, True, (coef[C.DT], coef[C.KP], coef[C.KI]), gyr, acc, mag, coef, state, out, bias_out,
+                     coef[C.USE_MAG])
 
 
 @njit(cache=True)

@@ -22,6 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.attitude.filters._scalar import qmul
 from objectives.attitude.filters.realtime.coefficients import C, S
 
 __all__ = ["realtime_kernel"]
@@ -62,12 +63,6 @@ def _lp(s, off, n, x, y, c, k, tau, dt):
 
 
 @njit(cache=True, inline="always")
-def _qmul(a0, a1, a2, a3, b0, b1, b2, b3):
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
-
-
-@njit(cache=True, inline="always")
 def _rotate(q0, q1, q2, q3, v0, v1, v2):
     """``q (x) v (x) q*``."""
     x = (1 - 2 * q2 * q2 - 2 * q3 * q3) * v0 + 2 * v1 * (q2 * q1 - q0 * q3) + 2 * v2 * (q0 * q2 + q3 * q1)
@@ -87,8 +82,8 @@ def _normq(s, k):
 @njit
 def _q6(s):
     """The 6-D quaternion ``accQuat (x) gyrQuat``."""
-    return _qmul(s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3],
-                 s[S.GYR_Q], s[S.GYR_Q + 1], s[S.GYR_Q + 2], s[S.GYR_Q + 3])
+    return qmul(s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3],
+                s[S.GYR_Q], s[S.GYR_Q + 1], s[S.GYR_Q + 2], s[S.GYR_Q + 3])
 
 
 @njit
@@ -225,7 +220,7 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
             ang = un * dt
             cw = math.cos(ang / 2.0)
             sw = math.sin(ang / 2.0) / un
-            q = _qmul(s[S.GYR_Q], s[S.GYR_Q + 1], s[S.GYR_Q + 2], s[S.GYR_Q + 3], cw, sw * u0, sw * u1, sw * u2)
+            q = qmul(s[S.GYR_Q], s[S.GYR_Q + 1], s[S.GYR_Q + 2], s[S.GYR_Q + 3], cw, sw * u0, sw * u1, sw * u2)
             for j in range(4):
                 s[S.GYR_Q + j] = q[j]
             _normq(s, S.GYR_Q)
@@ -252,10 +247,10 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
             # inclination correction: the smallest rotation taking the filtered acc to the vertical
             qw = math.sqrt((ez + 1.0) / 2.0)
             if qw > 1e-6:
-                q = _qmul(qw, 0.5 * ey / qw, -0.5 * ex / qw, 0.0,
-                          s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3])
+                q = qmul(qw, 0.5 * ey / qw, -0.5 * ex / qw, 0.0,
+                         s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3])
             else:
-                q = _qmul(0.0, 1.0, 0.0, 0.0, s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3])
+                q = qmul(0.0, 1.0, 0.0, 0.0, s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3])
             for j in range(4):
                 s[S.ACC_Q + j] = q[j]
             _normq(s, S.ACC_Q)

@@ -84,6 +84,7 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.attitude.filters._scalar import qmul
 from objectives.attitude.filters.layout import Layout
 from objectives.attitude.filters.ukf.mean import _r2q_series, _wmean_cov
 from objectives.attitude.filters.ukf.scalar import (
@@ -97,7 +98,6 @@ from objectives.attitude.filters.ukf.scalar import (
     _mad_sorted,
     _median_sorted,
     _qdiff,
-    _qm,
     _r2q,
     _sorted_update,
     _store_sym3,
@@ -263,7 +263,7 @@ def _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_
                     _chol(P, L, 6, Ld)
                 # mean-input image as the start of the iterative mean
                 d0, d1, d2, d3 = _r2q((wx - b0) * dt, (wy - b1) * dt, (wz - b2) * dt)
-                r0, r1, r2, r3 = _qm(e0, e1, e2, e3, d0, d1, d2, d3)
+                r0, r1, r2, r3 = qmul(e0, e1, e2, e3, d0, d1, d2, d3)
                 for j in range(18):
                     col = j % 9
                     sgn = sq9 if j < 9 else -sq9
@@ -295,14 +295,14 @@ def _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_
                     a0, a1, a2, a3, ta = _r2q_series(U[0, j], U[1, j], U[2, j])
                     p0, p1, p2, p3, tp = _r2q_series(PA[0, j], PA[1, j], PA[2, j])
                     far += (ta >= _R2Q_SERIES_TH2) + (tp >= _R2Q_SERIES_TH2)
-                    s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
-                    E[0, j], E[1, j], E[2, j], E[3, j] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                    s0, s1, s2, s3 = qmul(p0, p1, p2, p3, e0, e1, e2, e3)
+                    E[0, j], E[1, j], E[2, j], E[3, j] = qmul(s0, s1, s2, s3, a0, a1, a2, a3)
                 if far > 0:
                     for j in range(18):
                         a0, a1, a2, a3 = _r2q(U[0, j], U[1, j], U[2, j])
                         p0, p1, p2, p3 = _r2q(PA[0, j], PA[1, j], PA[2, j])
-                        s0, s1, s2, s3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
-                        E[0, j], E[1, j], E[2, j], E[3, j] = _qm(s0, s1, s2, s3, a0, a1, a2, a3)
+                        s0, s1, s2, s3 = qmul(p0, p1, p2, p3, e0, e1, e2, e3)
+                        E[0, j], E[1, j], E[2, j], E[3, j] = qmul(s0, s1, s2, s3, a0, a1, a2, a3)
                 e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D, True)
                 # eq. 14: attitude block from the mean; the bias mean is unchanged (symmetric
                 # points) and the bias block is L_b L_b^T = P_bb, so only the cross block is summed
@@ -390,7 +390,7 @@ def _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_
             cy = K[1, 0] * gx + K[1, 1] * gy + K[1, 2] * gz
             cz = K[2, 0] * gx + K[2, 1] * gy + K[2, 2] * gz
             p0, p1, p2, p3 = _r2q(cx, cy, cz)
-            e0, e1, e2, e3 = _qm(p0, p1, p2, p3, e0, e1, e2, e3)
+            e0, e1, e2, e3 = qmul(p0, p1, p2, p3, e0, e1, e2, e3)
             b0 += K[3, 0] * gx + K[3, 1] * gy + K[3, 2] * gz
             b1 += K[4, 0] * gx + K[4, 1] * gy + K[4, 2] * gz
             b2 += K[5, 0] * gx + K[5, 1] * gy + K[5, 2] * gz

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from numba import njit
 
+from objectives.attitude.filters._scalar import qmul
 from objectives.attitude.filters.ukf.scalar import (
     _A1,
     _A2,
@@ -35,7 +36,6 @@ from objectives.attitude.filters.ukf.scalar import (
     _S5,
     _S6,
     _qdiff,
-    _qm,
     _r2q,
 )
 
@@ -66,7 +66,7 @@ def _r2q_series(rx, ry, rz):
 def _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz):
     """Column j of :func:`_dev_pass` by the series of eq. 1, added to the running sums; ``far`` counts
     columns beyond the series' range."""
-    w, x, y, z = _qm(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
+    w, x, y, z = qmul(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
     n2 = x * x + y * y + z * z
     far += n2 >= _Q2R_SERIES_N2
     f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
@@ -135,7 +135,7 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D, vector):
         if s2 < _TOL_MEAN * _TOL_MEAN:
             break
         e0, e1, e2, e3 = _r2q(sx, sy, sz)
-        r0, r1, r2, r3 = _qm(e0, e1, e2, e3, r0, r1, r2, r3)
+        r0, r1, r2, r3 = qmul(e0, e1, e2, e3, r0, r1, r2, r3)
         tr = (cxx + cyy + czz) * w
         if s2 < _BCH_STEP2 and s2 * tr * tr < _BCH_NEXT2:
             hx, hy, hz = 0.5 * sx, 0.5 * sy, 0.5 * sz

@@ -32,6 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.attitude.filters._scalar import qmul
 from objectives.attitude.filters.robust import (
     _acc_lp_update,
     _mag_dist_update,
@@ -42,7 +43,7 @@ from objectives.attitude.filters.robust import (
     rest_state,
 )
 from objectives.attitude.filters.ukf.kernel import C, I, S, _ukf_run_inner
-from objectives.attitude.filters.ukf.scalar import _qm, _r2q
+from objectives.attitude.filters.ukf.scalar import _r2q
 
 __all__ = ["ukf_robust_run"]
 
@@ -59,8 +60,8 @@ def _rest_bias_update(state, g_lp, r_rest):
         y = g_lp[i] - state[S.BIAS + i]
         c0, c1, c2 = P[0, j] * y / s, P[1, j] * y / s, P[2, j] * y / s
         p0, p1, p2, p3 = _r2q(c0, c1, c2)
-        state[S.Q], state[S.Q + 1], state[S.Q + 2], state[S.Q + 3] = _qm(p0, p1, p2, p3, state[S.Q], state[S.Q + 1],
-                                                                        state[S.Q + 2], state[S.Q + 3])
+        state[S.Q], state[S.Q + 1], state[S.Q + 2], state[S.Q + 3] = qmul(p0, p1, p2, p3, state[S.Q], state[S.Q + 1],
+                                                                          state[S.Q + 2], state[S.Q + 3])
         for m in range(3):
             state[S.BIAS + m] += P[3 + m, j] * y / s
         # P = P - P[:, j] P[j, :] / s (symmetric rank-one downdate)
@@ -89,7 +90,7 @@ def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mc
         wz = state[S.GYR + 2] - state[S.BIAS + 2]
         if istate[I.SEEN] > 0 and math.isfinite(wx + wy + wz):
             d0, d1, d2, d3 = _r2q(wx * dt, wy * dt, wz * dt)
-            q[0], q[1], q[2], q[3] = _qm(q[0], q[1], q[2], q[3], d0, d1, d2, d3)
+            q[0], q[1], q[2], q[3] = qmul(q[0], q[1], q[2], q[3], d0, d1, d2, d3)
         ax, ay, az = acc[k, 0], acc[k, 1], acc[k, 2]
         mx, my, mz = mag[k, 0], mag[k, 1], mag[k, 2]
         at_rest = False

@@ -17,6 +17,8 @@ import math
 
 from numba import njit
 
+from objectives.attitude.filters._scalar import qmul
+
 _S2 = 1.0 / math.sqrt(2.0)
 _SQRT2 = math.sqrt(2.0)
 
@@ -35,15 +37,6 @@ _SHORT_N2 = 1e-4
 
 # ----------------------------------------------------------------------------------------------
 # scalar quaternion helpers (tuples: no allocation)
-@njit(cache=True, inline="always")
-def _qm(a0, a1, a2, a3, b0, b1, b2, b3):
-    """Hamilton product ``a * b``."""
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
-            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
-            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
-
-
 @njit(cache=True, inline="always")
 def _r2q(rx, ry, rz):
     """Exponential map, eq. 2: rotation vector (rad) -> unit quaternion."""
@@ -90,7 +83,7 @@ def _q2r(w, x, y, z):
 @njit(cache=True, inline="always")
 def _qdiff(a0, a1, a2, a3, b0, b1, b2, b3):
     """Eq. 3: ``e_a (-) e_b = Q2R(e_a * e_b^*)`` (rad, earth-frame rotation vector)."""
-    w, x, y, z = _qm(a0, a1, a2, a3, b0, -b1, -b2, -b3)
+    w, x, y, z = qmul(a0, a1, a2, a3, b0, -b1, -b2, -b3)
     return _q2r(w, x, y, z)
 
 

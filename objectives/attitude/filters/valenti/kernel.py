@@ -13,6 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
+from objectives.attitude.filters._scalar import qmul
 from objectives.attitude.filters.layout import Layout
 
 __all__ = ["C", "S", "coefficients", "initial_state", "valenti_kernel", "G_NODE", "STEADY", "ADAPTIVE"]
@@ -40,12 +41,6 @@ S = Layout("S", (("Q", 4, "^L_G q (w, x, y, z): earth (NWU) to sensor"),
                  ("BIAS", 3, "gyro bias estimate, rad/s"),
                  ("PREV", 3, "the last sample's raw rate, rad/s (steady-state test)"),
                  ("PHASE", 1, "0: the next sample starts from acc (and mag); 2: from Q as given; 1: running")))
-
-
-@njit(cache=True, inline="always")
-def _qmul(a0, a1, a2, a3, b0, b1, b2, b3):
-    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3, a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
-            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1, a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
 
 
 @njit(cache=True, inline="always")
@@ -106,7 +101,7 @@ def _start(ax, ay, az, mx, my, mz, use_mag):
     else:  # second form
         b = math.sqrt(gam - lx * sg)
         m0, m3 = ly / (math.sqrt(2.0) * b), b / math.sqrt(2.0 * gam)
-    return _qmul(a0, a1, a2, a3, m0, 0.0, 0.0, m3)  # eq. 36
+    return qmul(a0, a1, a2, a3, m0, 0.0, 0.0, m3)  # eq. 36
 
 
 @njit(cache=True)
@@ -173,14 +168,14 @@ def valenti_kernel(gyr, acc, mag, coef, state, out, bias_out):
             d1, d2, d3 = -gy / (2.0 * d0), gx / (2.0 * d0), 0.0
             alpha = ga * _gain_factor(abs(an - g) / g) if do_adapt else ga  # eqs. 60-61
             d0, d1, d2, d3 = _scale(alpha, d0, d1, d2, d3)
-            q0, q1, q2, q3 = _qmul(p0, p1, p2, p3, d0, d1, d2, d3)  # eq. 53
+            q0, q1, q2, q3 = qmul(p0, p1, p2, p3, d0, d1, d2, d3)  # eq. 53
             if use_mag:
                 # eqs. 54-58: l = R^T(q') m, delta q_mag
                 lx, ly, _ = _rotate(q0, -q1, -q2, -q3, mx, my, mz)
                 gam = lx * lx + ly * ly
                 b = math.sqrt(gam + lx * math.sqrt(gam))
                 d0, d1, d2, d3 = _scale(gm, b / math.sqrt(2.0 * gam), 0.0, 0.0, ly / (math.sqrt(2.0) * b))
-                q0, q1, q2, q3 = _qmul(q0, q1, q2, q3, d0, d1, d2, d3)  # eq. 59
+                q0, q1, q2, q3 = qmul(q0, q1, q2, q3, d0, d1, d2, d3)  # eq. 59
             n = math.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
             q0, q1, q2, q3 = q0 / n, q1 / n, q2 / n, q3 / n
         out[i, 0], out[i, 1], out[i, 2], out[i, 3] = q0, -q1, -q2, -q3

@@ -17,7 +17,7 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from tuner.objective import Evaluation
+from objectives.control.design import failed_design
 
 __all__ = ["evaluate_batch", "run_all"]
 
@@ -61,7 +61,7 @@ def evaluate_batch(loop: Any, params_list: Sequence[Mapping[str, Any]], n_thread
         try:
             designed.append((i, loop.coeffs(params)))
         except ValueError as exc:  # as ClosedLoopObjective.__call__: a design that cannot be built
-            results[i] = Evaluation.failed(f"controller design failed: {exc}")
+            results[i] = failed_design(exc)
         except Exception as exc:  # noqa: BLE001 - handed back as the serial call would raise it
             results[i] = exc
     n_models = len(loop.cases)

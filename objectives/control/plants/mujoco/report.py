@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.design import evaluate_loop
 from objectives.control.figure import new_figure, save_figure
 from objectives.control.plants.mujoco.batch import run_all
 from objectives.control.plants.mujoco.steps import violated
@@ -33,14 +34,6 @@ from objectives.control.plants.requirements import REQUIREMENTS, limit_text
 from tuner.objective import Evaluation
 
 __all__ = ["write_report", "held_out_scores", "HeldOut"]
-
-
-def _score(loop: Any, params: dict[str, Any]) -> Evaluation:
-    try:
-        sim = loop.simulate(params)
-    except ValueError as exc:
-        return Evaluation.failed(f"controller design failed: {exc}")
-    return loop.evaluation(sim, params)
 
 
 class HeldOut:
@@ -187,7 +180,7 @@ def _held_out_markdown(loop: Any, tuned: HeldOut, defaults: HeldOut) -> str:
 
 def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: dict[str, Any]) -> dict[str, Any]:
     fig_dir = run_dir / "figures"
-    ev0, ev1 = _score(loop, init), _score(loop, best)
+    ev0, ev1 = evaluate_loop(loop, init), evaluate_loop(loop, best)
     out: dict[str, Any] = {"best_fitness": ev1.fitness, "initial_status": ev0.status}
     if ev0.status == "ok":
         out["initial_fitness"] = ev0.fitness

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, prange
 
 from objectives.batch_threads import _pairwise_sum, claim, counter, use_threads
+from objectives.control.design import failed_design
 from objectives.control.plants.wmp.metrics import (
     SETTLE_BAND_DEG,
     _measures_kernel,
@@ -218,7 +219,7 @@ def evaluate_batch(obj: Any, params_list: Sequence[Mapping[str, Any]], n_threads
         try:
             cp = np.ascontiguousarray(obj.ctrl.param_array(values), dtype=float)
         except ValueError as exc:  # as ClosedLoopObjective.__call__: a design that cannot be built
-            results[i] = Evaluation.failed(f"controller design failed: {exc}")
+            results[i] = failed_design(exc)
             continue
         except Exception as exc:
             results[i] = exc

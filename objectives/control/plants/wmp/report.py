@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from objectives.control.design import evaluate_loop
 from objectives.control.figure import new_figure, save_figure
 from objectives.control.plants.wmp.model import STATUS_OK
-from tuner.objective import Evaluation
 from tuner.safe_io import write_atomic
 
 __all__ = ["plot_surfaces", "plot_response", "save_response", "traces_doc", "write_report"]
@@ -142,15 +142,6 @@ def save_response(loop: Any, params: Mapping[str, Any] | None, path: str | pathl
     return path
 
 
-def _score(loop: Any, params: Mapping[str, Any]) -> Any:
-    """The objective's evaluation of ``params`` (a design that cannot be built fails, as in a run)."""
-    try:
-        sim = loop.simulate(params)
-    except ValueError as exc:
-        return Evaluation.failed(f"controller design failed: {exc}")
-    return loop.evaluation(sim, params)
-
-
 def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: dict[str, Any]) -> dict[str, Any]:
     """After a run: the initial parameters' score next to the best one, and report figures.
 
@@ -162,7 +153,7 @@ def write_report(loop: Any, run_dir: pathlib.Path, init: dict[str, Any], best: d
     MAEs}} of the best parameters, which the sweep tables collect as ``train.*`` columns.
     """
     fig_dir = run_dir / "figures"
-    ev0, ev1 = _score(loop, init), _score(loop, best)
+    ev0, ev1 = evaluate_loop(loop, init), evaluate_loop(loop, best)
     out: dict[str, Any] = {
         "initial_fitness": ev0.fitness,
         "initial_status": ev0.status,
