@@ -31,35 +31,42 @@ _EPS = np.finfo(np.float64).eps
 
 
 @njit
+def _lp_start(s, off, n, x, y, b0, b2, a2, tau, dt):
+    """The start phase of :func:`_lp` (its state's first entry NaN): the running mean of the first ``tau`` s,
+    then the filter's state in steady state at that mean."""
+    if math.isnan(s[off + 1]):
+        s[off + 1] = 0.0  # sample count
+        for j in range(n):
+            s[off + n + j] = 0.0  # running sums
+    s[off + 1] += 1.0
+    cnt = s[off + 1]
+    for j in range(n):
+        s[off + n + j] += x[j]
+        y[j] = s[off + n + j] / cnt
+    if cnt * dt >= tau:
+        for j in range(n):
+            s[off + j] = y[j] * (1.0 - b0)
+            s[off + n + j] = y[j] * (b2 - a2)
+
+
+@njit(cache=True, inline="always")
 def _lp(s, off, n, x, y, c, k, tau, dt):
     """One step of the second-order low-pass of ``n`` channels ``x`` -> ``y`` (state ``s[off:off + 2n]``,
     coefficients ``c[k:k + 5]``); during the first ``tau`` s the output is the running mean, after which the
-    filter starts in steady state at that mean."""
+    filter starts in steady state at that mean (:func:`_lp_start`)."""
     b0 = c[k]
     b1 = c[k + 1]
     b2 = c[k + 2]
     a1 = c[k + 3]
     a2 = c[k + 4]
     if math.isnan(s[off]):
-        if math.isnan(s[off + 1]):
-            s[off + 1] = 0.0  # sample count
-            for j in range(n):
-                s[off + n + j] = 0.0  # running sums
-        s[off + 1] += 1.0
-        cnt = s[off + 1]
+        _lp_start(s, off, n, x, y, b0, b2, a2, tau, dt)
+    else:
         for j in range(n):
-            s[off + n + j] += x[j]
-            y[j] = s[off + n + j] / cnt
-        if cnt * dt >= tau:
-            for j in range(n):
-                s[off + j] = y[j] * (1.0 - b0)
-                s[off + n + j] = y[j] * (b2 - a2)
-        return
-    for j in range(n):
-        yj = b0 * x[j] + s[off + j]
-        s[off + j] = b1 * x[j] - a1 * yj + s[off + n + j]
-        s[off + n + j] = b2 * x[j] - a2 * yj
-        y[j] = yj
+            yj = b0 * x[j] + s[off + j]
+            s[off + j] = b1 * x[j] - a1 * yj + s[off + n + j]
+            s[off + n + j] = b2 * x[j] - a2 * yj
+            y[j] = yj
 
 
 @njit(cache=True, inline="always")
@@ -152,20 +159,6 @@ def _clip(x, lim):
     return min(max(x, -lim), lim)
 
 
-@njit(cache=True, inline="always")
-def _rest_deviation_sq(s, off, v0, v1, v2, x, y, c, dt):
-    """Rest detection of one sensor: low-pass ``v`` with the rest filter (state at ``s[off]``; ``y`` gets the
-    low-passed value, ``x`` is scratch) and return the squared deviation ``|v - y|^2``."""
-    x[0] = v0
-    x[1] = v1
-    x[2] = v2
-    _lp(s, off, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
-    d0 = v0 - y[0]
-    d1 = v1 - y[1]
-    d2 = v2 - y[2]
-    return d0 * d0 + d1 * d1 + d2 * d2
-
-
 @njit(cache=True)
 def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
     """The filter over whole arrays (see the module docstring).
@@ -205,8 +198,14 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         # --- gyroscope: rest detection on the low-passed rate, then strapdown integration
         g0, g1, g2 = gyr[i, 0], gyr[i, 1], gyr[i, 2]
         if rest_bias or mag_rej:
-            sq = _rest_deviation_sq(s, S.REST_GYR_LP, g0, g1, g2, x, y, c, dt)
-            if sq >= c[C.REST_TH_GYR] ** 2 or max(abs(y[0]), max(abs(y[1]), abs(y[2]))) > clip:
+            x[0] = g0
+            x[1] = g1
+            x[2] = g2
+            _lp(s, S.REST_GYR_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
+            d0 = g0 - y[0]
+            d1 = g1 - y[1]
+            d2 = g2 - y[2]
+            if d0 * d0 + d1 * d1 + d2 * d2 >= c[C.REST_TH_GYR] ** 2 or max(abs(y[0]), max(abs(y[1]), abs(y[2]))) > clip:
                 s[S.REST_T] = 0.0
                 s[S.REST] = 0.0
             s[S.REST_GYR] = y[0]
@@ -228,7 +227,14 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         a0, a1, a2 = acc[i, 0], acc[i, 1], acc[i, 2]
         if not (a0 == 0.0 and a1 == 0.0 and a2 == 0.0):
             if rest_bias or first_at_rest:
-                if _rest_deviation_sq(s, S.REST_ACC_LP, a0, a1, a2, x, y, c, dt) >= c[C.REST_TH_ACC] ** 2:
+                x[0] = a0
+                x[1] = a1
+                x[2] = a2
+                _lp(s, S.REST_ACC_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
+                d0 = a0 - y[0]
+                d1 = a1 - y[1]
+                d2 = a2 - y[2]
+                if d0 * d0 + d1 * d1 + d2 * d2 >= c[C.REST_TH_ACC] ** 2:
                     s[S.REST_T] = 0.0
                     s[S.REST] = 0.0
                 else:
