@@ -31,9 +31,12 @@ _EPS = np.finfo(np.float64).eps
 
 
 @njit
-def _lp_start(s, off, n, x, y, b0, b2, a2, tau, dt):
-    """The start phase of :func:`_lp` (its state's first entry NaN): the running mean of the first ``tau`` s,
-    then the filter's state in steady state at that mean."""
+def _lp_start(s, off, n, x, y, c, k, tau, dt):
+    """The start phase of the low-pass :func:`_lp` (its state's first entry NaN): the output is the running
+    mean of the first ``tau`` s, after which the filter starts in steady state at that mean."""
+    b0 = c[k]
+    b2 = c[k + 2]
+    a2 = c[k + 4]
     if math.isnan(s[off + 1]):
         s[off + 1] = 0.0  # sample count
         for j in range(n):
@@ -50,23 +53,24 @@ def _lp_start(s, off, n, x, y, b0, b2, a2, tau, dt):
 
 
 @njit(cache=True, inline="always")
-def _lp(s, off, n, x, y, c, k, tau, dt):
+def _lp(s, off, n, x, y, c, k):
     """One step of the second-order low-pass of ``n`` channels ``x`` -> ``y`` (state ``s[off:off + 2n]``,
-    coefficients ``c[k:k + 5]``); during the first ``tau`` s the output is the running mean, after which the
-    filter starts in steady state at that mean (:func:`_lp_start`)."""
+    coefficients ``c[k:k + 5]``); False, doing nothing, during its start phase (the state's first entry NaN),
+    where the caller runs :func:`_lp_start` instead (a call kept out of this inlined step: around a call numba
+    keeps an atomic reference count of each array argument)."""
+    if math.isnan(s[off]):
+        return False
     b0 = c[k]
     b1 = c[k + 1]
     b2 = c[k + 2]
     a1 = c[k + 3]
     a2 = c[k + 4]
-    if math.isnan(s[off]):
-        _lp_start(s, off, n, x, y, b0, b2, a2, tau, dt)
-    else:
-        for j in range(n):
-            yj = b0 * x[j] + s[off + j]
-            s[off + j] = b1 * x[j] - a1 * yj + s[off + n + j]
-            s[off + n + j] = b2 * x[j] - a2 * yj
-            y[j] = yj
+    for j in range(n):
+        yj = b0 * x[j] + s[off + j]
+        s[off + j] = b1 * x[j] - a1 * yj + s[off + n + j]
+        s[off + n + j] = b2 * x[j] - a2 * yj
+        y[j] = yj
+    return True
 
 
 @njit(cache=True, inline="always")
@@ -93,7 +97,7 @@ def _q6(s):
                 s[S.GYR_Q], s[S.GYR_Q + 1], s[S.GYR_Q + 2], s[S.GYR_Q + 3])
 
 
-@njit
+@njit(cache=True, inline="always")
 def _inv3(m, out):
     """``out = inv(m)`` for row-major (9,) ``m`` by cofactors."""
     a, b, c, d, e, f, g, h, k = m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8]
@@ -201,7 +205,8 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
             x[0] = g0
             x[1] = g1
             x[2] = g2
-            _lp(s, S.REST_GYR_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
+            if not _lp(s, S.REST_GYR_LP, 3, x, y, c, C.REST_LP):
+                _lp_start(s, S.REST_GYR_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
             d0 = g0 - y[0]
             d1 = g1 - y[1]
             d2 = g2 - y[2]
@@ -230,7 +235,8 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                 x[0] = a0
                 x[1] = a1
                 x[2] = a2
-                _lp(s, S.REST_ACC_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
+                if not _lp(s, S.REST_ACC_LP, 3, x, y, c, C.REST_LP):
+                    _lp_start(s, S.REST_ACC_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
                 d0 = a0 - y[0]
                 d1 = a1 - y[1]
                 d2 = a2 - y[2]
@@ -243,7 +249,8 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                         s[S.REST] = 1.0
             # low-pass of the accelerometer in the strapdown (almost inertial) frame
             x[0], x[1], x[2] = _rotate(s[S.GYR_Q], s[S.GYR_Q + 1], s[S.GYR_Q + 2], s[S.GYR_Q + 3], a0, a1, a2)
-            _lp(s, S.ACC_LP, 3, x, y, c, C.ACC_LP, c[C.TAU_ACC], dt)
+            if not _lp(s, S.ACC_LP, 3, x, y, c, C.ACC_LP):
+                _lp_start(s, S.ACC_LP, 3, x, y, c, C.ACC_LP, c[C.TAU_ACC], dt)
             ex, ey, ez = _rotate(s[S.ACC_Q], s[S.ACC_Q + 1], s[S.ACC_Q + 2], s[S.ACC_Q + 3], y[0], y[1], y[2])
             en = math.sqrt(ex * ex + ey * ey + ez * ez)
             if en != 0.0:
@@ -277,8 +284,10 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                 x[1] = r[3] * b0_ + r[4] * b1_ + r[5] * b2_
                 for j in range(9):
                     y[j] = r[j]
-                _lp(s, S.R_LP, 9, y, r, c, C.ACC_LP, c[C.TAU_ACC], dt)
-                _lp(s, S.BLP, 2, x, y, c, C.ACC_LP, c[C.TAU_ACC], dt)
+                if not _lp(s, S.R_LP, 9, y, r, c, C.ACC_LP):
+                    _lp_start(s, S.R_LP, 9, y, r, c, C.ACC_LP, c[C.TAU_ACC], dt)
+                if not _lp(s, S.BLP, 2, x, y, c, C.ACC_LP):
+                    _lp_start(s, S.BLP, 2, x, y, c, C.ACC_LP, c[C.TAU_ACC], dt)
                 has_meas = True
                 if s[S.REST] != 0.0 and rest_bias:
                     for j in range(3):
@@ -315,7 +324,8 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
                     x[0] = nrm
                     x[1] = -math.asin(h2 / nrm)
                     if c[C.MAG_TAU] > 0.0:
-                        _lp(s, S.MAG_LP, 2, x, y, c, C.MAG_LP, c[C.MAG_TAU], dt)
+                        if not _lp(s, S.MAG_LP, 2, x, y, c, C.MAG_LP):
+                            _lp_start(s, S.MAG_LP, 2, x, y, c, C.MAG_LP, c[C.MAG_TAU], dt)
                     else:
                         y[0] = x[0]
                         y[1] = x[1]
