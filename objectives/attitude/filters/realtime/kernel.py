@@ -99,7 +99,8 @@ def _q6(s):
 
 @njit(cache=True, inline="always")
 def _inv3(m, out):
-    """``out = inv(m)`` for row-major (9,) ``m`` by cofactors."""
+    """``out = inv(m)`` for row-major (9,) ``m`` by cofactors (inlined: with no call in its body, numba keeps no
+    reference counts of :func:`_bias_update`'s array arguments)."""
     a, b, c, d, e, f, g, h, k = m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8]
     c00 = e * k - f * h
     c01 = f * g - d * k
