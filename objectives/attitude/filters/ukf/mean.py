@@ -63,19 +63,16 @@ def _r2q_series(rx, ry, rz):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz):
-    """Column j of :func:`_dev_pass` by the series of eq. 1, added to the running sums; ``far`` counts
-    columns beyond the series' range."""
-    w, x, y, z = qmul(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
+def _dev_column(Y, j, m, r0, r1, r2, r3, D):
+    """Column j of :func:`_dev_pass` by the series of eq. 1 into ``D[:, j]`` (``Y`` (4 m,) and ``D`` (3 m,) flat, row
+    after row); returns 1 when the column is beyond the series' range, else 0."""
+    w, x, y, z = qmul(Y[j], Y[m + j], Y[2 * m + j], Y[3 * m + j], r0, -r1, -r2, -r3)
     n2 = x * x + y * y + z * z
-    far += n2 >= _Q2R_SERIES_N2
     f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
         _A6 + n2 * (_A7 + n2 * (_A8 + n2 * _A9)))))))))
     f = f if w >= 0.0 else -f
-    dx, dy, dz = f * x, f * y, f * z
-    D[0, j], D[1, j], D[2, j] = dx, dy, dz
-    cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
-    return far, sx + dx, sy + dy, sz + dz, cxx, cxy, cxz, cyy, cyz, czz
+    D[j], D[m + j], D[2 * m + j] = f * x, f * y, f * z
+    return n2 >= _Q2R_SERIES_N2
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -92,9 +89,18 @@ def _dev_pass(Y, m, r0, r1, r2, r3, D, vector):
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
     far = 0
     if vector:
+        # the columns first, then the sums in the same order: a floating-point sum in the loop would keep it
+        # scalar (no reassociation without fast-math), apart the column loop vectorises
+        Yf = Y.reshape(4 * m)  # flat views: with ``m`` a compile-time constant the rows' offsets are known
+        Df = D.reshape(3 * m)
         for j in range(m):
-            far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz,
-                                                                        cxx, cxy, cxz, cyy, cyz, czz)
+            far += _dev_column(Yf, j, m, r0, r1, r2, r3, Df)
+        for j in range(m):
+            dx, dy, dz = D[0, j], D[1, j], D[2, j]
+            sx += dx
+            sy += dy
+            sz += dz
+            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
     else:
         far = 1
     if far > 0:
