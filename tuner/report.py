@@ -156,8 +156,9 @@ def _card(s: dict[str, Any], cfg: dict[str, Any]) -> list[list[Any]]:
         rows.append(["objective", what])
     if s["found"]:
         f = s["found"]
-        rows.append(["best found at", f"stage {f.get('stage')}, generation {f.get('generation')}, "
-                                      f"evaluation {f.get('eval')}"])
+        rows.append(["best found at", "the objective's defaults (chosen on held-out data, not an evaluation of the "
+                     "history)" if f.get("eval") == -1 else
+                     f"stage {f.get('stage')}, generation {f.get('generation')}, evaluation {f.get('eval')}"])
     return rows
 
 
@@ -200,7 +201,7 @@ def _gap_warning(val: dict[str, Any]) -> list[str]:
             "the tuned parameters do not carry over to held-out data as well as the tuning score says."]
 
 
-def _validation_md(val: dict[str, Any]) -> list[str]:
+def _validation_md(val: dict[str, Any], cv_chose_defaults: bool = False) -> list[str]:
     """The ``validation.json`` results: tuning score, CV score, gap; the final selection's candidates."""
     md: list[str] = []
     cv = val.get("cv") or {}
@@ -240,7 +241,9 @@ def _validation_md(val: dict[str, Any]) -> list[str]:
         md += ["## Final selection on a held-out fold", "",
                f"The {sel['top_k']} best distinct candidates of the tuning (which did not see fold "
                f"`{md_escape(sel['holdout'])}`, {sel.get('n_holdout')} recordings) rescored on that fold; the best "
-               "there is best.yaml" + (" (not the tuning best)." if sel.get("changed") else " (the tuning best)."), "",
+               "there is best.yaml" + (" (not the tuning best)." if sel.get("changed") else " (the tuning best).")
+               + (" The run's cross-validation then chose the defaults over it: best.yaml holds the defaults."
+                  if cv_chose_defaults else ""), "",
                _rows_table(rows, ["evaluation", "tuning fitness", "held-out fitness", ""], 4), ""]
     return md
 
@@ -305,7 +308,7 @@ def write_run_report(run_dir: Path, meta: dict[str, Any] | None = None, live: bo
         + ([f"- **optimistic CV**: {md_escape(optimistic)}."] if optimistic else []) \
         or ["None: no parameter within 2 % of a search bound, no failed evaluation."]
     md += [""]
-    md += _validation_md(val)
+    md += _validation_md(val, bool(s["evaluation"].get("cv_deploys_defaults")))
     if s["params"]:
         md += ["## Best parameters", "", "Position in bounds: 0 % = low bound, 100 % = high bound, measured in "
                "log10 for log-scaled parameters.", "",

@@ -32,13 +32,36 @@ def test_deviation_pass_series_and_exact_logarithm_agree(spread):
     c = ref.r2q(rng.normal(size=3))
     Y = _cloud(rng, c, 18, spread)
     D1, D2 = np.zeros((3, 18)), np.zeros((3, 18))
-    s1 = um._dev_pass(Y, 18, *c, D1, True)
-    s2 = um._dev_pass(Y, 18, *c, D2, False)
+    s1 = um._dev_pass(Y, 18, 18, *c, D1, True)
+    s2 = um._dev_pass(Y, 18, 18, *c, D2, False)
     Dref = np.array([ref.qminus(Y[:, j], c) for j in range(18)]).T
     assert np.allclose(D1, Dref, rtol=1e-12, atol=1e-15)
     assert np.allclose(D1, D2, rtol=1e-13, atol=1e-16)
     assert np.allclose(s1, s2, rtol=1e-12, atol=1e-16 * (1 + spread) ** 2)
     assert math.isclose(s1[0], Dref[0].sum(), rel_tol=1e-12, abs_tol=1e-15)
+
+
+@pytest.mark.parametrize("spread", [1e-3, 0.01, 0.02, 0.1, 0.3])
+def test_exact_pass_equals_the_scalar_logarithm_bit_for_bit(spread):
+    """Without ``vector`` the pass gives the scalar logarithm's values exactly (its short series below
+    ``|n|^2 = 1e-4``, its long one below 0.01, atan2 beyond: spreads around both thresholds), with 12 points
+    padded to 16 columns whose values never enter the sums."""
+    rng = np.random.default_rng(5)
+    c = ref.r2q(rng.normal(size=3))
+    for k in range(20):
+        Y = np.empty((4, 16))
+        Y[:, :12] = _cloud(rng, c, 12, spread)
+        # padding as the kernel's (the centre: the series' side) or any (a far column sends the pass to the scalar form)
+        Y[:, 12:] = c[:, None] if k % 2 == 0 else rng.normal(size=(4, 4))
+        D = np.full((3, 16), np.nan)
+        s = um._dev_pass(Y, 12, 16, *c, D, False)
+        Dref = np.array([sc._qdiff(*Y[:, j], *c) for j in range(12)]).T
+        assert np.array_equal(D[:, :12], Dref)
+        sums = [0.0] * 9
+        for dx, dy, dz in Dref.T:  # the same sums in the same order
+            for i, v in enumerate((dx, dy, dz, dx * dx, dx * dy, dx * dz, dy * dy, dy * dz, dz * dz)):
+                sums[i] += v
+        assert list(s) == sums
 
 
 @pytest.mark.parametrize("spread", [1e-4, 0.01, 0.3])
@@ -49,7 +72,7 @@ def test_weighted_mean_matches_reference_mean(spread):
     Y = _cloud(rng, c, 18, spread)
     for series in (True, False):
         D = np.zeros((3, 18))
-        out = um._wmean_cov(Y, 18, *c, D, series)
+        out = um._wmean_cov(Y, 18, 18, *c, D, series)
         mean = ref.wmean(list(Y.T), np.full(18, 1 / 18), c)
         assert abs(abs(np.dot(out[:4], mean)) - 1) < 1e-13
         dev = np.array([ref.qminus(Y[:, j], mean) for j in range(18)])

@@ -215,7 +215,8 @@ def test_the_run_deploys_the_defaults_when_its_cv_says_tuning_does_worse(tmp_pat
     assert best.fitness == pytest.approx(SpreadObjective()({"x": 0.3}))  # the defaults' tuning fitness
     line = defaults_verdict(ev)
     assert "the run deploys the defaults (the cross-validation chose them)" in line and "CV" in line
-    assert "cross-validation chose them" in (res.run_dir / "report.md").read_text()
+    md = (res.run_dir / "report.md").read_text()
+    assert "cross-validation chose them" in md and "| best found at | the objective's defaults" in md
 
 
 def test_without_defaults_as_a_candidate_the_cv_only_warns(tmp_path, spread_kind):

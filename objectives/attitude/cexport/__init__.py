@@ -18,8 +18,8 @@ Each filter is one struct and a streaming API without heap or global state::
 
 Only ``sqrt``, ``exp``, ``asin`` and ``atan2`` of libm are called (sine and cosine, for exact quaternion steps
 and Euler angles, are a series, ``trig.c``, within 1 ulp of libm's). Compiled with ``-DPREFIX_LIBM_TRIG`` the port
-calls libm's ``sin`` and ``cos`` instead, as the numba kernel does: it then runs the kernel's operations (the
-realtime port's output equals the kernel's bit for bit), at the price of libm's slower sine and cosine.
+calls libm's ``sin`` and ``cos`` instead, as the numba kernel does: it then runs the kernel's operations (a port
+whose output needs no frame change equals its kernel bit for bit), at the price of libm's slower sine and cosine.
 ``precision="float"`` writes every literal and call in single precision for MCUs without a double FPU.
 
 The ports and the shared parts (``templates/*.c``, ``*.h``) name public identifiers ``PFX_`` and use ``real``,

@@ -51,13 +51,13 @@ from objectives.attitude.filters.robust import (
     MAG_STATE,
     REST_COEF,
     REST_STATE,
+    _mag_dist_update,
+    _rest_update,
     acc_lp_coefficients,
     acc_lp_update_inline,
     mag_dist_coefficients,
     mag_dist_state,
-    mag_dist_update_inline,
     rest_coefficients,
-    rest_update_inline,
 )
 from objectives.attitude.filters.robust_params import robust_decl
 from objectives.attitude.filters.stream import StateStream
@@ -194,7 +194,7 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
     ax, ay, az, a_ok = sc.unit(acc[i, 0], acc[i, 1], acc[i, 2])
     rs = state[S.REST:S.ACC]
     if (rej or rest) and g_ok and a_ok:
-        rest_update_inline(rs, coef[RC.REST:RC.ACC], gx, gy, gz, ax, ay, az)
+        _rest_update(rs, coef[RC.REST:RC.ACC], gx, gy, gz, ax, ay, az)
     bx, by, bz = 0.0, 0.0, 0.0
     if rest:
         bx, by, bz = rs[8], rs[9], rs[10]
@@ -210,7 +210,7 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
             hx, hy, hz = sc.rotate_sensor_to_earth(q0, q1, q2, q3, mx, my, mz)  # NWU: z up, as block a expects
             gl = math.sqrt(rs[0] * rs[0] + rs[1] * rs[1] + rs[2] * rs[2])
             ms = state[S.MAG:S.REST]
-            g = mag_dist_update_inline(ms, coef[RC.MAG:RC.REST], hx, hy, hz, gl)
+            g = _mag_dist_update(ms, coef[RC.MAG:RC.REST], hx, hy, hz, gl)
             if ms[0] == 0.0 and coef[RC.FLAGS + 3] != 0.0:  # mag_ref_start: the first field is the reference
                 ms[0], ms[1], ms[2], ms[6] = ms[8], ms[9], coef[RC.MAG + 5], 0.0
                 g = 1.0

@@ -15,7 +15,12 @@ holds the per-sample arithmetic, written for the fixed sizes of the problem (6 e
   (valid below ``|n| = 0.1``, 0.2 rad), both truncated below 1e-19 relative. When any point of a
   loop is beyond that range the loop is redone with the exact scalar maps (atan2, sin, cos), so the
   result never depends on a truncated series outside its range. The measurement UT's 12 points
-  keep the scalar loop (measured faster for 12 points than the vector loop with its remainder).
+  are padded to 16 columns (two vector iterations; 12 columns stayed scalar, the vector loop judged
+  not worth it by LLVM) and get the scalar logarithm's own values, its two series computed and one
+  selected without a branch (:mod:`objectives.attitude.filters.ukf.mean`).
+- A vector loop holds no floating-point sum: without fast-math LLVM may not reassociate one, so a
+  sum keeps the whole loop scalar; the means store the deviations first and sum them afterwards,
+  in the same order (the forecast mean's column loop had run scalar since fast-math was dropped).
 - The exponential and logarithm maps (eqs. 1-2) elsewhere use their power series for small angles
   (see :mod:`objectives.attitude.filters.ukf.scalar`, which holds the scalar helpers).
 - The iterative mean (eqs. 5, 13) saves its last pass when the next step is predicted below
@@ -59,7 +64,12 @@ was tried and measured slower, so left out: the 12 measurement sigma points as v
 branch-free eq. 22-24 and the series mean; 12 columns run mostly in the vector remainder), the same
 padded to 16 columns, the magnetometer points' deviations in closed form (an earth-z rotation by the
 heading change: an atan series per point costs as much as the logarithm it replaces), and the
-forecast's first mean pass fused into the propagation loop in scalar form.
+forecast's first mean pass fused into the propagation loop in scalar form (those with fast-math).
+
+The table was measured with fast-math. Without it (rule 1), best of 9 thread-CPU runs on bench6dof 60 s
+at 1 kHz: QUKF 1277 ns per sample (0.180x the EKF's samples/s), 1129 ns (0.205x) once the forecast
+mean's column loop vectorised again (its sums taken apart), 1076 ns (0.217x) with the measurement
+mean's columns vectorised too (padded to 16, the scalar logarithm's values); QRAUKF 1653, 1543, 1493 ns.
 
 State passed in and out
 -----------------------
@@ -120,8 +130,9 @@ I = Layout("I", (("SEEN", 1, "samples processed"), ("IWIN", 1, "next write posit
                  ("NWIN", 1, "filled window length"), ("WINDOW", 1, "window length W")))
 #: the scratch ``work`` (float64), sigma points one per column
 W = Layout("W", (("E", 72, "forecast sigma quaternions (4, 18)"), ("D", 54, "their deviations (3, 18)"),
-                 ("DB", 54, "their bias deviations (3, 18)"), ("YM", 48, "measurement UT images (4, 12)"),
-                 ("DM", 36, "(3, 12)"), ("L", 36, "Cholesky factor (6, 6)"), ("R0", 9, "3 x 3"), ("RH", 9, "3 x 3"),
+                 ("DB", 54, "their bias deviations (3, 18)"),
+                 ("YM", 64, "measurement UT images (4, 16): 12 and 4 padding"), ("DM", 48, "(3, 16)"),
+                 ("L", 36, "Cholesky factor (6, 6)"), ("R0", 9, "3 x 3"), ("RH", 9, "3 x 3"),
                  ("PYY", 9, "3 x 3"), ("SYY", 9, "3 x 3"), ("K", 18, "gain (6, 3)"), ("LD", 6, "1 / diag(L)"),
                  ("U", 54, "rotation vectors u dt (3, 18)"), ("PA", 54, "attitude deviations (3, 18)")))
 #: size of ``work``
@@ -135,8 +146,8 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
 
     ``(ax, ay, az)`` and ``(bx, by, bz)`` are the raw acc and mag; the UT runs on the normalised
     vectors with the noise scaled by the norms (h of eq. 22 does not depend on the vectors' lengths).
-    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (4, 12) and ``D``
-    (3, 12) are scratch, one sigma point per column.
+    Returns (ok, w, x, y, z); ``ok`` False when the vectors are degenerate. ``Y`` (4, 16) and ``D``
+    (3, 16) are scratch, one sigma point per column (the last 4 padding).
     """
     na = math.sqrt(ax * ax + ay * ay + az * az)
     nb = math.sqrt(bx * bx + by * by + bz * bz)
@@ -190,8 +201,11 @@ def _meas_ut(ax, ay, az, bx, by, bz, sig_a, sig_b, Y, D, R):
         Y[1, j] = x
         Y[2, j] = y
         Y[3, j] = z
-    # 12 points: the exact scalar deviation pass (measured faster than the series' vector loop here)
-    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, q0, q1, q2, q3, D, False)
+    # 12 points, padded to 16 columns with the nominal quaternion (a vector loop's count; never summed), and the
+    # values of the scalar logarithm
+    for j in range(12, 16):
+        Y[0, j], Y[1, j], Y[2, j], Y[3, j] = q0, q1, q2, q3
+    y0, y1, y2, y3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(Y, 12, 16, q0, q1, q2, q3, D, False)
     _store_sym3(R, cxx, cxy, cxz, cyy, cyz, czz)
     return True, y0, y1, y2, y3
 
@@ -235,8 +249,8 @@ def _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_
     DB = work[W.DB:W.DB + 54].reshape((3, 18))    # their bias deviations
     U = work[W.U:W.U + 54].reshape((3, 18))       # their rotation vectors u dt (eq. 17)
     PA = work[W.PA:W.PA + 54].reshape((3, 18))    # their attitude deviations (zero for 12 of them)
-    Ym = work[W.YM:W.YM + 48].reshape((4, 12))    # measurement UT sigma images (eq. 25), one per column
-    Dm = work[W.DM:W.DM + 36].reshape((3, 12))
+    Ym = work[W.YM:W.YM + 64].reshape((4, 16))    # measurement UT sigma images (eq. 25), one per column, padded
+    Dm = work[W.DM:W.DM + 48].reshape((3, 16))
     L = work[W.L:W.L + 36].reshape((6, 6))
     R0 = work[W.R0:W.R0 + 9].reshape((3, 3))
     Rh = work[W.RH:W.RH + 9].reshape((3, 3))
@@ -303,7 +317,7 @@ def _ukf_run_inner(gyr, acc, mag, coef, robust, state, istate, work, out_q, out_
                         p0, p1, p2, p3 = _r2q(PA[0, j], PA[1, j], PA[2, j])
                         s0, s1, s2, s3 = qmul(p0, p1, p2, p3, e0, e1, e2, e3)
                         E[0, j], E[1, j], E[2, j], E[3, j] = qmul(s0, s1, s2, s3, a0, a1, a2, a3)
-                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, r0, r1, r2, r3, D, True)
+                e0, e1, e2, e3, cxx, cxy, cxz, cyy, cyz, czz = _wmean_cov(E, 18, 18, r0, r1, r2, r3, D, True)
                 # eq. 14: attitude block from the mean; the bias mean is unchanged (symmetric
                 # points) and the bias block is L_b L_b^T = P_bb, so only the cross block is summed
                 _store_sym3(P, cxx, cxy, cxz, cyy, cyz, czz)

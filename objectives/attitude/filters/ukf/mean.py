@@ -1,9 +1,9 @@
 """Sigma-point means of the quaternion UKF kernels (eqs. 5, 13-14 of Chiella et al. 2019).
 
 The iterative intrinsic mean and covariance of equally weighted unit quaternions stored one per
-column (:func:`_wmean_cov`): for the forecast's 18 sigma points its deviation pass is a branch-free
-loop the compiler turns into vector code (``vector``), for the measurement UT's 12 the exact scalar
-pass (measured faster at that count). Used by
+column (:func:`_wmean_cov`): its deviation pass is a branch-free loop the compiler turns into vector
+code, for the forecast's 18 sigma points by one power series of eq. 1 (``vector``), for the measurement
+UT's 12 (padded to 16 columns) with the values of the scalar logarithm. Used by
 :mod:`objectives.attitude.filters.ukf.kernel`, which documents the layouts and the profile.
 """
 
@@ -35,6 +35,7 @@ from objectives.attitude.filters.ukf.scalar import (
     _S4,
     _S5,
     _S6,
+    _SHORT_N2,
     _qdiff,
     _r2q,
 )
@@ -63,57 +64,75 @@ def _r2q_series(rx, ry, rz):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz):
-    """Column j of :func:`_dev_pass` by the series of eq. 1, added to the running sums; ``far`` counts
-    columns beyond the series' range."""
-    w, x, y, z = qmul(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, -r1, -r2, -r3)
+def _dev_column(Y, j, m, r0, r1, r2, r3, D):
+    """Column j of :func:`_dev_pass` by the series of eq. 1 into ``D[:, j]`` (``Y`` (4 m,) and ``D`` (3 m,) flat, row
+    after row); returns 1 when the column is beyond the series' range, else 0."""
+    w, x, y, z = qmul(Y[j], Y[m + j], Y[2 * m + j], Y[3 * m + j], r0, -r1, -r2, -r3)
     n2 = x * x + y * y + z * z
-    far += n2 >= _Q2R_SERIES_N2
     f = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
         _A6 + n2 * (_A7 + n2 * (_A8 + n2 * _A9)))))))))
     f = f if w >= 0.0 else -f
-    dx, dy, dz = f * x, f * y, f * z
-    D[0, j], D[1, j], D[2, j] = dx, dy, dz
-    cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
-    return far, sx + dx, sy + dy, sz + dz, cxx, cxy, cxz, cyy, cyz, czz
+    D[j], D[m + j], D[2 * m + j] = f * x, f * y, f * z
+    return n2 >= _Q2R_SERIES_N2
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _dev_pass(Y, m, r0, r1, r2, r3, D, vector):
+def _dev_column_exact(Y, j, m, r0, r1, r2, r3, D):
+    """Column j of :func:`_dev_pass` as the scalar logarithm (``_qdiff``, :func:`~.scalar._q2r`) computes it below
+    ``|n|^2 = 0.01``, bit for bit: both of its series evaluated and one selected, without a branch (the choice
+    between them is noise near ``|n|^2 = 1e-4``); returns 1 when the column is beyond that range, else 0."""
+    w, x, y, z = qmul(Y[j], Y[m + j], Y[2 * m + j], Y[3 * m + j], r0, -r1, -r2, -r3)
+    n2 = x * x + y * y + z * z
+    fs = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * _A4))))
+    fl = 2.0 * (1.0 + n2 * (_A1 + n2 * (_A2 + n2 * (_A3 + n2 * (_A4 + n2 * (_A5 + n2 * (
+        _A6 + n2 * (_A7 + n2 * (_A8 + n2 * _A9)))))))))
+    f = fs if n2 < _SHORT_N2 else fl
+    f = -f if w < 0.0 else f
+    D[j], D[m + j], D[2 * m + j] = f * x, f * y, f * z
+    return not n2 < _Q2R_SERIES_N2  # NaN too: the scalar form decides
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _dev_pass(Y, m, mp, r0, r1, r2, r3, D, vector):
     """One pass of the mean: ``D[:, j] = Y[:, j] (-) r`` (eq. 3) for j < m, and the sums of the deviations
     and of their outer products (sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz).
 
-    ``Y`` (4, m) and ``D`` (3, m) hold one sigma point per column, so the loop runs over contiguous
-    rows without a branch and vectorises: the logarithm is the power series of eq. 1 (valid for
-    ``|n|^2 < 0.01``, i.e. deviations below 0.2 rad, relative error below 1e-20), and a pass with any
-    deviation beyond that is redone with the exact scalar logarithm (``_qdiff``).
+    ``Y`` (4, mp) and ``D`` (3, mp) hold one sigma point per column (``mp >= m``: the columns from ``m`` on
+    are padding, near the mean, so that the loop's count suits the vector width; they are computed and not
+    summed), so the loop runs over contiguous
+    rows without a branch and vectorises. With ``vector`` the logarithm is the power series of eq. 1 (valid
+    for ``|n|^2 < 0.01``, i.e. deviations below 0.2 rad, relative error below 1e-20); without, the values of
+    the scalar logarithm (``_qdiff``). A pass with any deviation beyond the series' range is redone with the
+    scalar logarithm. The sums are taken afterwards, column after column: a floating-point sum in the column
+    loop would keep it scalar (no reassociation without fast-math).
     """
+    far = 0
+    Yf = Y.reshape(4 * mp)  # flat views: with ``mp`` a compile-time constant the rows' offsets are known
+    Df = D.reshape(3 * mp)
+    if vector:
+        for j in range(mp):
+            far += _dev_column(Yf, j, mp, r0, r1, r2, r3, Df)
+    else:
+        for j in range(mp):
+            far += _dev_column_exact(Yf, j, mp, r0, r1, r2, r3, Df)
+    if far > 0:
+        for j in range(mp):
+            D[0, j], D[1, j], D[2, j] = _qdiff(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, r1, r2, r3)
     sx = sy = sz = 0.0
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
-    far = 0
-    if vector:
-        for j in range(m):
-            far, sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_column(Y, j, r0, r1, r2, r3, D, far, sx, sy, sz,
-                                                                        cxx, cxy, cxz, cyy, cyz, czz)
-    else:
-        far = 1
-    if far > 0:
-        sx = sy = sz = 0.0
-        cxx = cxy = cxz = cyy = cyz = czz = 0.0
-        for j in range(m):
-            dx, dy, dz = _qdiff(Y[0, j], Y[1, j], Y[2, j], Y[3, j], r0, r1, r2, r3)
-            D[0, j], D[1, j], D[2, j] = dx, dy, dz
-            sx += dx
-            sy += dy
-            sz += dz
-            cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
+    for j in range(m):
+        dx, dy, dz = D[0, j], D[1, j], D[2, j]
+        sx += dx
+        sy += dy
+        sz += dz
+        cxx, cxy, cxz, cyy, cyz, czz = _add_outer(cxx, cxy, cxz, cyy, cyz, czz, dx, dy, dz)
     return sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz
 
 
 @njit(error_model="numpy")
-def _wmean_cov(Y, m, r0, r1, r2, r3, D, vector):
-    """Eqs. 13-14 for equally weighted quaternions Y[:, :m] (one per column): iterative mean from
-    (r0..r3) and covariance.
+def _wmean_cov(Y, m, mp, r0, r1, r2, r3, D, vector):
+    """Eqs. 13-14 for equally weighted quaternions Y[:, :m] (one per column; ``Y`` (4, mp), the columns from ``m``
+    on padding, see :func:`_dev_pass`): iterative mean from (r0..r3) and covariance.
 
     D[:, :m] receives the deviations ``Y_j (-) y_hat`` about the returned mean. Returns the mean
     (4 floats) and the covariance's 6 distinct entries (xx, xy, xz, yy, yz, zz).
@@ -127,7 +146,7 @@ def _wmean_cov(Y, m, r0, r1, r2, r3, D, vector):
     w = 1.0 / m
     cxx = cxy = cxz = cyy = cyz = czz = 0.0
     for _ in range(_MAX_MEAN_ITER):
-        sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_pass(Y, m, r0, r1, r2, r3, D, vector)
+        sx, sy, sz, cxx, cxy, cxz, cyy, cyz, czz = _dev_pass(Y, m, mp, r0, r1, r2, r3, D, vector)
         sx *= w
         sy *= w
         sz *= w
