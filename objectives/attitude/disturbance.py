@@ -198,7 +198,15 @@ def _windowed_mean(x, window, packet, causal, out):
 
 @njit(cache=True)
 def _abs_norm_dev(v, ref, out):
-    """out[k] = | |v_k| - ref | / ref."""
+    """out[k] = | |v_k| - ref | / ref. Three columns are summed written out (the same additions in the same
+    order): numba does not unroll the inner loop of unknown length, and the written-out sum is 4x faster."""
+    if v.shape[1] == 3:
+        for k in range(v.shape[0]):
+            x = v[k, 0]
+            y = v[k, 1]
+            z = v[k, 2]
+            out[k] = abs(math.sqrt(x * x + y * y + z * z) - ref) / ref
+        return
     for k in range(v.shape[0]):
         s = 0.0
         for j in range(v.shape[1]):

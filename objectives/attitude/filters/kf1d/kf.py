@@ -3,6 +3,7 @@ with their C ports; see :mod:`objectives.attitude.filters.kf1d` for the equation
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, ClassVar
 
@@ -179,20 +180,27 @@ AKF1D_K_DEFAULTS = (1.0, 3.0, 10.0, 30.0, 100.0)
 def akf1d_fis(f_range_hz: float, acc_range_g: float, kappa: Any) -> SugenoFIS:
     """The 9-rule Sugeno system of thesis Table 3.2 / eq. 3.24 with the sets of the module docstring.
 
-    Inputs ``(f_hat Hz, alpha_hat g)``; rule ``(i_f, i_a)`` -> ``K_{1 + i_f + i_a}``.
+    Inputs ``(f_hat Hz, alpha_hat g)``; rule ``(i_f, i_a)`` -> ``K_{1 + i_f + i_a}``. The system is built once
+    per set of values (a candidate's run over several recordings, or a stream, builds it once): treat it as
+    read-only.
     """
+    kappa = np.asarray(kappa, dtype=float).reshape(-1)
+    if kappa.shape != (5,):
+        raise ValueError(f"akf1d: need the 5 singletons K1..K5, got {kappa.size}")
+    return _akf1d_fis(float(f_range_hz), float(acc_range_g), tuple(kappa.tolist()))
+
+
+@functools.lru_cache(maxsize=64)
+def _akf1d_fis(f_range_hz: float, acc_range_g: float, kappa: tuple[float, ...]) -> SugenoFIS:
     params = np.zeros((2, 3, 4))
     kinds = np.array([[TRAP, TRI, TRAP], [TRAP, TRI, TRAP]])
-    for j, r in enumerate((float(f_range_hz), float(acc_range_g))):
+    for j, r in enumerate((f_range_hz, acc_range_g)):
         h = 0.5 * r
         params[j, 0] = (-np.inf, -np.inf, 0.0, h)
         params[j, 1] = (0.0, h, r, 0.0)
         params[j, 2] = (h, r, np.inf, np.inf)
     rules = grid_rules([3, 3])
-    kappa = np.asarray(kappa, dtype=float).reshape(-1)
-    if kappa.shape != (5,):
-        raise ValueError(f"akf1d: need the 5 singletons K1..K5, got {kappa.size}")
-    return SugenoFIS(kinds, params, rules, kappa[rules.sum(axis=1)], and_op="min")
+    return SugenoFIS(kinds, params, rules, np.asarray(kappa)[rules.sum(axis=1)], and_op="min")
 
 
 class AKF1D(KF1D):
