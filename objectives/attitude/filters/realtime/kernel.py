@@ -74,6 +74,15 @@ def _lp(s, off, n, x, y, c, k):
 
 
 @njit(cache=True, inline="always")
+def _dist2(y, v0, v1, v2):
+    """The squared distance of ``(v0, v1, v2)`` from ``y[:3]`` (rest detection's deviation from its low-pass)."""
+    d0 = v0 - y[0]
+    d1 = v1 - y[1]
+    d2 = v2 - y[2]
+    return d0 * d0 + d1 * d1 + d2 * d2
+
+
+@njit(cache=True, inline="always")
 def _rotate(q0, q1, q2, q3, v0, v1, v2):
     """``q (x) v (x) q*``."""
     x = (1 - 2 * q2 * q2 - 2 * q3 * q3) * v0 + 2 * v1 * (q2 * q1 - q0 * q3) + 2 * v2 * (q0 * q2 + q3 * q1)
@@ -203,15 +212,10 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         # --- gyroscope: rest detection on the low-passed rate, then strapdown integration
         g0, g1, g2 = gyr[i, 0], gyr[i, 1], gyr[i, 2]
         if rest_bias or mag_rej:
-            x[0] = g0
-            x[1] = g1
-            x[2] = g2
+            x[0], x[1], x[2] = g0, g1, g2
             if not _lp(s, S.REST_GYR_LP, 3, x, y, c, C.REST_LP):
                 _lp_start(s, S.REST_GYR_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
-            d0 = g0 - y[0]
-            d1 = g1 - y[1]
-            d2 = g2 - y[2]
-            if d0 * d0 + d1 * d1 + d2 * d2 >= c[C.REST_TH_GYR] ** 2 or max(abs(y[0]), max(abs(y[1]), abs(y[2]))) > clip:
+            if _dist2(y, g0, g1, g2) >= c[C.REST_TH_GYR] ** 2 or max(abs(y[0]), max(abs(y[1]), abs(y[2]))) > clip:
                 s[S.REST_T] = 0.0
                 s[S.REST] = 0.0
             s[S.REST_GYR] = y[0]
@@ -233,15 +237,10 @@ def realtime_kernel(gyr, acc, mag, c, s, out, bias_out, flags_out):
         a0, a1, a2 = acc[i, 0], acc[i, 1], acc[i, 2]
         if not (a0 == 0.0 and a1 == 0.0 and a2 == 0.0):
             if rest_bias or first_at_rest:
-                x[0] = a0
-                x[1] = a1
-                x[2] = a2
+                x[0], x[1], x[2] = a0, a1, a2
                 if not _lp(s, S.REST_ACC_LP, 3, x, y, c, C.REST_LP):
                     _lp_start(s, S.REST_ACC_LP, 3, x, y, c, C.REST_LP, c[C.REST_TAU], dt)
-                d0 = a0 - y[0]
-                d1 = a1 - y[1]
-                d2 = a2 - y[2]
-                if d0 * d0 + d1 * d1 + d2 * d2 >= c[C.REST_TH_ACC] ** 2:
+                if _dist2(y, a0, a1, a2) >= c[C.REST_TH_ACC] ** 2:
                     s[S.REST_T] = 0.0
                     s[S.REST] = 0.0
                 else:
