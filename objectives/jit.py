@@ -22,7 +22,10 @@ from the cache while the parent compiled could then score the same candidate twi
    inlining types the callee's IR again at every call site (most of the UKF's compile time), but an
    uncached call in a per-sample path costs run time (LLVM does not inline numba's calls there: the QUKF
    2-4 % slower with its per-sample helpers as calls, the robust Madgwick 15 % with its prologue), so the
-   kernels keep their helpers inlined.
+   kernels keep their helpers inlined. Most of a call's cost is the atomic reference count numba keeps of
+   each array argument: a callee that takes and returns scalars only (``robust.acc_lp_step``) costs 2-4 % as a
+   call, is compiled once per process for every kernel that calls it, and keeps those kernels' cold compile
+   down (the robust Madgwick and Mahony 5.2 and 4.9 s CPU with it inlined, 4.5 and 4.0-4.1 s as a call).
 3. **The cache follows the package**: numba keys a cache entry on the caller's own source file only, so a
    cached kernel that calls a kernel of another module (compiled into it by rule 2) would keep running the
    old callee after an edit there. Importing this module (``objectives/__init__.py`` does, before any

@@ -54,7 +54,7 @@ from objectives.attitude.filters.robust import (
     _mag_dist_update,
     _rest_update,
     acc_lp_coefficients,
-    acc_lp_update_inline,
+    acc_lp_step,
     mag_dist_coefficients,
     mag_dist_state,
     rest_coefficients,
@@ -79,13 +79,12 @@ RC = Layout("RC", (("FLAGS", 4, "mag_rejection, rest_bias, acc_lp, mag_ref_start
                    ("ACC", ACC_COEF, "block c: robust.acc_lp_coefficients")), start=ROBUST_AT)
 #: length of a coefficient array with the blocks
 COEF_LEN = RC.LEN
-#: the state: quaternion and bias (all of it with the blocks off), then the blocks' states and scratch
+#: the state: quaternion and bias (all of it with the blocks off), then the blocks' states
 S = Layout("S", (("Q", 4, "sensor-to-earth quaternion, NWU"),
                  ("BIAS", 3, "gyro bias (Madgwick: omega_b; Mahony: the integral I = -b), rad/s"),
                  ("MAG", MAG_STATE, "block a: robust.mag_dist_state"),
                  ("REST", REST_STATE, "block b: robust.rest_state"),
-                 ("ACC", ACC_STATE, "block c: robust.acc_lp_state"),
-                 ("SCRATCH", 7, "the previous quaternion and the low-passed acc (block c)")))
+                 ("ACC", ACC_STATE, "block c: robust.acc_lp_state")))
 #: length of the state array with the blocks (:data:`S`; the quaternion and bias alone: ``S.MAG``)
 STATE_LEN = S.LEN
 #: the C ports' shared parts: the blocks, then the prologue of the quaternion-and-bias filters
@@ -199,10 +198,10 @@ def robust_sample(coef, state, gyr, acc, mag, i, use_mag, q0, q1, q2, q3):
     if rest:
         bx, by, bz = rs[8], rs[9], rs[10]
     if alp and a_ok:
-        scr = state[S.SCRATCH:]
-        scr[0], scr[1], scr[2], scr[3] = q0, q1, q2, q3
-        acc_lp_update_inline(state[S.ACC:S.SCRATCH], coef[RC.ACC:RC.LEN], scr[:4], ax, ay, az, scr[4:7])
-        ax, ay, az, a_ok = sc.unit(scr[4], scr[5], scr[6])
+        o = S.ACC
+        state[o], state[o + 1], state[o + 2], state[o + 3], ax, ay, az = acc_lp_step(
+            coef[RC.ACC], state[o], state[o + 1], state[o + 2], state[o + 3], q0, q1, q2, q3, ax, ay, az)
+        ax, ay, az, a_ok = sc.unit(ax, ay, az)
     gm = 1.0
     if rej and use_mag:
         mx, my, mz, m_ok = sc.read_vec(mag, i)

@@ -249,29 +249,32 @@ def _rot(qw, qx, qy, qz, vx, vy, vz, sign):
 
 
 @njit
-def _acc_lp_update(state, coef, q, ax, ay, az, out):
-    """Low-pass the acc in the earth frame of sensor-to-earth ``q`` (4,); write it in sensor coordinates to out (3,).
+def acc_lp_step(k, s0, s1, s2, n, qw, qx, qy, qz, ax, ay, az):
+    """One step of block (c) on scalars: the acc ``(ax, ay, az)`` rotated into the earth frame of sensor-to-earth
+    ``q``, low-passed with gain ``k`` (state ``s0, s1, s2``; ``n`` samples so far, the first one initialises it)
+    and rotated back. Returns ``(s0, s1, s2, n, ox, oy, oz)``: the new state and the low-passed acc in sensor
+    coordinates, which a kernel uses instead of the raw acc.
 
-    The first sample initialises the low-pass. ``out`` is what a kernel uses instead of the raw acc.
-    """
-    ex, ey, ez = _rot(q[0], q[1], q[2], q[3], ax, ay, az, 1.0)
-    if state[3] == 0.0:
-        state[0], state[1], state[2] = ex, ey, ez
+    Scalars in and out, so a kernel's call carries no array (numba keeps an atomic reference count of every array
+    argument of a call, per sample): Madgwick and Mahony call it per sample without inlining it in numba's IR,
+    which cost their cold compile a quarter."""
+    ex, ey, ez = _rot(qw, qx, qy, qz, ax, ay, az, 1.0)
+    if n == 0.0:
+        s0, s1, s2 = ex, ey, ez
     else:
-        k = coef[0]
-        state[0] += k * (ex - state[0])
-        state[1] += k * (ey - state[1])
-        state[2] += k * (ez - state[2])
-    state[3] += 1.0
-    out[0], out[1], out[2] = _rot(q[0], q[1], q[2], q[3], state[0], state[1], state[2], -1.0)
+        s0 += k * (ex - s0)
+        s1 += k * (ey - s1)
+        s2 += k * (ez - s2)
+    ox, oy, oz = _rot(qw, qx, qy, qz, s0, s1, s2, -1.0)
+    return s0, s1, s2, n + 1.0, ox, oy, oz
 
 
-#: the accelerometer block inlined (numba-level ``inline="always"``, the same function) in the per-sample prologue
-#: of Madgwick and Mahony (:func:`objectives.attitude.filters._bias_filter.robust_sample`): a call per sample cost
-#: the robust Mahony a sixth of its speed (6.5e6 against 7.9e6 samples/s); inlining the rest and magnetic blocks too
-#: gained 3 % more but doubled those kernels' cold compile (7.5 s against 4-5 s), so they keep their calls, as in
-#: the EKF, CCF and UKF
-acc_lp_update_inline = njit(cache=True, inline="always")(_acc_lp_update.py_func)
+@njit
+def _acc_lp_update(state, coef, q, ax, ay, az, out):
+    """:func:`acc_lp_step` on the block's state (4,) and coefficients (:func:`acc_lp_coefficients`), at the
+    sensor-to-earth ``q`` (4,); the low-passed acc in sensor coordinates goes to ``out`` (3,)."""
+    state[0], state[1], state[2], state[3], out[0], out[1], out[2] = acc_lp_step(
+        coef[0], state[0], state[1], state[2], state[3], q[0], q[1], q[2], q[3], ax, ay, az)
 
 
 @njit(cache=True)

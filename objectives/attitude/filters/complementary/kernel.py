@@ -36,10 +36,10 @@ from objectives.attitude.filters._scalar import read_rate, sq_norm_ok
 from objectives.attitude.filters.complementary.steps import _blend, _mag_yaw, _pi_step, _quat_zyx, _read_mag, _wrap
 from objectives.attitude.filters.layout import Layout
 from objectives.attitude.filters.robust import (
-    _acc_lp_update,
     _mag_dist_update,
     _rest_update,
     acc_lp_state,
+    acc_lp_step,
     mag_dist_state,
     rest_state,
 )
@@ -99,8 +99,6 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
     w_bias = bias_out.shape[0] == gyr.shape[0]
     w_gain = gain_out.shape[0] == gyr.shape[0]
     blend = 1.0 - alpha
-    qb = np.empty(4)
-    a_lp = np.empty(3)
     phi, th, psi = state[X.EULER], state[X.EULER + 1], state[X.EULER + 2]
     i0, i1, i2 = state[X.INTEG], state[X.INTEG + 1], state[X.INTEG + 2]
     for i in range(gyr.shape[0]):
@@ -121,9 +119,10 @@ def cf_robust_kernel(gyr, acc, mag, coef, flags, mcoef, rcoef, acoef, state, ms,
         an, acc_ok = sq_norm_ok(dx, dy, dz)
         if use_alp and acc_ok:
             # block (c): earth-frame low-pass with the current estimate, back in sensor coordinates
-            qb[0], qb[1], qb[2], qb[3] = _quat_zyx(phi, th, psi)
-            _acc_lp_update(ast, acoef, qb, -dx, -dy, -dz, a_lp)
-            dx, dy, dz = -a_lp[0], -a_lp[1], -a_lp[2]
+            b0, b1, b2, b3 = _quat_zyx(phi, th, psi)
+            ast[0], ast[1], ast[2], ast[3], lpx, lpy, lpz = acc_lp_step(
+                acoef[0], ast[0], ast[1], ast[2], ast[3], b0, b1, b2, b3, -dx, -dy, -dz)
+            dx, dy, dz = -lpx, -lpy, -lpz
             _, acc_ok = sq_norm_ok(dx, dy, dz)
         if acc_ok and gate < math.inf:
             acc_ok = abs(math.sqrt(an) - g_ref) <= gate * g_ref

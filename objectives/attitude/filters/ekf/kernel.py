@@ -19,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from objectives.attitude.filters.layout import Layout
-from objectives.attitude.filters.robust import _acc_lp_update, _mag_dist_update, _rest_update
+from objectives.attitude.filters.robust import _mag_dist_update, _rest_update, acc_lp_step
 from objectives.attitude.quaternion import _triad_into
 from objectives.jit import uncached
 
@@ -153,7 +153,6 @@ def _steps(gyr, acc, mag, coef, kscale, flags, mcoef, rcoef, acoef, x, P, k_star
     ms = _mag_dist_state()
     rs = np.zeros(12)
     ast = np.zeros(4)
-    a_lp = np.empty(3)
     A = np.empty((4, 4))
     B = np.empty((4, 3))
     T = np.empty((4, 7))
@@ -169,8 +168,8 @@ def _steps(gyr, acc, mag, coef, kscale, flags, mcoef, rcoef, acoef, x, P, k_star
 
         # ---- TRIAD measurement (eqs. 11-15), from the robust blocks' vectors where they are on ------
         if use_alp:
-            _acc_lp_update(ast, acoef, x, acc[k, 0], acc[k, 1], acc[k, 2], a_lp)
-            ax, ay, az = a_lp[0], a_lp[1], a_lp[2]
+            ast[0], ast[1], ast[2], ast[3], ax, ay, az = acc_lp_step(
+                acoef[0], ast[0], ast[1], ast[2], ast[3], x[0], x[1], x[2], x[3], acc[k, 0], acc[k, 1], acc[k, 2])
         else:
             ax, ay, az = acc[k, 0], acc[k, 1], acc[k, 2]
         gm = 1.0

@@ -6,7 +6,7 @@ blocks between samples, with the attitude forecast for the sample (the previous 
 eq. 17 with the previous gyro sample and the bias estimate, noise-free):
 
 - (c) ``acc_lp``: the accelerometer of sample ``k`` is replaced by its low-pass in the (ENU) earth
-  frame rotated back into the sensor frame (:func:`~objectives.attitude.filters.robust._acc_lp_update`):
+  frame rotated back into the sensor frame (:func:`~objectives.attitude.filters.robust.acc_lp_step`):
   the tilt of the pseudo-measurement (eqs. 22-23) holds through fast translation.
 - (a) ``mag_rejection``: the magnetometer rotated into the earth frame (z up) feeds
   :func:`~objectives.attitude.filters.robust._mag_dist_update` (field norm and dip against a reference
@@ -34,11 +34,11 @@ from numba import njit
 
 from objectives.attitude.filters._scalar import qmul
 from objectives.attitude.filters.robust import (
-    _acc_lp_update,
     _mag_dist_update,
     _rest_update,
     _rot,
     acc_lp_state,
+    acc_lp_step,
     mag_dist_state,
     rest_state,
 )
@@ -78,7 +78,6 @@ def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mc
     use_rej, use_rest, use_alp, r_rest = flags[0] != 0.0, flags[1] != 0.0, flags[2] != 0.0, flags[3]
     a_in = np.empty((1, 3))
     m_in = np.empty((1, 3))
-    a_used = np.empty(3)
     q = np.empty(4)
     g_lp = np.empty(3)
     dt = coef[C.DT]
@@ -97,8 +96,8 @@ def _ukf_robust_loop(gyr, acc, mag, coef, robust, state, istate, work, flags, mc
         if use_rest or use_rej:
             at_rest = _rest_update(rs, rcoef, gyr[k, 0], gyr[k, 1], gyr[k, 2], ax, ay, az)
         if use_alp and math.isfinite(ax + ay + az):
-            _acc_lp_update(ast, acoef, q, ax, ay, az, a_used)
-            ax, ay, az = a_used[0], a_used[1], a_used[2]
+            ast[0], ast[1], ast[2], ast[3], ax, ay, az = acc_lp_step(
+                acoef[0], ast[0], ast[1], ast[2], ast[3], q[0], q[1], q[2], q[3], ax, ay, az)
         gm = 1.0
         if use_rej and math.isfinite(mx + my + mz):
             ex, ey, ez = _rot(q[0], q[1], q[2], q[3], mx, my, mz, 1.0)  # ENU: z up, as the block expects
