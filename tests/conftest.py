@@ -80,6 +80,37 @@ def run_tuner(*args: str, cwd=None, env=None, timeout: float = 300, process: boo
     return subprocess.CompletedProcess(["tuner", *args], code, out.getvalue(), err.getvalue())
 
 
+def built_once(tmp_path_factory, name: str, build) -> Path:
+    """A folder filled by ``build(folder)`` once per test session, also when pytest-xdist workers share the
+    session: the first worker to ask builds it, the other waits for it. The tests only read it (a test that
+    changes a run or a page works on a copy)."""
+    import fcntl
+    import shutil
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the session's folder, above each worker's own
+    folder, done = root / f"built-{name}", root / f"built-{name}.done"
+    with open(root / f"built-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.exists():
+            shutil.rmtree(folder, ignore_errors=True)  # a build that failed half-way
+            folder.mkdir()
+            build(folder)
+            done.touch()
+    return folder
+
+
+@pytest.fixture(scope="module")
+def browser(tmp_path_factory):
+    """One headless Chromium for every page of a test module (each page in a browser context of its own;
+    ``tests/tuner/browser.py``)."""
+    from tests.tuner.browser import Browser
+
+    with Browser(tmp_path_factory.mktemp("chromium")) as b:
+        yield b
+
+
 def readme_c_block(tag: str) -> str:
     """The C program of the README that follows ``<!-- tag -->`` (what the export tests compile against)."""
     text = (REPO / "README.md").read_text()

@@ -33,7 +33,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["Browser", "chromium", "measure", "screenshot"]
+import pytest
+
+__all__ = ["Browser", "chromium", "measure", "screenshot", "needs_chromium", "output_dir"]
 
 
 def chromium() -> str | None:
@@ -308,4 +310,17 @@ def screenshot(page_path: Path, out: Path, browser: Browser, width: int = 1200, 
     out.parent.mkdir(parents=True, exist_ok=True)
     with browser.open(Path(page_path).resolve().as_uri() + fragment, width, height, 8000) as page:
         out.write_bytes(base64.b64decode(page.send("Page.captureScreenshot", {"format": "png"})["data"]))
+    return out
+
+
+#: skip a test when there is no Chromium
+needs_chromium = pytest.mark.skipif(chromium() is None, reason="Chromium not installed (.ci/run installs it)")
+
+
+def output_dir() -> Path:
+    """The screenshots' folder: ``$TUNER_TEST_OUTPUT/browser/`` (default ``test-output/browser/`` in the
+    repository)."""
+    root = Path(os.environ.get("TUNER_TEST_OUTPUT", Path(__file__).resolve().parents[2] / "test-output"))
+    out = root / "browser"
+    out.mkdir(parents=True, exist_ok=True)
     return out

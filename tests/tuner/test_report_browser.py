@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tests.conftest import run_tuner
-from tests.tuner.browser import Browser, chromium, measure, screenshot
+from tests.conftest import built_once, run_tuner
+from tests.tuner.browser import measure, needs_chromium, output_dir, screenshot
 from tests.tuner.test_render import _assert_inert, _assert_inert_attrs, _parse
 from tuner.config import config_from_dict
 from tuner.run import run
@@ -80,33 +80,12 @@ def _raw(name, options=None, generations=4):
             "parallel": {"backend": "serial"}}
 
 
-def _built_once(tmp_path_factory, name: str, build) -> Path:
-    """A folder filled by ``build(folder)`` once per test session, also when pytest-xdist workers share the
-    session: the first worker to ask builds it, the other waits for it. The tests only read it (a test that
-    changes a run or a page works on a copy)."""
-    import fcntl
-    import os
-
-    root = tmp_path_factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        root = root.parent  # the session's folder, above each worker's own
-    folder, done = root / f"built-{name}", root / f"built-{name}.done"
-    with open(root / f"built-{name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not done.exists():
-            shutil.rmtree(folder, ignore_errors=True)  # a build that failed half-way
-            folder.mkdir()
-            build(folder)
-            done.touch()
-    return folder
-
-
 @pytest.fixture(scope="module")
 def evil_run(tmp_path_factory):
     def build(tmp):
         run(config_from_dict(_raw("evil"), base_dir=tmp), run_dir=tmp / "run", quiet=True)
 
-    return _built_once(tmp_path_factory, "evil", build) / "run"
+    return built_once(tmp_path_factory, "evil", build) / "run"
 
 
 def test_run_report_content(evil_run):
@@ -248,7 +227,7 @@ def sweep_dir(tmp_path_factory, evil_run):
         out = run_tuner("sweep", tmp / "sweep.yaml", "--dir", tmp / "sw", "-q")  # the objective: this module
         assert out.returncode == 0, out.stderr
 
-    return _built_once(tmp_path_factory, "sweep", build) / "sw"
+    return built_once(tmp_path_factory, "sweep", build) / "sw"
 
 
 def test_sweep_report_links_html_and_is_inert(sweep_dir):
@@ -277,25 +256,6 @@ def test_sweep_live_report_reloads_until_every_job_finished(sweep_dir, tmp_path)
 
 
 # --- a real browser ------------------------------------------------------------------------------
-needs_chromium = pytest.mark.skipif(chromium() is None, reason="Chromium not installed (.ci/run installs it)")
-
-
-@pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    """One Chromium for every page of this module (each page in a browser context of its own)."""
-    with Browser(tmp_path_factory.mktemp("chromium")) as b:
-        yield b
-
-
-def _output_dir():
-    import os
-
-    root = Path(os.environ.get("TUNER_TEST_OUTPUT", Path(__file__).resolve().parents[2] / "test-output"))
-    out = root / "browser"
-    out.mkdir(parents=True, exist_ok=True)
-    return out
-
-
 @pytest.fixture(scope="module")
 def filter_run(tmp_path_factory, broad_dir):
     """Madgwick on two BROAD trials, scored on a third: the time series with a recording selector."""
@@ -312,7 +272,7 @@ def filter_run(tmp_path_factory, broad_dir):
     def build(tmp):
         run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True)
 
-    return _built_once(tmp_path_factory, "filter", build) / "run"
+    return built_once(tmp_path_factory, "filter", build) / "run"
 
 
 def test_filter_report_shows_the_worst_recording_first(filter_run):
@@ -343,7 +303,7 @@ def dashboard_dir(tmp_path_factory, evil_run, sweep_dir, filter_run):
         out = run_tuner("report", root)
         assert out.returncode == 0 and out.stdout.strip() == str(root / "index.html"), out.stderr
 
-    return _built_once(tmp_path_factory, "dashboard", build) / "runs"
+    return built_once(tmp_path_factory, "dashboard", build) / "runs"
 
 
 def test_dashboard_lists_every_run_and_sweep(dashboard_dir):
@@ -448,7 +408,7 @@ def test_pages_in_a_browser(which, width, request, browser):
             assert res["plots"][1]["name"] == "compare-convergence" and res["plots"][1]["traces"] == 2
     else:
         assert res["images"] >= 3
-    shot = screenshot(page, _output_dir() / f"{which}_{width}.png", browser, width, 7000 if width < 500 else 5000,
+    shot = screenshot(page, output_dir() / f"{which}_{width}.png", browser, width, 7000 if width < 500 else 5000,
                       "#compare=evil,madgwick" if which == "dashboard" else "")
     arr = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert arr.std() > 5 and (arr < 128).mean() > 0.005, "blank screenshot"
@@ -515,7 +475,7 @@ def long_names_dir(tmp_path_factory):
         assert out.returncode == 0, out.stderr
         assert run_tuner("dashboard", tmp / "runs").returncode == 0
 
-    return _built_once(tmp_path_factory, "long-names", build) / "runs"
+    return built_once(tmp_path_factory, "long-names", build) / "runs"
 
 
 #: the right edge (px) of every cell under a header named in HEADS, and the viewport width
@@ -549,58 +509,3 @@ def test_long_job_names_keep_status_and_best_on_screen_at_1200_px(long_names_dir
     assert len(cells) >= 8, res
     off = [c for c in cells if c["right"] > res["width"]]
     assert not off, off
-
-
-@pytest.fixture(scope="module")
-def loop_run(tmp_path_factory):
-    """The saturation trap (configs/examples/dc_motor_saturation.yaml) at a short budget: a closed loop whose
-    report leads with the gains and the requirements table."""
-    raw = yaml.safe_load((Path(__file__).resolve().parents[2] / "configs" / "examples" /
-                          "dc_motor_saturation.yaml").read_text())
-    raw["optimizer"] = {"method": "pso", "population": 10, "generations": 6}
-
-    def build(tmp):
-        run(config_from_dict(raw, base_dir=tmp), run_dir=tmp / "run", quiet=True)
-
-    return _built_once(tmp_path_factory, "loop", build) / "run"
-
-
-def test_loop_report_leads_with_gains_and_requirements_in_words(loop_run):
-    md = (loop_run / "report.md").read_text()
-    lead = md.index("## Tuned controller")
-    assert lead < md.index("## Requirements") < md.index("## Summary")
-    assert "| K | " in md[lead:md.index("## Requirements")] and "u/y |" in md
-    assert "[requirements.md](requirements.md)" in md and "- [requirements.md](requirements.md)" in md
-    assert "| maximum sensitivity Ms | ms |" in md and "| phase margin (deg) | pm_deg |" in md  # words, then key
-    assert "1e+12" not in md and "initial fitness | failed: requirement violated" in md  # the defaults fail
-    assert md.count("```") == 0  # no code block repeats the lead or the terminal table
-
-
-@needs_chromium
-@pytest.mark.parametrize("width", [1200, 390])
-def test_loop_report_first_view_in_a_browser(loop_run, browser, width):
-    """At 390 px the first screen (900 px high) shows the gains' table and the requirements table's first row
-    with its verdict in view; nothing overflows the page."""
-    page = loop_run / "report.html"
-    res = measure(page, browser, width)
-    assert res["scrollWidth"] <= res["innerWidth"] and res["wide"] == [], res
-    assert res["broken"] == [] and res["errors"] == [], res
-    js = """(function () {
-      var hs = Array.from(document.querySelectorAll('h2'));
-      function top(text) { var h = hs.find(function (x) { return x.textContent.trim() === text; });
-                           return h ? h.getBoundingClientRect().top : -1; }
-      var tables = Array.from(document.querySelectorAll('table'));
-      var req = tables[1] ? tables[1].querySelector('tbody tr') : null;
-      var met = req ? req.cells[1].getBoundingClientRect() : null;
-      return JSON.stringify({gains: top('Tuned controller'), reqs: top('Requirements'), summary: top('Summary'),
-                             firstRow: req ? req.getBoundingClientRect().bottom : -1,
-                             firstCell: req ? req.cells[0].textContent : '', met: req ? req.cells[1].textContent : '',
-                             metRight: met ? met.right : 1e9, small: req ? req.cells[4].textContent : ''});
-    })()"""
-    with browser.open(page.resolve().as_uri(), width, 900, 8000) as p:
-        pos = json.loads(p.evaluate(js))
-    assert 0 <= pos["gains"] < pos["reqs"] < pos["summary"], pos
-    assert 0 < pos["firstRow"] <= 900 and pos["firstCell"] == "overshoot (%)", pos
-    assert pos["met"] == "yes" and pos["metRight"] <= width, pos  # the verdict is on screen, not scrolled off
-    assert "NO: met only through saturation" in pos["small"], pos
-    screenshot(page, _output_dir() / f"loop_{width}.png", browser, width, 1800)
