@@ -44,7 +44,7 @@ bias, also during motion; a first-order low-pass and a fixed time constant keep 
 Over a translation that starts and ends at rest the linear acceleration integrates to zero, so its
 low-pass in an (almost) inertial frame vanishes while gravity stays: the accelerometer rotated into
 the earth frame with the current attitude and low-passed with ``tau_acc_s`` points up even while the
-raw vector does not. :func:`_acc_lp_update` keeps that low-pass and returns it rotated back into the
+raw vector does not. :func:`acc_lp_step` keeps that low-pass and returns it rotated back into the
 sensor frame (a drop-in replacement for the measured acc of any kernel). :func:`_acc_gate` gives a
 weight in [0, 1] for an accelerometer update: 0 when ``||a| - g| > gate_norm * g`` or when the angle
 between ``a`` and the gyro-predicted gravity direction exceeds ``gate_angle``, else 1.
@@ -59,8 +59,8 @@ from numba import njit
 
 __all__ = [
     "lp_gain", "mag_dist_coefficients", "mag_dist_state", "rest_coefficients", "rest_state",
-    "acc_lp_coefficients", "acc_lp_state", "MAG_STATE", "REST_STATE", "ACC_STATE", "MAG_COEF", "REST_COEF",
-    "ACC_COEF",
+    "acc_lp_coefficients", "acc_lp_state", "acc_lp_step", "MAG_STATE", "REST_STATE", "ACC_STATE", "MAG_COEF",
+    "REST_COEF", "ACC_COEF",
 ]
 
 # --- layouts --------------------------------------------------------------------------------------
@@ -257,7 +257,7 @@ def acc_lp_step(k, s0, s1, s2, n, qw, qx, qy, qz, ax, ay, az):
 
     Scalars in and out, so a kernel's call carries no array (numba keeps an atomic reference count of every array
     argument of a call, per sample): Madgwick and Mahony call it per sample without inlining it in numba's IR,
-    which cost their cold compile a quarter."""
+    which had cost their cold compile a third."""
     ex, ey, ez = _rot(qw, qx, qy, qz, ax, ay, az, 1.0)
     if n == 0.0:
         s0, s1, s2 = ex, ey, ez
@@ -267,14 +267,6 @@ def acc_lp_step(k, s0, s1, s2, n, qw, qx, qy, qz, ax, ay, az):
         s2 += k * (ez - s2)
     ox, oy, oz = _rot(qw, qx, qy, qz, s0, s1, s2, -1.0)
     return s0, s1, s2, n + 1.0, ox, oy, oz
-
-
-@njit
-def _acc_lp_update(state, coef, q, ax, ay, az, out):
-    """:func:`acc_lp_step` on the block's state (4,) and coefficients (:func:`acc_lp_coefficients`), at the
-    sensor-to-earth ``q`` (4,); the low-passed acc in sensor coordinates goes to ``out`` (3,)."""
-    state[0], state[1], state[2], state[3], out[0], out[1], out[2] = acc_lp_step(
-        coef[0], state[0], state[1], state[2], state[3], q[0], q[1], q[2], q[3], ax, ay, az)
 
 
 @njit(cache=True)

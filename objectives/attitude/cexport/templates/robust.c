@@ -147,7 +147,7 @@ static void rot_(real qw, real qx, real qy, real qz, real vx, real vy, real vz, 
     out[2] = vz + qw * tz + qx * ty - qy * tx;
 }
 
-/* the acc low-passed in the earth frame of q, back in sensor coordinates: robust._acc_lp_update */
+/* the acc low-passed in the earth frame of q, back in sensor coordinates: robust.acc_lp_step */
 static void acc_lp_update(real *s, real k, const real *q, real ax, real ay, real az, real out[3])
 {
     real e[3];
